@@ -1,0 +1,32 @@
+"""User-facing errors.
+
+Every problem with a user's input is raised as :class:`InputError`, which carries the file, the
+field and what was expected, and renders as one line. The CLI prints that line (no traceback unless
+``--debug``) and exits with a non-zero code.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class InputError(ValueError):
+    """Bad user input: names the file, the field and what was expected.
+
+    >>> str(InputError("expected a 3-column array, got shape (10, 2)", file="a.mat", field="REFM"))
+    'a.mat: field REFM: expected a 3-column array, got shape (10, 2)'
+    """
+
+    def __init__(
+        self, message: str, *, file: str | Path | None = None, field: str | None = None
+    ) -> None:
+        self.file = None if file is None else str(file)
+        self.field = field
+        self.message = message
+        parts = []
+        if self.file:
+            parts.append(self.file)
+        if field:
+            parts.append(f"field {field}")
+        parts.append(message)
+        super().__init__(": ".join(parts))

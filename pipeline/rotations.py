@@ -1,0 +1,183 @@
+"""The one home of SO(3) helpers.
+
+Conventions (DESIGN.md §2):
+
+* A rotation matrix ``R`` of a segment has the segment axes as its columns, expressed in the
+  world: ``p_world = R @ p_segment + t``.
+* Quaternions are scalar-first ``[w, x, y, z]`` everywhere in this package (SciPy uses
+  scalar-last internally; the conversion happens here and nowhere else).
+* Every function accepts a single item (``(3,)``, ``(3, 3)``, ``(4,)``) or a stack
+  (``(N, 3)``, ``(N, 3, 3)``, ``(N, 4)``) and returns the same leading shape.
+* Angles are radians.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+__all__ = [
+    "angle_between",
+    "axis_angle",
+    "euler_zyx_from_matrix",
+    "exp3",
+    "log3",
+    "matrix_from_euler_zyx",
+    "matrix_from_quat",
+    "normalize",
+    "project_to_so3",
+    "quat_from_matrix",
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "rotation_aligning",
+    "skew",
+]
+
+
+def _stack(a: np.ndarray, item_ndim: int) -> tuple[np.ndarray, bool]:
+    a = np.asarray(a, dtype=float)
+    single = a.ndim == item_ndim
+    return (a[None] if single else a), single
+
+
+def normalize(v: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Unit vectors along ``axis``. Raises ``ValueError`` on a zero-length vector."""
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v, axis=axis, keepdims=True)
+    if np.any(n == 0):
+        raise ValueError("cannot normalise a zero-length vector")
+    return v / n
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrix ``[v]x`` with ``[v]x @ u == np.cross(v, u)``."""
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def _elementary(axis: str, angle: np.ndarray | float) -> np.ndarray:
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+    k = 3 - i - j
+    out[..., k, k] = 1.0
+    out[..., i, i], out[..., j, j] = c, c
+    out[..., i, j], out[..., j, i] = -s, s
+    return out
+
+
+def rot_x(angle: np.ndarray | float) -> np.ndarray:
+    """Rotation about x by ``angle`` (right-handed)."""
+    return _elementary("x", angle)
+
+
+def rot_y(angle: np.ndarray | float) -> np.ndarray:
+    """Rotation about y by ``angle`` (right-handed)."""
+    return _elementary("y", angle)
+
+
+def rot_z(angle: np.ndarray | float) -> np.ndarray:
+    """Rotation about z by ``angle`` (right-handed)."""
+    return _elementary("z", angle)
+
+
+def exp3(rotvec: np.ndarray) -> np.ndarray:
+    """Exponential map so(3) -> SO(3) (Rodrigues), rotation vector = axis * angle."""
+    r, single = _stack(rotvec, 1)
+    out = Rotation.from_rotvec(r).as_matrix()
+    return out[0] if single else out
+
+
+def log3(R: np.ndarray) -> np.ndarray:
+    """Logarithm SO(3) -> rotation vector (axis * angle, angle in [0, pi])."""
+    m, single = _stack(R, 2)
+    out = Rotation.from_matrix(m).as_rotvec()
+    return out[0] if single else out
+
+
+def axis_angle(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis (unit) and angle (>= 0) of rotation matrices; the axis of an identity is NaN."""
+    rv = log3(R)
+    angle = np.linalg.norm(rv, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        axis = rv / angle[..., None]
+    return axis, angle
+
+
+def matrix_from_quat(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices from scalar-first quaternions ``[w, x, y, z]``.
+
+    Quaternions are normalised first; a zero quaternion raises ``ValueError``.
+    """
+    q, single = _stack(q, 1)
+    n = np.linalg.norm(q, axis=-1)
+    if np.any(~np.isfinite(n)) or np.any(n < 1e-12):
+        raise ValueError("zero or non-finite quaternion")
+    out = Rotation.from_quat(q[:, [1, 2, 3, 0]] / n[:, None]).as_matrix()
+    return out[0] if single else out
+
+
+def quat_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Scalar-first unit quaternions ``[w, x, y, z]`` with ``w >= 0``."""
+    m, single = _stack(R, 2)
+    q = Rotation.from_matrix(m).as_quat()[:, [3, 0, 1, 2]]
+    q[q[:, 0] < 0] *= -1
+    return q[0] if single else q
+
+
+def matrix_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
+    """``R = Rz(e0) @ Ry(e1) @ Rx(e2)`` (MATLAB ``eul2rotm`` default order 'ZYX')."""
+    e = np.asarray(euler, dtype=float)
+    return rot_z(e[..., 0]) @ rot_y(e[..., 1]) @ rot_x(e[..., 2])
+
+
+def euler_zyx_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`matrix_from_euler_zyx`: ``[z, y, x]`` angles, ``y`` in [-pi/2, pi/2]."""
+    m, single = _stack(R, 2)
+    out = Rotation.from_matrix(m).as_euler("ZYX")
+    return out[0] if single else out
+
+
+def project_to_so3(M: np.ndarray) -> np.ndarray:
+    """Nearest rotation matrix (Frobenius norm) to ``M`` via SVD, with det = +1."""
+    m, single = _stack(M, 2)
+    u, _, vt = np.linalg.svd(m)
+    d = np.sign(np.linalg.det(u @ vt))
+    u[:, :, -1] *= d[:, None]
+    out = u @ vt
+    return out[0] if single else out
+
+
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle (rad) between vectors, numerically safe near 0 and pi."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+
+
+def rotation_aligning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Smallest rotation ``R`` with ``R @ a_hat == b_hat`` (Wang 2023 eq 10-12).
+
+    Axis ``a x b`` (eq 11), angle ``arccos(a.b / |a||b|)`` (eq 10), matrix by Rodrigues (eq 12).
+    Parallel vectors give the identity; anti-parallel vectors a half-turn about an axis
+    perpendicular to ``a``.
+    """
+    a_hat = normalize(a)
+    b_hat = normalize(b)
+    axis = np.cross(a_hat, b_hat)
+    s = np.linalg.norm(axis)
+    angle = angle_between(a_hat, b_hat)
+    if s < 1e-12:
+        if angle < 1.0:
+            return np.eye(3)
+        perp = np.cross(a_hat, [1.0, 0.0, 0.0])
+        if np.linalg.norm(perp) < 1e-6:
+            perp = np.cross(a_hat, [0.0, 1.0, 0.0])
+        return exp3(normalize(perp) * np.pi)
+    return exp3(axis / s * angle)
