@@ -1,25 +1,185 @@
 """Command-line interface: ``pipeline <command> ...`` (also ``python -m pipeline``).
 
-Errors in user input are printed as one line naming the file and the field, with a non-zero exit
-code and no traceback (``--debug`` shows it).
+Errors in user input are printed as one line naming the file and the field, with exit code 2 and no
+traceback (``--debug`` shows it). Heavy imports happen inside the commands so ``--help`` is instant.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from pipeline.errors import InputError
+
+EXAMPLES = {
+    "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out subject.urdf",
+    "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
+    "--sex m --height-m 1.80 --out out/walk",
+    "calibrate": "pipeline calibrate hinge --imu1 thigh.csv --imu2 shank.csv --method ipopt --json",
+    "simulate": "pipeline simulate --out out/sim --motion rich --seed 0",
+    "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
+    "demo": "pipeline demo --out out/demo",
+    "view": "pipeline view out/demo/demo.rrd --web",
+}
+
+
+def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
+    return sub.add_parser(
+        name,
+        help=help_,
+        description=help_,
+        epilog=f"example:\n  {EXAMPLES[name]}",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+
+
+def _add_anthropometrics(p: argparse.ArgumentParser, required: bool = True) -> None:
+    p.add_argument("--sex", choices=["m", "f"], required=required, help="sex for the regression")
+    p.add_argument("--height-m", type=float, required=required, help="body height in metres")
+    p.add_argument("--shank-lateral-m", type=float, help="s_L = |EFL - LM| in metres")
+    p.add_argument("--shank-medial-m", type=float, help="s_M = |EFM - MM| in metres")
+    p.add_argument("--knee-width-m", type=float, help="k = |EFM - EFL| in metres")
+    p.add_argument("--ankle-width-m", type=float, help="a = |MM - LM| in metres")
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pipeline",
-        description="Lower-limb IMU-to-skeleton pipeline on Pinocchio.",
+        description="Lower-limb IMU-to-skeleton pipeline on Pinocchio (Wang 2023, Hu 2021).",
+        epilog="examples:\n  " + "\n  ".join(EXAMPLES.values()),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="command")
+
+    p = _sub(sub, "scale", "build a subject-scaled URDF from the regression equations")
+    _add_anthropometrics(p)
+    p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
+    p.add_argument("--out", type=Path, required=True, help="output .urdf file")
+    p.set_defaults(func=_cmd_scale)
+
+    p = _sub(sub, "ik", "inverse kinematics from IMU orientations (.sto)")
+    p.add_argument("--orientations", type=Path, required=True, help="OpenSim .sto quaternions")
+    _add_anthropometrics(p)
+    p.add_argument(
+        "--sensor-to-model",
+        type=float,
+        nargs=3,
+        metavar=("RX", "RY", "RZ"),
+        help="fixed world rotation (rad, XYZ) as OpenSense's sensor_to_opensim_rotations; "
+        "default: detected from the file (Xsens z-up -> -pi/2 0 0)",
+    )
+    p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.set_defaults(func=_cmd_ik)
+
+    p = _sub(sub, "calibrate", "joint-constraint calibration of IMU placement (Hu 2021)")
+    p.add_argument("joint", choices=["hinge", "spherical"], help="joint model")
+    p.add_argument("--imu1", type=Path, required=True, help="proximal IMU CSV")
+    p.add_argument("--imu2", type=Path, required=True, help="distal IMU CSV")
+    p.add_argument("--method", choices=["gn", "dwpso", "gwo", "ipopt"], default="ipopt")
+    p.add_argument("--seed", type=int, default=0, help="seed for the swarm optimizers")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=_cmd_calibrate)
+
+    p = _sub(sub, "simulate", "simulate IMU trials with known truth")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument(
+        "--motion", choices=["rich", "supine_hip_flexion", "still_thigh"], default="rich"
+    )
+    p.add_argument("--duration-s", type=float, default=15.0)
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_simulate)
+
+    p = _sub(sub, "reproduce", "reproduce a paper's results on its published data")
+    p.add_argument("paper", choices=["wang2023"])
+    p.add_argument("--data", type=Path, required=True, help="dataset directory")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument("--rerun", type=Path, help="also write one .rrd per IMC subject here")
+    p.set_defaults(func=_cmd_reproduce)
+
+    p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
+    p.add_argument("--out", type=Path, default=Path("out/demo"), help="output directory")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_demo)
+
+    p = _sub(sub, "view", "open a recording in the rerun viewer")
+    p.add_argument("rrd", type=Path, help=".rrd file")
+    p.add_argument("--web", action="store_true", help="serve the web viewer on 127.0.0.1")
+    p.set_defaults(func=_cmd_view)
     return parser
+
+
+def _measures(args):
+    from pipeline.anthropometry import Measures
+
+    return Measures(
+        sex=args.sex,
+        height_m=args.height_m,
+        shank_lateral_m=args.shank_lateral_m,
+        shank_medial_m=args.shank_medial_m,
+        knee_width_m=args.knee_width_m,
+        ankle_width_m=args.ankle_width_m,
+    )
+
+
+def _cmd_scale(args) -> int:
+    from pipeline.model.scaling import scale_model
+
+    out = scale_model(_measures(args), args.out, knee=args.knee)
+    print(f"wrote {out}")
+    return 0
+
+
+def _cmd_ik(args) -> int:
+    from pipeline.workflows import run_ik_from_sto
+
+    summary = run_ik_from_sto(
+        args.orientations,
+        _measures(args),
+        args.out,
+        knee=args.knee,
+        sensor_to_model=args.sensor_to_model,
+    )
+    print(summary)
+    return 0
+
+
+def _cmd_calibrate(args) -> int:
+    from pipeline.workflows import run_calibration
+
+    print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json))
+    return 0
+
+
+def _cmd_simulate(args) -> int:
+    from pipeline.workflows import run_simulation
+
+    print(run_simulation(args.out, args.motion, args.duration_s, args.seed))
+    return 0
+
+
+def _cmd_reproduce(args) -> int:
+    from pipeline.reproduce import reproduce_wang2023
+
+    print(reproduce_wang2023(args.data, args.out, rerun_dir=args.rerun))
+    return 0
+
+
+def _cmd_demo(args) -> int:
+    from pipeline.demo import run_demo
+
+    print(run_demo(args.out, seed=args.seed))
+    return 0
+
+
+def _cmd_view(args) -> int:
+    from pipeline.viz import view
+
+    if not args.rrd.exists():
+        raise InputError("no such recording", file=args.rrd)
+    return int(view(args.rrd, web=args.web) or 0)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -32,6 +192,9 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

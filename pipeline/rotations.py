@@ -181,3 +181,26 @@ def rotation_aligning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             perp = np.cross(a_hat, [0.0, 1.0, 0.0])
         return exp3(normalize(perp) * np.pi)
     return exp3(axis / s * angle)
+
+
+def matrix_from_euler_zxy(euler: np.ndarray) -> np.ndarray:
+    """``R = Rz(e0) @ Rx(e1) @ Ry(e2)``: the ISB / Grood & Suntay joint coordinate system order.
+
+    Flexion about the proximal z, then ab/adduction about the floating x, then axial rotation about
+    the distal y (Wu et al. 2002; Hu et al. 2021 eq 38-42). Radians, ``(3,)`` or ``(N, 3)``.
+    """
+    e = np.asarray(euler, dtype=float)
+    return rot_z(e[..., 0]) @ rot_x(e[..., 1]) @ rot_y(e[..., 2])
+
+
+def euler_zxy_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`matrix_from_euler_zxy`: ``[z, x, y]`` angles, ``x`` in [-pi/2, pi/2].
+
+    From ``R[2, 1] = sin(x)``, ``(-R[0, 1], R[1, 1]) ~ (sin z, cos z)`` and
+    ``(-R[2, 0], R[2, 2]) ~ (sin y, cos y)``; singular (gimbal lock) at ``x = +-pi/2``.
+    """
+    R = np.asarray(R, dtype=float)
+    x = np.arcsin(np.clip(R[..., 2, 1], -1.0, 1.0))
+    z = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
+    y = np.arctan2(-R[..., 2, 0], R[..., 2, 2])
+    return np.stack([z, x, y], axis=-1)

@@ -1,0 +1,549 @@
+"""Validation shared by every reader: time stamps, rates, gaps, quaternions, units.
+
+One place for the checks a recording must pass before it enters the pipeline. Every refusal is an
+:class:`~pipeline.errors.InputError` naming the file, the field, what was expected and what was
+found (with the row). Every repair (gap interpolation, quaternion normalisation, sign flips) is
+written to a :class:`Notes` list that the reader returns, so that nothing is changed silently; the
+CLI prints the notes.
+
+Conventions: rows are counted from 0 over the data rows; readers that know where the data start in
+the file pass ``first_line`` so messages also give the 1-based file line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.errors import InputError
+from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
+
+__all__ = [
+    "DEFAULT_MAX_GAP_S",
+    "Notes",
+    "RateInfo",
+    "check_acc_units",
+    "check_gyro_units",
+    "check_position_units",
+    "check_rate",
+    "check_quaternions",
+    "check_same_length",
+    "check_same_rate",
+    "check_time",
+    "estimate_rate",
+    "fill_gaps",
+    "make_quaternions_continuous",
+    "parse_table",
+    "read_text_lines",
+]
+
+DEFAULT_MAX_GAP_S = 0.1
+"""Longest run of missing samples (seconds) that is interpolated; longer gaps are refused."""
+
+FileLike = str | Path | None
+
+
+@dataclass
+class Notes:
+    """What a reader changed or noticed: a list of one-line, human-readable messages.
+
+    Readers collect notes while checking and store them (as a tuple) on the object they return;
+    the CLI prints them. ``Notes`` is a thin wrapper on a list so that checks can add to the same
+    list through several calls.
+    """
+
+    items: list[str] = field(default_factory=list)
+
+    def add(self, message: str, *, file: FileLike = None, field: str | None = None) -> None:
+        """Append a message, prefixed like an :class:`InputError` (``file: field F: ...``)."""
+        parts = [str(file)] if file else []
+        if field:
+            parts.append(f"field {field}")
+        parts.append(message)
+        self.items.append(": ".join(parts))
+
+    def extend(self, other: Notes | list[str] | tuple[str, ...]) -> None:
+        self.items.extend(other.items if isinstance(other, Notes) else other)
+
+    def as_tuple(self) -> tuple[str, ...]:
+        return tuple(self.items)
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+
+def _where(row: int, first_line: int | None) -> str:
+    return f"row {row}" if first_line is None else f"row {row} (line {first_line + row})"
+
+
+# --------------------------------------------------------------------------------------------
+# time and rate
+
+
+@dataclass(frozen=True)
+class RateInfo:
+    """Sampling rate estimated from time stamps.
+
+    ``rate_hz = 1 / median(dt)``; ``jitter_s`` = standard deviation of ``dt``; ``max_dt_s`` the
+    longest interval (a dropped-sample gap shows up there).
+    """
+
+    rate_hz: float
+    dt_s: float
+    jitter_s: float
+    max_dt_s: float
+    n_samples: int
+
+
+def check_time(
+    time: np.ndarray,
+    *,
+    file: FileLike = None,
+    field: str = "time",
+    first_line: int | None = None,
+    min_samples: int = 2,
+) -> np.ndarray:
+    """Return ``time`` as a float array after checking it is finite and strictly increasing.
+
+    Refuses: fewer than ``min_samples`` samples; non-finite values; a repeated time stamp
+    (``t[r] == t[r-1]``) and an unsorted one (``t[r] < t[r-1]``), each with the first offending
+    row.
+    """
+    t = np.asarray(time, dtype=float)
+    if t.ndim != 1:
+        raise InputError(f"expected a 1-D time column, got shape {t.shape}", file=file, field=field)
+    if t.size < min_samples:
+        raise InputError(
+            f"expected at least {min_samples} samples, found {t.size}", file=file, field=field
+        )
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        r = int(bad[0])
+        raise InputError(
+            f"time stamp is not a finite number at {_where(r, first_line)}", file=file, field=field
+        )
+    dt = np.diff(t)
+    rep = np.flatnonzero(dt == 0)
+    back = np.flatnonzero(dt < 0)
+    if rep.size and (not back.size or rep[0] < back[0]):
+        r = int(rep[0]) + 1
+        raise InputError(
+            f"repeated time stamp {t[r]:.6g} s at {_where(r, first_line)} (same as the row before);"
+            " expected strictly increasing time",
+            file=file,
+            field=field,
+        )
+    if back.size:
+        r = int(back[0]) + 1
+        raise InputError(
+            f"time stamps not sorted: {t[r]:.6g} s at {_where(r, first_line)} comes after "
+            f"{t[r - 1]:.6g} s; expected strictly increasing time",
+            file=file,
+            field=field,
+        )
+    return t
+
+
+def estimate_rate(time: np.ndarray) -> RateInfo:
+    """Sampling rate from (already checked) time stamps: ``1 / median(diff(t))``."""
+    t = np.asarray(time, dtype=float)
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    return RateInfo(
+        rate_hz=1.0 / med,
+        dt_s=med,
+        jitter_s=float(np.std(dt)),
+        max_dt_s=float(np.max(dt)),
+        n_samples=int(t.size),
+    )
+
+
+def check_rate(
+    time: np.ndarray,
+    declared_hz: float | None = None,
+    *,
+    rtol: float = 0.01,
+    jitter_tol: float = 0.05,
+    notes: Notes | None = None,
+    file: FileLike = None,
+    field: str = "time",
+) -> RateInfo:
+    """Estimate the rate from ``time`` and compare it with a declared one (e.g. .sto ``DataRate``).
+
+    Refuses ``|rate - declared| > rtol * declared``. Notes (does not refuse) irregular sampling:
+    jitter (std of dt) above ``jitter_tol * dt``, or intervals longer than 1.5 dt (dropped samples).
+    """
+    info = estimate_rate(time)
+    if declared_hz is not None:
+        if not np.isfinite(declared_hz) or declared_hz <= 0:
+            raise InputError(
+                f"declared sampling rate must be a positive number, found {declared_hz!r}",
+                file=file,
+                field=field,
+            )
+        if abs(info.rate_hz - declared_hz) > rtol * declared_hz:
+            raise InputError(
+                f"declared rate {declared_hz:g} Hz but the time stamps give {info.rate_hz:.4g} Hz "
+                f"(median interval {info.dt_s:.6g} s); fix the header or the time column",
+                file=file,
+                field=field,
+            )
+    if notes is not None:
+        if info.jitter_s > jitter_tol * info.dt_s:
+            notes.add(
+                f"irregular sampling: interval {info.dt_s * 1e3:.4g} ms +- "
+                f"{info.jitter_s * 1e3:.3g} ms (jitter)",
+                file=file,
+                field=field,
+            )
+        n_long = int(np.sum(np.diff(np.asarray(time, float)) > 1.5 * info.dt_s))
+        if n_long:
+            notes.add(
+                f"{n_long} interval(s) longer than 1.5 sampling periods (dropped samples?), "
+                f"longest {info.max_dt_s:.4g} s",
+                file=file,
+                field=field,
+            )
+    return info
+
+
+def check_same_length(lengths: dict[str, int], *, file: FileLike = None) -> int:
+    """All streams must have the same number of samples; returns it or refuses listing them."""
+    values = set(lengths.values())
+    if len(values) > 1:
+        detail = ", ".join(f"{k}: {v}" for k, v in lengths.items())
+        raise InputError(f"streams have different numbers of samples ({detail})", file=file)
+    return values.pop() if values else 0
+
+
+def check_same_rate(rates: dict[str, float], *, rtol: float = 0.01, file: FileLike = None) -> float:
+    """All streams must share one sampling rate (within ``rtol``); returns the first one."""
+    vals = list(rates.values())
+    if not vals:
+        raise InputError("no streams to compare", file=file)
+    ref = vals[0]
+    if any(abs(v - ref) > rtol * ref for v in vals):
+        detail = ", ".join(f"{k}: {v:g} Hz" for k, v in rates.items())
+        raise InputError(f"streams have different sampling rates ({detail})", file=file)
+    return ref
+
+
+# --------------------------------------------------------------------------------------------
+# gaps
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index runs ``[a, b)`` where ``mask`` is True."""
+    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    d = np.diff(m)
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True))
+
+
+def _slerp_fill(q: np.ndarray, t: np.ndarray, a: int, b: int) -> None:
+    """Fill ``q[a:b]`` in place by slerp between ``q[a-1]`` and ``q[b]`` (geodesic on SO(3))."""
+    R0 = matrix_from_quat(q[a - 1])
+    R1 = matrix_from_quat(q[b])
+    w = log3(R0.T @ R1)
+    s = (t[a:b] - t[a - 1]) / (t[b] - t[a - 1])
+    filled = quat_from_matrix(R0 @ exp3(s[:, None] * w))
+    ref = q[a - 1] / np.linalg.norm(q[a - 1])
+    filled[filled @ ref < 0] *= -1
+    q[a:b] = filled
+
+
+def fill_gaps(
+    time: np.ndarray,
+    values: np.ndarray,
+    *,
+    kind: str = "vector",
+    max_gap_s: float = DEFAULT_MAX_GAP_S,
+    notes: Notes | None = None,
+    file: FileLike = None,
+    field: str | None = None,
+) -> np.ndarray:
+    """Interpolate short runs of missing (non-finite) samples; refuse long ones.
+
+    A sample (row) is missing when any of its components is not finite. A run of ``n`` missing
+    samples lasts ``n * dt`` (dt = median interval). Runs up to ``max_gap_s`` are filled, inside
+    the recording by linear interpolation (``kind="vector"``) or slerp (``kind="quaternion"``,
+    constant angular velocity between the neighbours), and at either end by holding the nearest
+    valid sample. Each filled run is reported in ``notes`` with its time range. Longer runs are
+    refused with their time range. Returns a new array (the input is not modified).
+    """
+    if kind not in ("vector", "quaternion"):
+        raise ValueError(f"kind must be 'vector' or 'quaternion', got {kind!r}")
+    t = np.asarray(time, dtype=float)
+    v = np.array(values, dtype=float, copy=True)
+    squeeze = v.ndim == 1
+    if squeeze:
+        v = v[:, None]
+    if v.shape[0] != t.size:
+        raise InputError(f"{v.shape[0]} samples but {t.size} time stamps", file=file, field=field)
+    missing = ~np.all(np.isfinite(v), axis=1)
+    if not missing.any():
+        return v[:, 0] if squeeze else v
+    if missing.all():
+        raise InputError("no finite values at all (every sample missing)", file=file, field=field)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    runs = _runs(missing)
+    for a, b in runs:
+        dur = (b - a) * dt
+        if dur > max_gap_s + 1e-9:
+            raise InputError(
+                f"gap of {b - a} missing samples ({dur:.3g} s) from t={t[a]:.4g} s to "
+                f"t={t[b - 1]:.4g} s (rows {a}-{b - 1}) is longer than the {max_gap_s:g} s that "
+                "may be interpolated",
+                file=file,
+                field=field,
+            )
+    for a, b in runs:
+        if a == 0 or b == t.size:
+            v[a:b] = v[b] if a == 0 else v[a - 1]
+            how = "held the nearest valid sample"
+        elif kind == "quaternion":
+            for r in (a - 1, b):
+                if np.linalg.norm(v[r]) < 1e-9:
+                    raise InputError(f"zero quaternion at row {r}", file=file, field=field)
+            _slerp_fill(v, t, a, b)
+            how = "slerp"
+        else:
+            s = ((t[a:b] - t[a - 1]) / (t[b] - t[a - 1]))[:, None]
+            v[a:b] = (1 - s) * v[a - 1] + s * v[b]
+            how = "linear interpolation"
+        if notes is not None:
+            notes.add(
+                f"filled {b - a} missing sample(s) from t={t[a]:.4g} s to t={t[b - 1]:.4g} s "
+                f"({how})",
+                file=file,
+                field=field,
+            )
+    return v[:, 0] if squeeze else v
+
+
+# --------------------------------------------------------------------------------------------
+# quaternions
+
+
+def make_quaternions_continuous(q: np.ndarray) -> tuple[np.ndarray, int]:
+    """Flip signs so that consecutive quaternions share a hemisphere (``q_k . q_{k-1} >= 0``).
+
+    ``q`` and ``-q`` are the same rotation; continuity matters for interpolation and filtering.
+    Returns the new array and the number of samples whose sign changed.
+    """
+    q = np.array(q, dtype=float, copy=True)
+    if len(q) < 2:
+        return q, 0
+    dots = np.sum(q[1:] * q[:-1], axis=1)
+    flips = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
+    q *= flips[:, None]
+    return q, int(np.sum(flips < 0))
+
+
+def check_quaternions(
+    q: np.ndarray,
+    *,
+    norm_range: tuple[float, float] = (0.9, 1.1),
+    notes: Notes | None = None,
+    file: FileLike = None,
+    field: str | None = None,
+    first_line: int | None = None,
+    note_above: float = 1e-3,
+) -> np.ndarray:
+    """Check and clean scalar-first quaternions ``(N, 4)``; returns unit, sign-continuous ones.
+
+    Refuses non-finite and zero quaternions, and norms outside ``norm_range`` ("not unit
+    quaternions (norm x at row r)"). Norms inside the range are normalised; a deviation larger
+    than ``note_above`` is noted. Hemisphere flips (q -> -q) are removed and noted.
+    """
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2 or q.shape[1] != 4:
+        raise InputError(
+            f"expected quaternions as an (N, 4) array, got shape {q.shape}", file=file, field=field
+        )
+    bad = np.flatnonzero(~np.all(np.isfinite(q), axis=1))
+    if bad.size:
+        raise InputError(
+            f"non-finite quaternion at {_where(int(bad[0]), first_line)}", file=file, field=field
+        )
+    n = np.linalg.norm(q, axis=1)
+    zero = np.flatnonzero(n < 1e-9)
+    if zero.size:
+        raise InputError(
+            f"zero quaternion at {_where(int(zero[0]), first_line)} (no rotation defined)",
+            file=file,
+            field=field,
+        )
+    lo, hi = norm_range
+    out = np.flatnonzero((n < lo) | (n > hi))
+    if out.size:
+        r = int(out[0])
+        raise InputError(
+            f"not unit quaternions (norm {n[r]:.4g} at {_where(r, first_line)}; "
+            f"expected within [{lo:g}, {hi:g}])",
+            file=file,
+            field=field,
+        )
+    dev = np.abs(n - 1.0)
+    if notes is not None and dev.max() > note_above:
+        notes.add(
+            f"normalised {int(np.sum(dev > note_above))} quaternion(s) with |norm - 1| up to "
+            f"{dev.max():.3g}",
+            file=file,
+            field=field,
+        )
+    q, n_flipped = make_quaternions_continuous(q / n[:, None])
+    if notes is not None and n_flipped:
+        notes.add(
+            f"flipped the sign of {n_flipped} quaternion(s) to keep q continuous "
+            "(q and -q are the same rotation)",
+            file=file,
+            field=field,
+        )
+    return q
+
+
+# --------------------------------------------------------------------------------------------
+# units
+
+
+def check_position_units(
+    points_m: np.ndarray,
+    *,
+    max_extent_m: float = 20.0,
+    file: FileLike = None,
+    field: str | None = None,
+) -> None:
+    """Refuse positions (metres) whose extent is implausible for human motion capture.
+
+    Extent = largest distance of a finite point from the median point. Above ``max_extent_m``
+    the values are most likely millimetres (x1000) or centimetres (x100) labelled as metres.
+    """
+    p = np.asarray(points_m, dtype=float).reshape(-1, 3)
+    p = p[np.all(np.isfinite(p), axis=1)]
+    if p.size == 0:
+        return
+    extent = float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1)))
+    if extent > max_extent_m:
+        raise InputError(
+            f"positions span {extent:.4g} m, implausible for a motion-capture volume "
+            f"(expected < {max_extent_m:g} m); they look like millimetres given as metres "
+            "(check the unit: divide by 1000)",
+            file=file,
+            field=field,
+        )
+
+
+def check_gyro_units(
+    gyr: np.ndarray, *, limit: float = 20.0, file: FileLike = None, field: str | None = "gyr"
+) -> None:
+    """Refuse angular velocities that look like deg/s given as rad/s.
+
+    Human segments rarely exceed 20 rad/s (1150 deg/s); if the 90th percentile of ``|w|`` is
+    above ``limit`` the column is routinely that fast, which means degrees per second.
+    """
+    w = np.linalg.norm(np.asarray(gyr, dtype=float), axis=1)
+    w = w[np.isfinite(w)]
+    if w.size and float(np.percentile(w, 90)) > limit:
+        raise InputError(
+            f"angular velocity |w| is routinely above {limit:g} rad/s (90th percentile "
+            f"{np.percentile(w, 90):.4g}); it looks like deg/s: expected rad/s "
+            "(multiply deg/s by pi/180)",
+            file=file,
+            field=field,
+        )
+
+
+def check_acc_units(acc: np.ndarray, *, file: FileLike = None, field: str | None = "acc") -> None:
+    """Refuse accelerations that look like g, or like raw counts / mm/s^2, instead of m/s^2.
+
+    On a human-worn IMU the median of ``|a|`` is close to gravity, 9.81 m/s^2. A median within
+    [0.5, 2] means the unit is g; above 100 it is not m/s^2 either.
+    """
+    a = np.linalg.norm(np.asarray(acc, dtype=float), axis=1)
+    a = a[np.isfinite(a)]
+    if not a.size:
+        return
+    med = float(np.median(a))
+    if 0.5 <= med <= 2.0:
+        raise InputError(
+            f"median |a| is {med:.3g}, close to 1: the acceleration looks like it is in g; "
+            "expected m/s^2 (multiply by 9.80665)",
+            file=file,
+            field=field,
+        )
+    if med > 100.0:
+        raise InputError(
+            f"median |a| is {med:.4g}, implausible in m/s^2 (gravity is 9.81); "
+            "raw counts or mm/s^2?",
+            file=file,
+            field=field,
+        )
+
+
+# --------------------------------------------------------------------------------------------
+# tables
+
+
+def parse_table(
+    lines: list[str],
+    labels: list[str],
+    *,
+    sep: str = "\t",
+    file: FileLike = None,
+    first_line: int | None = None,
+) -> np.ndarray:
+    """Parse delimited text rows into an ``(N, len(labels))`` float array.
+
+    Refuses a row with the wrong number of fields (typically a file cut mid-row) and a cell that
+    is not a number, naming the row, the file line and the column. Empty cells and ``NaN`` become
+    NaN (missing samples, handled by :func:`fill_gaps`).
+    """
+    n = len(labels)
+    rows = [ln.rstrip("\r\n").split(sep) for ln in lines]
+    for r, cells in enumerate(rows):
+        if len(cells) != n:
+            hint = " (file truncated?)" if r == len(rows) - 1 and len(cells) < n else ""
+            raise InputError(
+                f"{_where(r, first_line)} has {len(cells)} fields, expected {n}{hint}", file=file
+            )
+    if not rows:
+        return np.zeros((0, n))
+    try:
+        return np.array(rows, dtype=float)
+    except ValueError:
+        pass
+    out = np.empty((len(rows), n))
+    for r, cells in enumerate(rows):
+        for c, cell in enumerate(cells):
+            s = cell.strip()
+            if not s:
+                out[r, c] = np.nan
+                continue
+            try:
+                out[r, c] = float(s)
+            except ValueError:
+                raise InputError(
+                    f"{s!r} at {_where(r, first_line)} is not a number", file=file, field=labels[c]
+                ) from None
+    return out
+
+
+def read_text_lines(path: str | Path) -> list[str]:
+    """Lines of a text file (without line ends); refuses a missing, unreadable or empty file."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError("file not found" if not p.exists() else "not a file", file=p)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise InputError(f"not a UTF-8 text file ({e.reason} at byte {e.start})", file=p) from None
+    except OSError as e:
+        raise InputError(f"cannot read: {e.strerror}", file=p) from None
+    if not text.strip():
+        raise InputError("file is empty", file=p)
+    return text.splitlines()

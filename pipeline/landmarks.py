@@ -1,0 +1,125 @@
+"""Anatomical landmark trajectories and ISB joint angles from model configurations.
+
+Landmarks (Wang et al. 2023, eq 15-17): the landmark frames of the scaled model are fixed in their
+segments, so their trajectories are the forward kinematics of those frames. With the hip at the
+origin, the femoral landmarks follow ``t = e_F p`` (eq 15), the knee centre
+``t_knee = (t_EFL + t_EFM) / 2`` (eq 16) and the malleoli ``t = e_T p + t_knee`` (eq 17).
+
+Joint angles: the Grood & Suntay / ISB joint coordinate system (Wu et al. 2002) as a Z-X-Y
+decomposition of the distal segment's rotation relative to the proximal one,
+``R_p^T R_d = Rz(a) Rx(b) Ry(c)`` (Hu et al. 2021 eq 38-42):
+
+* hip: flexion ``a``, adduction ``L b``, internal rotation ``L c``;
+* knee: flexion ``-a`` (the tibia turns about -z when it flexes), adduction (varus) ``L b``,
+  tibial internal rotation ``L c``;
+
+with ``L = +1`` for the right leg and ``-1`` for the left leg, whose segment frames are mirrored
+(z still to the subject's right): mirroring maps ``Rz(a) Rx(b) Ry(c)`` to ``Rz(a) Rx(-b) Ry(-c)``,
+so the sign flip gives both legs the same anatomical meaning (adduction and internal rotation
+positive). Radians throughout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from pipeline.errors import InputError
+from pipeline.model.skeleton import Skeleton
+from pipeline.rotations import euler_zxy_from_matrix
+
+__all__ = ["frame_trajectories", "jcs_angles", "joint_angles", "landmark_trajectories"]
+
+_JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia")}
+
+
+def _check_q(skeleton: Skeleton, Q: np.ndarray) -> np.ndarray:
+    Q = np.asarray(Q, dtype=float)
+    if Q.ndim == 1:
+        Q = Q[None]
+    if Q.ndim != 2 or Q.shape[1] != skeleton.nq:
+        raise InputError(f"expected configurations of shape (N, {skeleton.nq}), got {Q.shape}")
+    return Q
+
+
+def frame_trajectories(
+    skeleton: Skeleton, Q: np.ndarray, names: Sequence[str]
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """World rotations ``(N, 3, 3)`` and positions ``(N, 3)`` of frames over configurations ``Q``.
+
+    One ``pin.forwardKinematics`` per sample, then only the requested frames are updated.
+    """
+    Q = _check_q(skeleton, Q)
+    model, data = skeleton.model, skeleton.data
+    ids = [skeleton.frame_id(n) for n in names]
+    n = len(Q)
+    R = np.empty((len(ids), n, 3, 3))
+    p = np.empty((len(ids), n, 3))
+    for k in range(n):
+        pin.forwardKinematics(model, data, Q[k])
+        for i, fid in enumerate(ids):
+            M = pin.updateFramePlacement(model, data, fid)
+            R[i, k] = M.rotation
+            p[i, k] = M.translation
+    return {name: (R[i], p[i]) for i, name in enumerate(names)}
+
+
+def landmark_trajectories(
+    skeleton: Skeleton, Q: np.ndarray, names: Sequence[str] | None = None
+) -> dict[str, np.ndarray]:
+    """Landmark name -> ``(N, 3)`` world positions (m) over configurations ``Q`` ``(N, nq)``.
+
+    Default names: every landmark frame of the model (``right_EFM``, ..., ``left_LM``). This is
+    Wang eq 15-17 evaluated by forward kinematics.
+    """
+    names = list(skeleton.landmark_frames if names is None else names)
+    Q = _check_q(skeleton, Q)
+    model, data = skeleton.model, skeleton.data
+    ids = [skeleton.frame_id(n) for n in names]
+    out = np.empty((len(ids), len(Q), 3))
+    for k in range(len(Q)):
+        pin.forwardKinematics(model, data, Q[k])
+        for i, fid in enumerate(ids):
+            out[i, k] = pin.updateFramePlacement(model, data, fid).translation
+    return {name: out[i] for i, name in enumerate(names)}
+
+
+def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: str) -> np.ndarray:
+    """ISB joint angles ``(N, 3)`` = [flexion, adduction, internal rotation] (rad).
+
+    ``R_proximal``, ``R_distal``: ``(N, 3, 3)`` or ``(3, 3)`` segment rotations in one world frame
+    (ISB axes; left-leg frames mirrored). ``joint`` is ``'hip'`` or ``'knee'`` (knee flexion is
+    ``-a`` of the Z-X-Y decomposition); see the module docstring for the signs.
+    """
+    if joint not in _JOINTS:
+        raise InputError(f"expected joint 'hip' or 'knee', got {joint!r}", field="joint")
+    if side not in ("right", "left"):
+        raise InputError(f"expected side 'right' or 'left', got {side!r}", field="side")
+    Rp, Rd = np.asarray(R_proximal, dtype=float), np.asarray(R_distal, dtype=float)
+    rel = np.swapaxes(Rp, -1, -2) @ Rd
+    e = euler_zxy_from_matrix(rel)
+    lat = 1.0 if side == "right" else -1.0
+    flex = -e[..., 0] if joint == "knee" else e[..., 0]
+    return np.stack([flex, lat * e[..., 1], lat * e[..., 2]], axis=-1)
+
+
+def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
+    """ISB hip and knee angles over ``Q``: ``'<side>_<joint>_<angle>'`` -> ``(N,)`` radians.
+
+    Keys: ``right_hip_flexion``, ``right_hip_adduction``, ``right_hip_rotation``,
+    ``right_knee_flexion``, ``right_knee_adduction``, ``right_knee_rotation`` (+ ``left_*``);
+    rotation = internal rotation. Computed from the segment frames (not read from q), so a hinge
+    knee reports its JCS angles including the reference rotation between the segments.
+    """
+    segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia")]
+    traj = frame_trajectories(skeleton, Q, segs)
+    out: dict[str, np.ndarray] = {}
+    for side in skeleton.legs:
+        for joint, (prox, dist) in _JOINTS.items():
+            p = prox if prox == "pelvis" else f"{side}_{prox}"
+            ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
+            for i, name in enumerate(("flexion", "adduction", "rotation")):
+                out[f"{side}_{joint}_{name}"] = ang[:, i]
+    return out

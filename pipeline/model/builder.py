@@ -1,0 +1,421 @@
+"""Subject-scaled lower-limb URDF, derived from example-robot-data's ``human.urdf`` (DESIGN.md §3).
+
+Kept from the template: pelvis + thigh/shank/foot per leg, its naming style (``<side>_hip_Z``,
+``<side>_hip_X``, ``<side>_hip_Y``, ``<side>_knee_Z``, ``<side>_ankle_Z``, ``<side>_ankle_X``,
+``*_virtual`` intermediate links), its STL meshes (scaled) and its Dumas et al. (2007) inertias
+(scaled). The upper body is dropped. Links are renamed to the segment names used downstream:
+``pelvis``, ``<side>_femur``, ``<side>_tibia``, ``<side>_foot``. The knee is ``<side>_knee``
+(hinge, 1 DoF) or ``<side>_knee_Z``, ``_X``, ``_Y`` (free). Fixed frames are massless links
+``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``, ``pelvis_imu`` and ``<side>_{femur,tibia,foot}_imu``,
+each attached by a fixed joint named ``<frame>_joint``. Mesh widths scale by knee / ankle width
+over assumed template widths of 0.100 m / 0.070 m (viewer only; no dimension downstream uses them).
+
+Every link frame IS the ISB segment frame at ``q = 0`` (femur: origin HJC; tibia: origin KJC;
+foot: origin AJC; axes x anterior, y proximal, z right, left leg mirrored), so the landmark frames
+are fixed frames at the :class:`SubjectGeometry` positions and Wang eq 15-17 are the forward
+kinematics of those frames.
+
+Joints and signs (``L = +1`` right leg, ``-1`` left leg; the left leg's URDF axes are mirrored so
+that every angle has the same anatomical meaning on both sides):
+
+=================  =====================  ====================================  =================
+joint              axis (parent frame)    positive q                            limits (rad)
+=================  =====================  ====================================  =================
+``hip_Z``          ``(0, 0, 1)``          hip flexion                           [-1.047, 3.142]
+``hip_X``          ``(L, 0, 0)``          hip adduction                         [-1.571, 1.047]
+``hip_Y``          ``(0, L, 0)``          hip internal rotation                 [-1.571, 1.047]
+``knee`` (hinge)   ``-a_T`` (tibia)       knee flexion about the AoR            [0, 3.142]
+``knee_Z`` (free)  ``(0, 0, -1)``         knee flexion                          [0, 3.142]
+``knee_X`` (free)  ``(L, 0, 0)``          knee adduction (varus)                [-0.524, 0.524]
+``knee_Y`` (free)  ``(0, L, 0)``          tibial internal rotation              [-0.785, 0.785]
+``ankle_Z``        ``(0, 0, 1)``          dorsiflexion                          [-1.571, 0.785]
+``ankle_X``        ``(L, 0, 0)``          inversion                             [-0.524, 0.785]
+=================  =====================  ====================================  =================
+
+Hip/ankle limits are the template's (its hip_X counted abduction positive; ISB adduction is used
+here, so the interval is negated); knee_X/knee_Y limits are ours (the template has a 1-DoF knee).
+
+Hinge knee: the joint frame sits at the KJC with rotation ``R0 = rotation_aligning(a_T, a_F)``
+relative to the femur, and turns about ``-a_T`` in the tibial frame, so ``R_F a_F = R_T a_T`` for
+every ``q`` (the AoR is fixed in both segments; Wang eq 6-8). Free knee: Z-X-Y chain at the KJC,
+so ``e_T = e_F Rz(-q_Z) Rx(L q_X) Ry(L q_Y)`` takes any value and the malleoli follow Wang eq 17.
+
+Masses: template mass times ``geometry.mass_scale`` (``body_mass / 75 kg``, or ``(H / 1.80)^3``);
+centres of mass scale with the segment length ratio ``l = L / L_template``; inertia tensors by
+``mass_ratio * l^2`` (fixed radii of gyration relative to length, as in Dumas 2007).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import yourdfpy as ud
+
+from pipeline.errors import InputError
+from pipeline.model.geometry import TEMPLATE_HEIGHT_M, SubjectGeometry, mirror_point
+from pipeline.paths import example_robot_data_share
+from pipeline.rotations import rotation_aligning
+
+__all__ = [
+    "LANDMARKS",
+    "SEGMENTS",
+    "build_urdf",
+    "default_imu_placements",
+    "imu_frame_names",
+    "joint_names",
+    "landmark_frame_names",
+    "resolve_package_uri",
+    "segment_frame_names",
+]
+
+KNEE_MODES = ("hinge", "free")
+LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
+SEGMENTS = ("femur", "tibia", "foot")
+_MESH_URI = "package://example-robot-data/robots/human_description/meshes/"
+
+# Template (human.urdf, right leg, H = 1.80 m) lengths used as scaling references (m).
+_T_THIGH, _T_SHANK = 0.439, 0.44
+_T_FOOT = 0.1497 * TEMPLATE_HEIGHT_M  # Dumas male foot ratio, matches the foot mesh (0.271 m)
+_T_KNEE_WIDTH, _T_ANKLE_WIDTH = 0.100, 0.070  # assumed epicondylar / bimalleolar widths at 1.80 m
+
+# Template inertials (right side): mass, com, (ixx, ixy, ixz, iyy, iyz, izz).
+_INERTIA = {
+    "pelvis": (
+        10.65,
+        (0.03, -0.025, -0.001),
+        (0.08977, -0.0055, -0.00127, 0.09888, -0.00056, 0.07942),
+    ),
+    "femur": (
+        9.22,
+        (-0.018, -0.188, 0.014),
+        (0.1497, 0.00872, -0.00071, 0.04005, -0.00872, 0.1602),
+    ),
+    "tibia": (3.6, (-0.021, -0.181, 0.003), (0.05471, 0.00112, 0.00028, 0.00698, 0.00174, 0.05471)),
+    "foot": (0.9, (0.068, -0.027, 0.005), (0.00081, 0.00048, -0.00018, 0.00385, 0.0, 0.00364)),
+}
+# (effort, velocity, lower, upper), sign-adapted as in the module docstring.
+_LIMITS = {
+    "hip_Z": (185.0, 12.0, -1.047196667, 3.14159),
+    "hip_X": (120.0, 12.0, -1.570795, 1.047196667),
+    "hip_Y": (60.0, 12.0, -1.570795, 1.047196667),
+    "knee": (130.0, 18.6, 0.0, 3.14159),
+    "knee_Z": (130.0, 18.6, 0.0, 3.14159),
+    "knee_X": (60.0, 6.0, -0.523598333, 0.523598333),
+    "knee_Y": (60.0, 6.0, -0.785398, 0.785398),
+    "ankle_Z": (126.0, 12.7, -1.570795, 0.7853975),
+    "ankle_X": (20.0, 6.0, -0.523598333, 0.785398),
+}
+_COLORS = {
+    "middle": (0.0, 0.0, 0.8, 1.0),
+    "right": (0.8, 0.0, 0.0, 1.0),
+    "left": (0.0, 0.8, 0.0, 1.0),
+}
+
+
+def segment_frame_names(legs: Sequence[str] = ("right", "left")) -> dict[str, str]:
+    """Segment key -> link/frame name: ``{'pelvis': 'pelvis', 'right_femur': 'right_femur'}``."""
+    names = {"pelvis": "pelvis"}
+    names.update({f"{s}_{seg}": f"{s}_{seg}" for s in legs for seg in SEGMENTS})
+    return names
+
+
+def landmark_frame_names(legs: Sequence[str] = ("right", "left")) -> list[str]:
+    """``right_HJC, right_KJC, right_AJC, right_EFM, right_EFL, right_MM, right_LM`` (+ left)."""
+    return [f"{s}_{lm}" for s in legs for lm in LANDMARKS]
+
+
+def imu_frame_names(legs: Sequence[str] = ("right", "left")) -> list[str]:
+    """``pelvis_imu`` and ``<side>_femur_imu``, ``<side>_tibia_imu``, ``<side>_foot_imu``."""
+    return ["pelvis_imu"] + [f"{s}_{seg}_imu" for s in legs for seg in SEGMENTS]
+
+
+def joint_names(knee: str = "hinge", legs: Sequence[str] = ("right", "left")) -> list[str]:
+    """Actuated joints in URDF order (hip Z-X-Y, knee, ankle Z-X per leg).
+
+    Pinocchio orders the legs alphabetically (left first); use ``Skeleton`` for q indices.
+    """
+    k = ["knee"] if knee == "hinge" else ["knee_Z", "knee_X", "knee_Y"]
+    per_leg = ["hip_Z", "hip_X", "hip_Y", *k, "ankle_Z", "ankle_X"]
+    return [f"{s}_{j}" for s in legs for j in per_leg]
+
+
+def resolve_package_uri(uri: str) -> Path:
+    """File behind ``package://example-robot-data/...`` (ROS_PACKAGE_PATH = the share folder)."""
+    prefix = "package://"
+    if not uri.startswith(prefix):
+        return Path(uri)
+    return example_robot_data_share().parent / uri[len(prefix) :]
+
+
+def _tf(
+    R: np.ndarray | None = None, p: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
+) -> np.ndarray:
+    T = np.eye(4)
+    if R is not None:
+        T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -> ud.Inertial:
+    m0, com, (ixx, ixy, ixz, iyy, iyz, izz) = _INERTIA[segment]
+    inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    com = np.asarray(com) * length_ratio
+    if side == "left":  # mirror the right-side template: M I M, M c
+        M = np.diag([1.0, 1.0, -1.0])
+        inertia, com = M @ inertia @ M, mirror_point(com)
+    inertia = inertia * mass_scale * length_ratio**2
+    return ud.Inertial(origin=_tf(p=com), mass=float(m0 * mass_scale), inertia=inertia)
+
+
+def _visual(
+    name: str, mesh: str, scale: Sequence[float], xyz: Sequence[float], mat: str
+) -> ud.Visual:
+    geometry = ud.Geometry(mesh=ud.Mesh(filename=_MESH_URI + mesh, scale=np.asarray(scale)))
+    return ud.Visual(
+        name=name, origin=_tf(p=xyz), geometry=geometry, material=ud.Material(name=mat)
+    )
+
+
+def _revolute(
+    name: str, parent: str, child: str, origin: np.ndarray, axis, limit_key: str
+) -> ud.Joint:
+    effort, velocity, lower, upper = _LIMITS[limit_key]
+    return ud.Joint(
+        name=name,
+        type="revolute",
+        parent=parent,
+        child=child,
+        origin=origin,
+        axis=np.asarray(axis, dtype=float),
+        limit=ud.Limit(effort=effort, velocity=velocity, lower=lower, upper=upper),
+    )
+
+
+def _fixed_frame(name: str, parent: str, T: np.ndarray) -> tuple[ud.Link, ud.Joint]:
+    joint = ud.Joint(name=f"{name}_joint", type="fixed", parent=parent, child=name, origin=T)
+    return ud.Link(name=name), joint
+
+
+def default_imu_placements(g: SubjectGeometry) -> dict[str, np.ndarray]:
+    """Plausible IMU sites (4x4, identity rotation) in the segment frames of ``g.side``.
+
+    pelvis: sacrum; femur: lateral mid-thigh; tibia: antero-medial shank (flat tibial surface);
+    foot: dorsum of the mid-foot. Offsets scale with height / 1.80 m and segment lengths.
+    """
+    s, lat, side = g.height_m / TEMPLATE_HEIGHT_M, g.lateral_sign, g.side
+    return {
+        "pelvis_imu": _tf(p=(-0.11 * s, -0.05 * s, 0.0)),
+        f"{side}_femur_imu": _tf(p=(0.0, -0.5 * g.thigh_length, 0.08 * s * lat)),
+        f"{side}_tibia_imu": _tf(p=(0.03 * s, -0.35 * g.shank_length, -0.03 * s * lat)),
+        f"{side}_foot_imu": _tf(p=(0.25 * g.foot_length_m, -0.02 * s, 0.0)),
+    }
+
+
+def _placement(name: str, value: object) -> np.ndarray:
+    if isinstance(value, tuple) and len(value) == 2:
+        R, p = (np.asarray(v, dtype=float) for v in value)
+        T = _tf(R, p) if R.shape == (3, 3) and p.shape == (3,) else np.full((4, 4), np.nan)
+    else:
+        T = np.asarray(value, dtype=float)
+    ok = T.shape == (4, 4) and np.all(np.isfinite(T))
+    if ok:
+        R = T[:3, :3]
+        ok = np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0
+        ok = ok and np.allclose(T[3], [0, 0, 0, 1])
+    if not ok:
+        raise InputError("expected a 4x4 rigid transform or (R 3x3 rotation, p 3)", field=name)
+    return T
+
+
+def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple[list, list]:
+    side, lat = g.side, g.lateral_sign
+    femur, tibia, foot = f"{side}_femur", f"{side}_tibia", f"{side}_foot"
+    mat = f"body_color_{side[0].upper()}"
+    l_thigh, l_shank = g.thigh_length / _T_THIGH, g.shank_length / _T_SHANK
+    l_foot = g.foot_length_m / _T_FOOT
+    w_knee, w_ankle = g.knee_width / _T_KNEE_WIDTH, g.ankle_width / _T_ANKLE_WIDTH
+    w_shank = 0.5 * (w_knee + w_ankle)
+    ms = g.mass_scale
+    links = [
+        ud.Link(name=f"{femur}_virtual"),
+        ud.Link(name=f"{femur}_virtual_2"),
+        ud.Link(
+            name=femur,
+            inertial=_inertial("femur", ms, l_thigh, side),
+            visuals=[
+                _visual(
+                    femur,
+                    "upperleg_mesh.STL",
+                    (0.0062 * w_knee, 0.0064 * l_thigh, 0.0069 * w_knee),
+                    (0.0, -0.05 * l_thigh, 0.0),
+                    mat,
+                )
+            ],
+        ),
+        ud.Link(
+            name=tibia,
+            inertial=_inertial("tibia", ms, l_shank, side),
+            visuals=[
+                _visual(
+                    tibia,
+                    "lowerleg_mesh.STL",
+                    (0.0063 * w_shank, 0.0066 * l_shank, 0.007 * w_shank),
+                    (0.0, 0.0, 0.0),
+                    mat,
+                ),
+                _visual(f"{side}_knee", "knee_mesh.STL", (0.0056 * w_knee,) * 3, (0, 0, 0), mat),
+            ],
+        ),
+        ud.Link(name=f"{foot}_virtual"),
+        ud.Link(
+            name=foot,
+            inertial=_inertial("foot", ms, l_foot, side),
+            visuals=[
+                _visual(
+                    foot,
+                    "foot_mesh.STL",
+                    (0.0067 * l_foot, 0.0067 * w_ankle, 0.0067 * w_ankle),
+                    (0.0, 0.0, 0.0),
+                    mat,
+                )
+            ],
+        ),
+    ]
+    jn = f"{side}_"
+    joints = [
+        _revolute(jn + "hip_Z", "pelvis", f"{femur}_virtual", _tf(p=g.hip), (0, 0, 1), "hip_Z"),
+        _revolute(
+            jn + "hip_X", f"{femur}_virtual", f"{femur}_virtual_2", _tf(), (lat, 0, 0), "hip_X"
+        ),
+        _revolute(jn + "hip_Y", f"{femur}_virtual_2", femur, _tf(), (0, lat, 0), "hip_Y"),
+    ]
+    kjc = g.kjc_femur
+    if knee == "hinge":
+        R0 = rotation_aligning(g.knee_axis_tibia, g.knee_axis_femur)
+        joints.append(
+            _revolute(jn + "knee", femur, tibia, _tf(R0, kjc), -g.knee_axis_tibia, "knee")
+        )
+    else:
+        v1, v2 = f"{tibia}_virtual", f"{tibia}_virtual_2"
+        links += [ud.Link(name=v1), ud.Link(name=v2)]
+        joints += [
+            _revolute(jn + "knee_Z", femur, v1, _tf(p=kjc), (0, 0, -1), "knee_Z"),
+            _revolute(jn + "knee_X", v1, v2, _tf(), (lat, 0, 0), "knee_X"),
+            _revolute(jn + "knee_Y", v2, tibia, _tf(), (0, lat, 0), "knee_Y"),
+        ]
+    joints += [
+        _revolute(
+            jn + "ankle_Z", tibia, f"{foot}_virtual", _tf(p=g.ajc_tibia), (0, 0, 1), "ankle_Z"
+        ),
+        _revolute(jn + "ankle_X", f"{foot}_virtual", foot, _tf(), (lat, 0, 0), "ankle_X"),
+    ]
+    fixed = {
+        "HJC": (femur, np.zeros(3)),
+        "KJC": (femur, kjc),
+        "AJC": (tibia, g.ajc_tibia),
+        **{k: (femur, v) for k, v in g.femur_landmarks.items()},
+        **{k: (tibia, v) for k, v in g.tibia_landmarks.items()},
+    }
+    for lm in LANDMARKS:
+        parent, p = fixed[lm]
+        link, joint = _fixed_frame(f"{side}_{lm}", parent, _tf(p=p))
+        links.append(link)
+        joints.append(joint)
+    for seg in SEGMENTS:
+        name = f"{side}_{seg}_imu"
+        link, joint = _fixed_frame(name, f"{side}_{seg}", imus[name])
+        links.append(link)
+        joints.append(joint)
+    return links, joints
+
+
+def build_urdf(
+    geometry: SubjectGeometry,
+    out_path: str | Path,
+    knee: str = "hinge",
+    legs: Sequence[str] = ("right", "left"),
+    imu_placements: Mapping[str, object] | None = None,
+    other_leg: SubjectGeometry | None = None,
+    check: bool = True,
+) -> Path:
+    """Write the subject's lower-limb URDF and return its path.
+
+    Args:
+        geometry: dimensions of one leg and the pelvis; the other leg is its mirror image
+            (:meth:`SubjectGeometry.mirrored`) unless ``other_leg`` is given.
+        out_path: ``.urdf`` file to write (parent folders are created).
+        knee: ``'hinge'`` (1 DoF about the knee AoR) or ``'free'`` (Z-X-Y, Wang eq 15-17).
+        legs: which legs to include, a subset of ``('right', 'left')``.
+        imu_placements: IMU frame name (e.g. ``'right_tibia_imu'``) -> 4x4 transform or
+            ``(R, p)`` in its segment frame; others get :func:`default_imu_placements`.
+        other_leg: geometry of the opposite leg, for asymmetric subjects.
+        check: load the result with ``pinocchio.buildModelFromUrdf`` and verify its joints.
+    """
+    if knee not in KNEE_MODES:
+        raise InputError(f"expected knee in {KNEE_MODES}, got {knee!r}", field="knee")
+    legs = tuple(legs)
+    if not legs or len(set(legs)) != len(legs) or not set(legs) <= {"right", "left"}:
+        raise InputError(f"expected legs from ('right', 'left'), got {legs}", field="legs")
+    geoms = {}
+    for side in legs:
+        if other_leg is not None and other_leg.side == side:
+            geoms[side] = other_leg
+        else:
+            geoms[side] = geometry.for_side(side)
+    imus: dict[str, np.ndarray] = {}
+    for g in geoms.values():
+        imus.update(default_imu_placements(g))
+    for name, value in (imu_placements or {}).items():
+        if name not in imus:
+            raise InputError(
+                f"expected an IMU frame among {sorted(imus)}, got {name!r}", field=name
+            )
+        imus[name] = _placement(name, value)
+
+    s = geometry.height_m / TEMPLATE_HEIGHT_M
+    pelvis = ud.Link(
+        name="pelvis",
+        inertial=_inertial("pelvis", geometry.mass_scale, s, "right"),
+        visuals=[
+            _visual(
+                "pelvis",
+                "pelvis_mesh.STL",
+                (0.006430 * s, 0.005897 * s, 0.005897 * s),
+                (0.0, -0.05 * s, 0.0),
+                "body_color",
+            )
+        ],
+    )
+    links, joints = [pelvis], []
+    link, joint = _fixed_frame("pelvis_imu", "pelvis", imus["pelvis_imu"])
+    links.append(link)
+    joints.append(joint)
+    for g in geoms.values():
+        leg_links, leg_joints = _leg(g, knee, imus)
+        links += leg_links
+        joints += leg_joints
+    materials = [
+        ud.Material(name=n, color=ud.Color(rgba=np.array(_COLORS[k])))
+        for n, k in (("body_color", "middle"), ("body_color_R", "right"), ("body_color_L", "left"))
+    ]
+    robot = ud.Robot(name=f"lower_limb_{knee}_knee_ISB_model", links=links, joints=joints)
+    robot.materials = materials
+    urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
+    out = Path(out_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    urdf.write_xml_file(str(out))
+    if check:
+        _check_with_pinocchio(out, joint_names(knee, legs))
+    return out
+
+
+def _check_with_pinocchio(path: Path, expected_joints: list[str]) -> None:
+    import pinocchio as pin
+
+    model = pin.buildModelFromUrdf(str(path))
+    names = list(model.names)[1:]
+    if sorted(names) != sorted(expected_joints):
+        raise RuntimeError(f"{path}: pinocchio joints {names} differ from {expected_joints}")

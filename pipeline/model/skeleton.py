@@ -1,0 +1,189 @@
+"""``Skeleton``: the one thin wrapper around a ``pin.Model`` + ``pin.Data`` of a generated URDF.
+
+Names (see :mod:`pipeline.model.builder`): segment frames ``pelvis``, ``<side>_femur``,
+``<side>_tibia``, ``<side>_foot``; landmark frames ``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``; IMU
+frames ``pelvis_imu``, ``<side>_{femur,tibia,foot}_imu``; joints ``<side>_hip_{Z,X,Y}``,
+``<side>_knee`` (hinge) or ``<side>_knee_{Z,X,Y}`` (free), ``<side>_ankle_{Z,X}``.
+
+Root: ``'fixed'`` (pelvis = world), ``'freeflyer'`` (q[:7] = position, quaternion **x, y, z, w**
+in Pinocchio's order) or ``'spherical'`` (q[:4] = quaternion x, y, z, w; pelvis origin fixed).
+Pinocchio orders the legs alphabetically (left before right): always index q through
+:meth:`Skeleton.q_index` / :meth:`Skeleton.q_slice`.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from pipeline.errors import InputError
+from pipeline.model.builder import LANDMARKS, SEGMENTS, build_urdf
+from pipeline.model.geometry import SubjectGeometry
+
+__all__ = ["ROOTS", "Skeleton"]
+
+ROOTS = ("fixed", "freeflyer", "spherical")
+
+
+@dataclass
+class Skeleton:
+    """A loaded model: ``model``, ``data``, and name lookups. Built by :meth:`from_urdf`."""
+
+    model: pin.Model
+    data: pin.Data
+    urdf_path: Path
+    root: str = "fixed"
+    _frame_ids: dict[str, int] = field(default_factory=dict, repr=False)
+
+    # ---- construction -------------------------------------------------------------------------
+    @classmethod
+    def from_urdf(cls, path: str | Path, root: str = "fixed") -> Skeleton:
+        """Load a URDF written by :func:`build_urdf` with the given root joint."""
+        path = Path(path)
+        if root not in ROOTS:
+            raise InputError(f"expected root in {ROOTS}, got {root!r}", field="root")
+        if not path.is_file():
+            raise InputError("expected an existing URDF file", file=path)
+        if root == "fixed":
+            model = pin.buildModelFromUrdf(str(path))
+        elif root == "freeflyer":
+            model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+        else:
+            model = pin.buildModelFromUrdf(str(path), pin.JointModelSpherical())
+        ids: dict[str, int] = {}
+        for i, f in enumerate(model.frames):
+            ids.setdefault(f.name, i)  # first frame of a name (a BODY frame for links)
+        for i, f in enumerate(model.frames):
+            if f.type == pin.FrameType.BODY:
+                ids[f.name] = i
+        return cls(model, model.createData(), path, root, ids)
+
+    @classmethod
+    def build(
+        cls,
+        geometry: SubjectGeometry,
+        knee: str = "hinge",
+        out_dir: str | Path | None = None,
+        root: str = "fixed",
+        **kwargs: object,
+    ) -> Skeleton:
+        """:func:`build_urdf` into ``out_dir`` (a fresh temporary folder if None), then load."""
+        folder = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="skel_"))
+        path = build_urdf(geometry, folder / f"lower_limb_{knee}.urdf", knee=knee, **kwargs)
+        return cls.from_urdf(path, root=root)
+
+    # ---- names --------------------------------------------------------------------------------
+    @property
+    def nq(self) -> int:
+        return self.model.nq
+
+    @property
+    def legs(self) -> tuple[str, ...]:
+        """Legs present, in ``('right', 'left')`` order."""
+        return tuple(s for s in ("right", "left") if f"{s}_femur" in self._frame_ids)
+
+    @property
+    def knee(self) -> str:
+        """``'hinge'`` or ``'free'``."""
+        return "free" if any(n.endswith("_knee_Z") for n in self.model.names) else "hinge"
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Actuated joints in Pinocchio order (root joint included if any)."""
+        return list(self.model.names)[1:]
+
+    @property
+    def segment_frames(self) -> dict[str, str]:
+        """``{'pelvis': 'pelvis', 'right_femur': 'right_femur', ...}`` for the legs present."""
+        out = {"pelvis": "pelvis"}
+        out.update({f"{s}_{seg}": f"{s}_{seg}" for s in self.legs for seg in SEGMENTS})
+        return out
+
+    @property
+    def landmark_frames(self) -> list[str]:
+        return [f"{s}_{lm}" for s in self.legs for lm in LANDMARKS]
+
+    @property
+    def imu_frames(self) -> list[str]:
+        return ["pelvis_imu"] + [f"{s}_{seg}_imu" for s in self.legs for seg in SEGMENTS]
+
+    def has_frame(self, name: str) -> bool:
+        return name in self._frame_ids
+
+    def frame_id(self, name: str) -> int:
+        """Pinocchio frame index of ``name`` (link/BODY frame preferred)."""
+        try:
+            return self._frame_ids[name]
+        except KeyError:
+            raise InputError(
+                f"expected a frame of the model, got {name!r}", field="frame"
+            ) from None
+
+    def q_index(self, joint: str) -> int:
+        """Index in q of a 1-DoF joint (e.g. ``'right_hip_X'``)."""
+        if not self.model.existJointName(joint):
+            raise InputError(f"expected a joint among {self.joint_names}, got {joint!r}")
+        return self.model.joints[self.model.getJointId(joint)].idx_q
+
+    def q_slice(self, joint: str) -> slice:
+        """Slice of q for any joint (root joints included)."""
+        if not self.model.existJointName(joint):
+            raise InputError(f"expected a joint among {self.joint_names}, got {joint!r}")
+        j = self.model.joints[self.model.getJointId(joint)]
+        return slice(j.idx_q, j.idx_q + j.nq)
+
+    def leg_joints(self, side: str, group: str) -> list[str]:
+        """Joint names of ``group`` in ``('hip', 'knee', 'ankle')`` for ``side``, chain order."""
+        prefix = f"{side}_{group}"
+        return [n for n in self.joint_names if n == prefix or n.startswith(prefix + "_")]
+
+    @property
+    def lower_limits(self) -> np.ndarray:
+        return np.array(self.model.lowerPositionLimit)
+
+    @property
+    def upper_limits(self) -> np.ndarray:
+        return np.array(self.model.upperPositionLimit)
+
+    # ---- kinematics ---------------------------------------------------------------------------
+    def neutral(self) -> np.ndarray:
+        """Neutral configuration: all joint angles 0 (segments in their ISB reference pose)."""
+        return pin.neutral(self.model)
+
+    def forward(self, q: np.ndarray) -> Skeleton:
+        """Forward kinematics of every joint and frame (``pin.framesForwardKinematics``)."""
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self.model.nq,):
+            raise InputError(f"expected q of shape ({self.model.nq},), got {q.shape}", field="q")
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self
+
+    def frame_pose(self, name: str) -> np.ndarray:
+        """4x4 world pose of a frame after :meth:`forward`."""
+        return self.data.oMf[self.frame_id(name)].homogeneous.copy()
+
+    def frame_rotation(self, name: str) -> np.ndarray:
+        """3x3 rotation (frame axes as columns in world) after :meth:`forward`."""
+        return self.data.oMf[self.frame_id(name)].rotation.copy()
+
+    def frame_position(self, name: str) -> np.ndarray:
+        """World position of a frame's origin after :meth:`forward`."""
+        return self.data.oMf[self.frame_id(name)].translation.copy()
+
+    def local_placement(self, name: str) -> np.ndarray:
+        """4x4 placement of a frame in its parent joint's frame (read from the URDF)."""
+        return self.model.frames[self.frame_id(name)].placement.homogeneous.copy()
+
+    def relative_pose(
+        self, name: str, reference: str, q: Sequence[float] | None = None
+    ) -> np.ndarray:
+        """4x4 pose of frame ``name`` in frame ``reference`` (at ``q`` if given)."""
+        if q is not None:
+            self.forward(np.asarray(q, dtype=float))
+        a, b = self.data.oMf[self.frame_id(reference)], self.data.oMf[self.frame_id(name)]
+        return (a.actInv(b)).homogeneous.copy()

@@ -1,0 +1,379 @@
+"""Shared input checks (pipeline.io.checks) and atomic output (pipeline.io.atomic)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from pipeline.errors import InputError
+from pipeline.io import atomic, checks
+from pipeline.io.checks import Notes
+from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
+
+RATE = 100.0
+
+
+def _t(n: int = 200, rate: float = RATE) -> np.ndarray:
+    return np.arange(n) / rate
+
+
+def _rotation_about_axis(t: np.ndarray, axis=(1.0, 2.0, 2.0), w=1.5) -> np.ndarray:
+    """Quaternions of a constant-rate rotation about a fixed axis (a geodesic: slerp is exact)."""
+    a = np.asarray(axis) / np.linalg.norm(axis)
+    R0 = exp3(np.array([0.3, -0.2, 0.1]))
+    return quat_from_matrix(R0 @ exp3(w * t[:, None] * a))
+
+
+# ---------------------------------------------------------------- time stamps
+
+
+def test_time_ok_and_returned_as_float():
+    t = checks.check_time([0, 1, 2])
+    assert t.dtype == float and t.tolist() == [0.0, 1.0, 2.0]
+
+
+def test_repeated_time_stamp_names_first_row():
+    t = _t(10)
+    t[4] = t[3]
+    with pytest.raises(InputError, match=r"repeated time stamp 0\.03 s at row 4 \(line 11\)") as e:
+        checks.check_time(t, file="a.sto", first_line=7)
+    assert e.value.file == "a.sto" and e.value.field == "time"
+
+
+def test_unsorted_time_stamps_name_first_row():
+    t = _t(10)
+    t[[5, 6]] = t[[6, 5]]
+    with pytest.raises(InputError, match=r"not sorted: 0\.05 s at row 6 comes after 0\.06 s"):
+        checks.check_time(t)
+
+
+def test_unsorted_reported_before_later_repeat():
+    t = np.array([0.0, 0.2, 0.1, 0.3, 0.3])
+    with pytest.raises(InputError, match="not sorted.*row 2"):
+        checks.check_time(t)
+
+
+@pytest.mark.parametrize(
+    ("t", "msg"),
+    [([0.0], "at least 2 samples, found 1"), ([0.0, np.nan, 0.2], "not a finite number at row 1")],
+)
+def test_time_too_short_or_nan(t, msg):
+    with pytest.raises(InputError, match=msg):
+        checks.check_time(t)
+
+
+# ---------------------------------------------------------------- rate
+
+
+def test_rate_estimate_and_jitter_match_construction():
+    rng = np.random.default_rng(0)
+    dt = 0.01 + rng.normal(0, 1e-4, 5000)
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    info = checks.estimate_rate(t)
+    assert info.rate_hz == pytest.approx(100.0, rel=1e-3)
+    assert info.jitter_s == pytest.approx(1e-4, rel=0.05)
+
+
+def test_rate_matches_declared():
+    info = checks.check_rate(_t(), 100.0)
+    assert info.rate_hz == pytest.approx(100.0)
+
+
+def test_wrong_declared_rate_refused():
+    with pytest.raises(InputError, match=r"declared rate 50 Hz but the time stamps give 100 Hz"):
+        checks.check_rate(_t(), 50.0, file="x.sto")
+
+
+def test_jitter_and_dropped_samples_noted_not_refused():
+    rng = np.random.default_rng(1)
+    t = np.concatenate([[0.0], np.cumsum(0.01 + rng.normal(0, 2e-3, 300))])
+    notes = Notes()
+    checks.check_rate(t, None, notes=notes)
+    assert any("irregular sampling" in n for n in notes)
+    t2 = np.delete(_t(), [50, 51])
+    notes2 = Notes()
+    checks.check_rate(t2, 100.0, notes=notes2)
+    assert any("1 interval(s) longer than 1.5 sampling periods" in n for n in notes2)
+
+
+def test_mismatched_lengths_and_rates_refused():
+    with pytest.raises(InputError, match=r"different numbers of samples \(acc: 100, gyr: 99\)"):
+        checks.check_same_length({"acc": 100, "gyr": 99}, file="f")
+    assert checks.check_same_length({"a": 5, "b": 5}) == 5
+    with pytest.raises(InputError, match=r"different sampling rates \(a: 100 Hz, b: 60 Hz\)"):
+        checks.check_same_rate({"a": 100.0, "b": 60.0})
+
+
+# ---------------------------------------------------------------- gaps
+
+
+def test_short_vector_gap_interpolated_exactly_and_reported():
+    t = _t()
+    truth = np.column_stack([2 * t + 1, -t, np.full_like(t, 3.0)])  # linear: exact
+    v = truth.copy()
+    v[50:55] = np.nan
+    v[80, 1] = np.nan  # one component missing makes the sample missing
+    notes = Notes()
+    out = checks.fill_gaps(t, v, notes=notes, file="f.csv", field="acc")
+    np.testing.assert_allclose(out, truth, atol=1e-12)
+    assert np.isnan(v[50]).all()  # input untouched
+    assert len(notes) == 2
+    assert "f.csv: field acc: filled 5 missing sample(s) from t=0.5 s to t=0.54 s" in notes.items[0]
+
+
+def test_gap_at_ends_held_and_reported():
+    t = _t(50)
+    v = np.arange(50.0)
+    v[:3] = np.nan
+    v[-2:] = np.nan
+    notes = Notes()
+    out = checks.fill_gaps(t, v, notes=notes)
+    assert out[:3].tolist() == [3.0] * 3 and out[-2:].tolist() == [47.0] * 2
+    assert all("held the nearest valid sample" in n for n in notes)
+
+
+def test_long_gap_refused_with_time_range():
+    t = _t()
+    v = np.ones((200, 3))
+    v[100:120] = np.nan  # 0.2 s
+    with pytest.raises(
+        InputError, match=r"gap of 20 missing samples \(0\.2 s\) from t=1 s to t=1\.19 s"
+    ):
+        checks.fill_gaps(t, v, max_gap_s=0.1)
+    out = checks.fill_gaps(t, v, max_gap_s=0.25)  # allowed when the user says so
+    assert np.isfinite(out).all()
+
+
+def test_gap_exactly_max_length_is_filled():
+    t = _t()
+    v = np.ones(200)
+    v[10:20] = np.nan  # 10 samples = 0.1 s
+    assert np.isfinite(checks.fill_gaps(t, v, max_gap_s=0.1)).all()
+
+
+def test_all_missing_refused():
+    with pytest.raises(InputError, match="no finite values"):
+        checks.fill_gaps(_t(10), np.full((10, 3), np.nan))
+
+
+def test_quaternion_gap_filled_by_slerp_matches_truth():
+    t = _t()
+    truth = _rotation_about_axis(t)
+    q = truth.copy()
+    q[60:68] = np.nan
+    q[68:] *= -1  # neighbour in the other hemisphere: same rotation, slerp must not care
+    notes = Notes()
+    out = checks.fill_gaps(t, q, kind="quaternion", notes=notes)
+    err = angle_between_rotations(out[60:68], truth[60:68])
+    assert err.max() < 1e-9
+    assert "slerp" in notes.items[0]
+
+
+def test_zero_quaternion_next_to_gap_refused():
+    q = _rotation_about_axis(_t(20))
+    q[5:7] = np.nan
+    q[7] = 0.0
+    with pytest.raises(InputError, match="zero quaternion at row 7"):
+        checks.fill_gaps(_t(20), q, kind="quaternion")
+
+
+def angle_between_rotations(q1, q2):
+    R = np.swapaxes(matrix_from_quat(q1), -1, -2) @ matrix_from_quat(q2)
+    return np.linalg.norm(log3(R), axis=-1)
+
+
+# ---------------------------------------------------------------- quaternions
+
+
+def test_slightly_non_unit_normalised_and_noted():
+    q = _rotation_about_axis(_t(20))
+    notes = Notes()
+    out = checks.check_quaternions(q * 1.05, notes=notes, field="pelvis_imu")
+    np.testing.assert_allclose(out, q, atol=1e-12)
+    assert "normalised 20 quaternion(s) with |norm - 1| up to 0.05" in notes.items[0]
+
+
+def test_tiny_norm_error_normalised_silently():
+    q = _rotation_about_axis(_t(20)) * (1 + 1e-6)
+    notes = Notes()
+    checks.check_quaternions(q, notes=notes)
+    assert len(notes) == 0
+
+
+def test_far_from_unit_refused_with_norm_and_row():
+    q = _rotation_about_axis(_t(20))
+    q[7] *= 0.5
+    with pytest.raises(InputError, match=r"not unit quaternions \(norm 0\.5 at row 7"):
+        checks.check_quaternions(q)
+
+
+def test_zero_and_nonfinite_quaternions_refused():
+    q = _rotation_about_axis(_t(20))
+    q[3] = 0
+    with pytest.raises(InputError, match="zero quaternion at row 3"):
+        checks.check_quaternions(q)
+    q[3] = [np.inf, 0, 0, 0]
+    with pytest.raises(InputError, match="non-finite quaternion at row 3"):
+        checks.check_quaternions(q)
+    with pytest.raises(InputError, match=r"\(N, 4\)"):
+        checks.check_quaternions(np.ones((5, 3)))
+
+
+def test_hemisphere_flips_fixed_and_counted():
+    q = _rotation_about_axis(_t(50))
+    flipped = q.copy()
+    flipped[10:20] *= -1
+    flipped[30] *= -1
+    notes = Notes()
+    out = checks.check_quaternions(flipped, notes=notes)
+    assert np.all(np.sum(out[1:] * out[:-1], axis=1) > 0)
+    np.testing.assert_allclose(out, q, atol=1e-12)  # q[0] kept, so same signs as the truth
+    assert "flipped the sign of 11 quaternion(s)" in notes.items[0]
+    np.testing.assert_allclose(matrix_from_quat(out), matrix_from_quat(flipped), atol=1e-12)
+
+
+# ---------------------------------------------------------------- units
+
+
+def test_positions_in_mm_given_as_m_refused():
+    rng = np.random.default_rng(2)
+    pts_m = rng.uniform(-1.0, 1.0, (100, 4, 3)) + [0, 0, 1.0]
+    checks.check_position_units(pts_m)  # plausible
+    with pytest.raises(InputError, match="look like millimetres given as metres"):
+        checks.check_position_units(pts_m * 1000, file="m.c3d")
+
+
+def test_gyro_in_deg_per_s_refused_rad_per_s_accepted():
+    t = _t(1000)
+    w = np.column_stack([3 * np.sin(2 * np.pi * t), 0.5 * np.cos(3 * t), 0.1 * t])  # rad/s
+    checks.check_gyro_units(w)
+    with pytest.raises(InputError, match="looks like deg/s"):
+        checks.check_gyro_units(np.degrees(w))
+
+
+def test_acc_in_g_refused_m_per_s2_accepted():
+    rng = np.random.default_rng(3)
+    a = np.array([0.3, 0.2, 9.81]) + rng.normal(0, 0.5, (500, 3))
+    checks.check_acc_units(a)
+    with pytest.raises(InputError, match="looks like it is in g"):
+        checks.check_acc_units(a / 9.81)
+    with pytest.raises(InputError, match="raw counts or mm/s"):
+        checks.check_acc_units(a * 1000)
+
+
+# ---------------------------------------------------------------- tables and files
+
+
+def test_parse_table_empty_cells_are_nan_and_bad_cells_named():
+    out = checks.parse_table(["1\t2", "3\t"], ["a", "b"])
+    assert out[0].tolist() == [1.0, 2.0] and np.isnan(out[1, 1])
+    with pytest.raises(InputError, match=r"'x' at row 1 \(line 6\) is not a number") as e:
+        checks.parse_table(["1\t2", "3\tx"], ["a", "b"], first_line=5)
+    assert e.value.field == "b"
+
+
+def test_parse_table_truncated_last_row():
+    with pytest.raises(InputError, match=r"row 2 has 2 fields, expected 3 \(file truncated\?\)"):
+        checks.parse_table(["1,2,3", "4,5,6", "7,8"], ["a", "b", "c"], sep=",")
+
+
+def test_read_text_lines_refuses_missing_empty_binary(tmp_path):
+    with pytest.raises(InputError, match="file not found"):
+        checks.read_text_lines(tmp_path / "nope.sto")
+    (tmp_path / "e.sto").write_text("  \n")
+    with pytest.raises(InputError, match="file is empty"):
+        checks.read_text_lines(tmp_path / "e.sto")
+    (tmp_path / "b.sto").write_bytes(b"\xff\xfe\x00\x81garbage")
+    with pytest.raises(InputError, match="not a UTF-8 text file"):
+        checks.read_text_lines(tmp_path / "b.sto")
+
+
+def test_notes_prefix_like_errors():
+    n = Notes()
+    n.add("did x", file="a.sto", field="pelvis_imu")
+    n.add("did y")
+    assert n.as_tuple() == ("a.sto: field pelvis_imu: did x", "did y")
+
+
+# ---------------------------------------------------------------- atomic output
+
+
+def test_atomic_write_replaces_and_leaves_no_temp(tmp_path):
+    p = tmp_path / "out.csv"
+    p.write_text("old")
+    with atomic.atomic_write(p) as f:
+        f.write("new")
+        assert p.read_text() == "old"  # not visible before the end
+    assert p.read_text() == "new"
+    assert os.listdir(tmp_path) == ["out.csv"]
+
+
+def test_atomic_write_error_keeps_old_file_and_no_temp(tmp_path):
+    p = tmp_path / "out.csv"
+    p.write_text("old")
+    with pytest.raises(RuntimeError), atomic.atomic_write(p) as f:
+        f.write("partial")
+        raise RuntimeError("boom")
+    assert p.read_text() == "old"
+    assert os.listdir(tmp_path) == ["out.csv"]
+    q = tmp_path / "new.csv"
+    with pytest.raises(RuntimeError), atomic.atomic_write(q) as f:
+        raise RuntimeError("boom")
+    assert not q.exists()
+
+
+def test_write_text_and_bytes_atomic(tmp_path):
+    atomic.write_text_atomic(tmp_path / "a.txt", "x\ny")
+    atomic.write_bytes_atomic(tmp_path / "b.bin", b"\x00\x01")
+    assert (tmp_path / "a.txt").read_text() == "x\ny"
+    assert (tmp_path / "b.bin").read_bytes() == b"\x00\x01"
+    mode = (tmp_path / "a.txt").stat().st_mode & 0o777
+    umask = os.umask(0)
+    os.umask(umask)
+    assert mode == 0o666 & ~umask  # not mkstemp's private 0600
+
+
+def test_output_set_all_or_nothing(tmp_path):
+    keep = tmp_path / "b.csv"
+    keep.write_text("old b")
+    with pytest.raises(ValueError, match="model failed"), atomic.output_set() as out:
+        with out.open(tmp_path / "a.csv") as f:
+            f.write("a")
+        out.path(tmp_path / "sub" / "c.urdf").write_text("c")
+        with out.open(keep) as f:
+            f.write("new b")
+        raise ValueError("model failed")
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["b.csv"]
+    assert keep.read_text() == "old b"
+    with atomic.output_set() as out:
+        with out.open(tmp_path / "a.csv") as f:
+            f.write("a")
+        with out.open(keep) as f:
+            f.write("new b")
+    assert (tmp_path / "a.csv").read_text() == "a" and keep.read_text() == "new b"
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == ["a.csv", "b.csv"]
+
+
+def test_output_set_commit_failure_rolls_back(tmp_path, monkeypatch):
+    keep = tmp_path / "b.csv"
+    keep.write_text("old b")
+    real_replace = os.replace
+    calls = {"n": 0}
+
+    def flaky(src, dst):
+        calls["n"] += 1
+        if calls["n"] == 3:  # a.csv committed, b.csv backed up, then its rename fails
+            raise OSError("disk full")
+        return real_replace(src, dst)
+
+    with pytest.raises(OSError, match="disk full"), atomic.output_set() as out:
+        with out.open(tmp_path / "a.csv") as f:
+            f.write("a")
+        with out.open(keep) as f:
+            f.write("new b")
+        monkeypatch.setattr(atomic.os, "replace", flaky)
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]
+    assert keep.read_text() == "old b"

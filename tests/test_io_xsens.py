@@ -1,0 +1,231 @@
+"""Xsens MT Manager .txt exports (pipeline.io.xsens) on files generated with known truth.
+
+The generated files follow the layout of OpenSim's Xsens test files (``// key: value`` comments,
+``PacketCounter`` zero-padded, empty cells for unused columns, ``Mat[r][c]`` listed column by
+column, six decimals).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.errors import InputError
+from pipeline.io import xsens
+from pipeline.io.checks import make_quaternions_continuous
+from pipeline.rotations import euler_zyx_from_matrix, exp3, log3, matrix_from_quat, quat_from_matrix
+
+RATE = 100.0
+G = np.array([0.0, 0.0, 9.81])
+
+
+def _motion(n: int = 200, w=(0.8, -0.4, 1.2)):
+    """Constant body angular velocity ``w`` (rad/s): R(t) = R0 exp(t [w]x)."""
+    t = np.arange(n) / RATE
+    R = exp3(np.array([0.2, -0.3, 2.0])) @ exp3(t[:, None] * np.asarray(w))
+    acc = np.einsum("nji,j->ni", R, G)  # specific force at rest-like: R^T g
+    gyr = np.tile(w, (n, 1))
+    return t, R, acc, gyr
+
+
+def _write(
+    path: Path,
+    R,
+    acc,
+    gyr,
+    *,
+    orientation="matrix",
+    counter=None,
+    rate_comment="// Update Rate: 100.0Hz",
+    stf=None,
+    delim="\t",
+    drop=(),
+):
+    n = len(R)
+    counter = np.arange(3583, 3583 + n) if counter is None else np.asarray(counter)
+    head = ["PacketCounter", "SampleTimeFine", "Year", "Acc_X", "Acc_Y", "Acc_Z"]
+    head += ["Gyr_X", "Gyr_Y", "Gyr_Z", "Mag_X", "Mag_Y", "Mag_Z"]
+    if orientation == "matrix":
+        head += [f"Mat[{r}][{c}]" for c in (1, 2, 3) for r in (1, 2, 3)]
+    elif orientation == "quaternion":
+        head += ["Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3"]
+    elif orientation == "euler":
+        head += ["Roll", "Pitch", "Yaw"]
+    lines = ["// Start Time: Unknown"]
+    if rate_comment:
+        lines.append(rate_comment)
+    lines += ["// Filter Profile: human (46.1)", "// Firmware Version: 4.0.2", delim.join(head)]
+    for i in range(n):
+        if i in drop:
+            continue
+        cells = [f"{int(counter[i]) % 65536:05d}", "" if stf is None else f"{int(stf[i])}", ""]
+        cells += [f"{v:.6f}" for v in (*acc[i], *gyr[i], 0.1, -0.2, 0.9)]
+        if orientation == "matrix":
+            cells += [f"{R[i][r, c]:.6f}" for c in range(3) for r in range(3)]
+        elif orientation == "quaternion":
+            cells += [f"{v:.6f}" for v in quat_from_matrix(R[i])]
+        elif orientation == "euler":
+            yaw, pitch, roll = np.degrees(euler_zyx_from_matrix(R[i]))
+            cells += [f"{v:.6f}" for v in (roll, pitch, yaw)]
+        lines.append(delim.join(cells))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _err(q, R):
+    return np.linalg.norm(log3(np.swapaxes(matrix_from_quat(q), -1, -2) @ R), axis=-1)
+
+
+@pytest.mark.parametrize("orientation", ["matrix", "quaternion", "euler"])
+def test_orientation_formats_agree_with_truth(tmp_path, orientation):
+    t, R, acc, gyr = _motion()
+    p = _write(
+        tmp_path / f"MT_012005D6_009-001_00B421AF_{orientation}.txt",
+        R,
+        acc,
+        gyr,
+        orientation=orientation,
+    )
+    rec = xsens.read_xsens_txt(p)
+    assert rec.orientation_from == orientation
+    assert rec.rate_hz == 100.0 and rec.header["Update Rate"] == "100.0Hz"
+    np.testing.assert_allclose(rec.time, t, atol=1e-12)
+    assert _err(rec.quat, R).max() < 2e-5  # six printed decimals
+    np.testing.assert_allclose(rec.acc, acc, atol=1e-6)
+    np.testing.assert_allclose(rec.gyr, gyr, atol=1e-6)
+    np.testing.assert_allclose(rec.mag, np.tile([0.1, -0.2, 0.9], (len(t), 1)))
+    # gravity check: the accelerometer at rest is R^T g
+    np.testing.assert_allclose(
+        np.einsum("nji,j->ni", matrix_from_quat(rec.quat), G), rec.acc, atol=2e-4
+    )
+    assert rec.sensor_id == orientation  # last '_' field of the file name
+
+
+def test_sensor_id_from_file_name(tmp_path):
+    t, R, acc, gyr = _motion(20)
+    rec = xsens.read_xsens_txt(_write(tmp_path / "MT_012005D6_009-001_00B421AF.txt", R, acc, gyr))
+    assert rec.sensor_id == "00B421AF"
+
+
+def test_packet_counter_wraps(tmp_path):
+    t, R, acc, gyr = _motion(100)
+    rec = xsens.read_xsens_txt(
+        _write(tmp_path / "w.txt", R, acc, gyr, counter=np.arange(65500, 65600))
+    )
+    np.testing.assert_allclose(rec.time, t, atol=1e-12)
+    assert not any("dropped" in n for n in rec.notes)
+
+
+def test_dropped_packets_filled_and_reported(tmp_path):
+    t, R, acc, gyr = _motion(100)
+    rec = xsens.read_xsens_txt(_write(tmp_path / "d.txt", R, acc, gyr, drop=(40, 41, 42)))
+    assert rec.time.size == 100
+    assert any("3 dropped packet(s)" in n for n in rec.notes)
+    assert any(
+        "filled 3 missing sample(s) from t=0.4 s to t=0.42 s (slerp)" in n for n in rec.notes
+    )
+    assert _err(rec.quat, R).max() < 2e-5  # constant-rate rotation: slerp is exact
+    np.testing.assert_allclose(rec.gyr, gyr, atol=1e-6)
+
+
+def test_long_packet_loss_refused(tmp_path):
+    t, R, acc, gyr = _motion(100)
+    p = _write(tmp_path / "d.txt", R, acc, gyr, drop=tuple(range(30, 60)))
+    with pytest.raises(InputError, match=r"gap of 30 missing samples \(0\.3 s\) from t=0\.3 s"):
+        xsens.read_xsens_txt(p)
+
+
+def test_repeated_packet_counter_refused(tmp_path):
+    t, R, acc, gyr = _motion(20)
+    c = np.arange(20)
+    c[7] = c[6]
+    with pytest.raises(InputError, match=r"packet counter repeated: 6 at row 7 \(line 13\)"):
+        xsens.read_xsens_txt(_write(tmp_path / "r.txt", R, acc, gyr, counter=c))
+
+
+def test_sample_time_fine_gives_time_and_is_checked_against_rate(tmp_path):
+    t, R, acc, gyr = _motion(50)
+    stf = 123456 + np.arange(50) * 100  # 10 kHz ticks, 100 Hz
+    rec = xsens.read_xsens_txt(_write(tmp_path / "s.txt", R, acc, gyr, stf=stf))
+    np.testing.assert_allclose(rec.time, t, atol=1e-12)
+    rec2 = xsens.read_xsens_txt(
+        _write(tmp_path / "s1.txt", R, acc, gyr, stf=123456 + np.arange(50) * 100, drop=(20, 21))
+    )
+    assert rec2.time.size == 50
+    assert any("2 dropped sample(s) (SampleTimeFine jumps)" in n for n in rec2.notes)
+    assert _err(rec2.quat, R).max() < 2e-5
+    stf_50 = 123456 + np.arange(50) * 200  # 50 Hz stamps, file says 100 Hz
+    with pytest.raises(InputError, match=r"declared rate 100 Hz but the time stamps give 50 Hz"):
+        xsens.read_xsens_txt(_write(tmp_path / "s2.txt", R, acc, gyr, stf=stf_50))
+
+
+def test_missing_rate_refused_unless_given(tmp_path):
+    t, R, acc, gyr = _motion(20)
+    p = _write(tmp_path / "n.txt", R, acc, gyr, rate_comment=None)
+    with pytest.raises(InputError, match="no sampling rate.*pass rate_hz"):
+        xsens.read_xsens_txt(p)
+    rec = xsens.read_xsens_txt(p, rate_hz=50.0)
+    np.testing.assert_allclose(rec.time, np.arange(20) / 50.0)
+    q = _write(tmp_path / "m.txt", R, acc, gyr)
+    with pytest.raises(InputError, match="rate_hz=50 but the file says Update Rate 100 Hz"):
+        xsens.read_xsens_txt(q, rate_hz=50.0)
+
+
+def test_no_orientation_columns_refused(tmp_path):
+    t, R, acc, gyr = _motion(20)
+    p = _write(tmp_path / "o.txt", R, acc, gyr, orientation="none")
+    with pytest.raises(InputError, match=r"no orientation columns: expected Quat_q0.*found Packet"):
+        xsens.read_xsens_txt(p)
+
+
+def test_truncated_and_empty_files_refused(tmp_path):
+    t, R, acc, gyr = _motion(20)
+    p = _write(tmp_path / "t.txt", R, acc, gyr)
+    p.write_text(p.read_text()[:-30])
+    with pytest.raises(InputError, match=r"row 19 \(line 25\) has \d+ fields.*truncated"):
+        xsens.read_xsens_txt(p)
+    (tmp_path / "e.txt").write_text("// Update Rate: 100.0Hz\n")
+    with pytest.raises(InputError, match="no header line"):
+        xsens.read_xsens_txt(tmp_path / "e.txt")
+
+
+def test_gyro_in_degrees_refused(tmp_path):
+    t, R, acc, gyr = _motion(50, w=(2.0, -1.0, 1.5))
+    p = _write(tmp_path / "g.txt", R, acc, np.degrees(gyr))
+    with pytest.raises(InputError, match="field Gyr: angular velocity.*looks like deg/s"):
+        xsens.read_xsens_txt(p)
+
+
+def test_comma_delimited_export(tmp_path):
+    t, R, acc, gyr = _motion(30)
+    rec = xsens.read_xsens_txt(_write(tmp_path / "c.txt", R, acc, gyr, delim=","))
+    assert _err(rec.quat, R).max() < 2e-5
+
+
+def test_trial_from_several_sensors(tmp_path):
+    t, R, acc, gyr = _motion(60)
+    t2, R2, acc2, gyr2 = _motion(60, w=(0.1, 0.2, -0.3))
+    _write(tmp_path / "MT_012005D6_009-001_00B421AF.txt", R, acc, gyr)
+    _write(tmp_path / "MT_012005D6_009-001_00B42263.txt", R2, acc2, gyr2)
+    trial = xsens.read_xsens_trial(
+        tmp_path,
+        {"00B421AF": "pelvis_imu", "00B42263": "femur_r_imu"},
+        prefix="MT_012005D6_009-001_",
+    )
+    assert trial.sensor_names == ("pelvis_imu", "femur_r_imu") and trial.rate_hz == 100.0
+    np.testing.assert_allclose(trial.time, t, atol=1e-12)
+    assert _err(trial.sensors["femur_r_imu"], R2).max() < 2e-5
+    q = make_quaternions_continuous(trial.sensors["pelvis_imu"])[0]
+    np.testing.assert_array_equal(q, trial.sensors["pelvis_imu"])  # already continuous
+    with pytest.raises(InputError, match="no file for sensor 00B4XXXX \\(tibia_r_imu\\)"):
+        xsens.read_xsens_trial(tmp_path, {"00B4XXXX": "tibia_r_imu"}, prefix="MT_012005D6_009-001_")
+
+
+def test_trial_with_mismatched_lengths_refused(tmp_path):
+    t, R, acc, gyr = _motion(60)
+    _write(tmp_path / "a_1.txt", R, acc, gyr)
+    _write(tmp_path / "a_2.txt", R[:50], acc[:50], gyr[:50])
+    with pytest.raises(InputError, match=r"different numbers of samples \(x \(a_1.txt\): 60"):
+        xsens.read_xsens_trial(tmp_path, {"1": "x", "2": "y"}, prefix="a_")

@@ -1,0 +1,81 @@
+import numpy as np
+import pytest
+
+from pipeline import rotations as rot
+
+
+def test_elementary_rotations_by_hand():
+    # a quarter turn about z maps x onto y; about x maps y onto z; about y maps z onto x
+    np.testing.assert_allclose(rot.rot_z(np.pi / 2) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
+    np.testing.assert_allclose(rot.rot_x(np.pi / 2) @ [0, 1, 0], [0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(rot.rot_y(np.pi / 2) @ [0, 0, 1], [1, 0, 0], atol=1e-15)
+    assert rot.rot_z(np.zeros(5)).shape == (5, 3, 3)
+
+
+def test_skew_is_cross_product():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(2, 10, 3))
+    np.testing.assert_allclose(np.einsum("nij,nj->ni", rot.skew(a), b), np.cross(a, b))
+
+
+def test_exp_log_round_trip_and_shapes():
+    rng = np.random.default_rng(1)
+    v = rng.normal(size=(50, 3))
+    v *= (rng.uniform(0, 3.0, 50) / np.linalg.norm(v, axis=1))[:, None]
+    R = rot.exp3(v)
+    assert R.shape == (50, 3, 3)
+    np.testing.assert_allclose(rot.log3(R), v, atol=1e-12)
+    np.testing.assert_allclose(rot.exp3(v[0]), R[0])
+    axis, angle = rot.axis_angle(R)
+    np.testing.assert_allclose(axis * angle[:, None], v, atol=1e-12)
+
+
+def test_quaternion_convention_scalar_first():
+    # 90 deg about z: w = cos 45, z = sin 45
+    q = np.array([np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)])
+    np.testing.assert_allclose(rot.matrix_from_quat(q), rot.rot_z(np.pi / 2), atol=1e-15)
+    np.testing.assert_allclose(rot.quat_from_matrix(rot.rot_z(np.pi / 2)), q, atol=1e-15)
+    # non-unit quaternions are normalised, zero ones refused
+    np.testing.assert_allclose(rot.matrix_from_quat(2 * q), rot.rot_z(np.pi / 2), atol=1e-15)
+    with pytest.raises(ValueError):
+        rot.matrix_from_quat(np.zeros(4))
+
+
+def test_euler_zyx_matches_matlab_eul2rotm_order():
+    e = np.array([0.3, -0.2, 0.7])
+    expected = rot.rot_z(0.3) @ rot.rot_y(-0.2) @ rot.rot_x(0.7)
+    np.testing.assert_allclose(rot.matrix_from_euler_zyx(e), expected)
+    np.testing.assert_allclose(rot.euler_zyx_from_matrix(expected), e, atol=1e-12)
+
+
+def test_project_to_so3():
+    rng = np.random.default_rng(2)
+    R = rot.exp3(rng.normal(size=(4, 3)))
+    noisy = R + 1e-3 * rng.normal(size=R.shape)
+    P = rot.project_to_so3(noisy)
+    np.testing.assert_allclose(np.einsum("nji,njk->nik", P, P), np.broadcast_to(np.eye(3), P.shape),
+                               atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(P), 1.0)
+    assert np.max(np.abs(P - R)) < 5e-3
+
+
+def test_rotation_aligning_wang_eq_10_12_by_hand():
+    # a = x, b = y: axis x × y = z, angle 90 deg -> Rz(90)
+    R = rot.rotation_aligning([1, 0, 0], [0, 2, 0])
+    np.testing.assert_allclose(R, rot.rot_z(np.pi / 2), atol=1e-15)
+    # general vectors: R a_hat = b_hat, and the rotation is about a × b
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a, b = rng.normal(size=(2, 3))
+        R = rot.rotation_aligning(a, b)
+        np.testing.assert_allclose(R @ rot.normalize(a), rot.normalize(b), atol=1e-12)
+        axis, _ = rot.axis_angle(R)
+        np.testing.assert_allclose(axis, rot.normalize(np.cross(a, b)), atol=1e-9)
+    np.testing.assert_allclose(rot.rotation_aligning([0, 0, 1], [0, 0, 3]), np.eye(3))
+    R = rot.rotation_aligning([0, 0, 1], [0, 0, -1])
+    np.testing.assert_allclose(R @ [0, 0, 1], [0, 0, -1], atol=1e-12)
+
+
+def test_angle_between_is_accurate_for_tiny_angles():
+    assert rot.angle_between([1, 0, 0], [1, 1e-9, 0]) == pytest.approx(1e-9, rel=1e-6)
+    assert rot.angle_between([1, 0, 0], [-1, 0, 0]) == pytest.approx(np.pi)
