@@ -30,7 +30,13 @@ from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import euler_zxy_from_matrix
 
-__all__ = ["frame_trajectories", "jcs_angles", "joint_angles", "landmark_trajectories"]
+__all__ = [
+    "frame_trajectories",
+    "jcs_angles",
+    "joint_angles",
+    "landmark_trajectories",
+    "wang_trajectories",
+]
 
 _JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia")}
 
@@ -122,4 +128,28 @@ def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
             ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
             for i, name in enumerate(("flexion", "adduction", "rotation")):
                 out[f"{side}_{joint}_{name}"] = ang[:, i]
+    return out
+
+
+def wang_trajectories(
+    femur_R: np.ndarray,
+    tibia_R: np.ndarray,
+    femur_landmarks: dict[str, np.ndarray],
+    tibia_landmarks: dict[str, np.ndarray],
+) -> dict[str, np.ndarray]:
+    """Wang et al. 2023 eq 15-17 in closed form, hip at the origin, vectorised over frames.
+
+    ``t_EFL,EFM = e_F p`` (eq 15), ``t_knee = (t_EFL + t_EFM) / 2`` (eq 16),
+    ``t_LM,MM = e_T p + t_knee`` (eq 17). Returns EFM, EFL, KJC, MM, LM as (N, 3). Identical to the
+    forward kinematics of the free-knee model's landmark frames (tested); used where a whole trial
+    of orientations is already in segment frames and no joint limits apply.
+    """
+    F = np.asarray(femur_R, dtype=float)
+    T = np.asarray(tibia_R, dtype=float)
+    if F.shape != T.shape or F.ndim != 3 or F.shape[1:] != (3, 3):
+        raise InputError(f"expected (N, 3, 3) femur and tibia rotations, got {F.shape}, {T.shape}")
+    out = {n: F @ np.asarray(femur_landmarks[n], dtype=float) for n in ("EFM", "EFL")}
+    out["KJC"] = 0.5 * (out["EFM"] + out["EFL"])
+    for n in ("MM", "LM"):
+        out[n] = T @ np.asarray(tibia_landmarks[n], dtype=float) + out["KJC"]
     return out

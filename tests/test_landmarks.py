@@ -158,3 +158,21 @@ def test_speed_3000_frames(free):
     fps = len(Q) / dt
     print(f"landmark_trajectories: {fps:.0f} frames/s ({len(traj)} landmarks, 3000 frames)")
     assert fps > 2000  # OpenSense IMU IK runs ~60 frames/s; FK must never be the bottleneck
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_wang_trajectories_equal_model_forward_kinematics(free, side):
+    """The closed form used by `reproduce` (eq 15-17) equals FK of the free-knee model."""
+    from pipeline.landmarks import wang_trajectories
+
+    g = subject().for_side(side)
+    lat = 1.0 if side == "right" else -1.0
+    Q, truth = isb_configurations(free, 100, seed=7)
+    e_F = matrix_from_euler_zxy(truth[f"{side}_hip"] * [1.0, lat, lat])
+    e_T = e_F @ matrix_from_euler_zxy(truth[f"{side}_knee"] * [-1.0, lat, lat])
+    closed = wang_trajectories(e_F, e_T, g.femur_landmarks, g.tibia_landmarks)
+    fk = landmark_trajectories(free, Q)
+    for name, t in closed.items():
+        assert np.abs(fk[f"{side}_{name}"] - g.hip - t).max() < 1e-9, name
+    with pytest.raises(InputError):
+        wang_trajectories(e_F[:, :2], e_T, g.femur_landmarks, g.tibia_landmarks)

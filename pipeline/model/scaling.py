@@ -1,0 +1,116 @@
+"""From a subject's measures to a scaled model: Wang eq 14 (Table I) + the population knee AoR.
+
+``scale_model`` is what ``pipeline scale`` runs: the regression equations give the landmark
+positions in the segment frames (:func:`pipeline.anthropometry.predict_landmarks`), the knee AoR
+defaults to the sex-specific population mean computed from the Wang 2023 dataset
+(``models/wang2023_knee_aor.csv``), and :func:`pipeline.model.builder.build_urdf` writes the URDF,
+which is then the single source of truth for every dimension downstream.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.anthropometry import LandmarkPositions, Measures, RegressionTable, predict_landmarks
+from pipeline.errors import InputError
+from pipeline.model.builder import build_urdf
+from pipeline.model.geometry import SubjectGeometry
+from pipeline.paths import models_file
+from pipeline.rotations import normalize
+
+KNEE_AOR_FILE = "wang2023_knee_aor.csv"
+
+__all__ = ["PopulationKneeAxis", "geometry_from_measures", "population_knee_axis", "scale_model"]
+
+
+@dataclass(frozen=True)
+class PopulationKneeAxis:
+    """Mean knee AoR of a sex group (unit vectors, right-leg ISB frames) and its spread (rad)."""
+
+    sex: str
+    n_subjects: int
+    femur_axis: np.ndarray
+    tibia_axis: np.ndarray
+    sd_femur_transverse: float
+    sd_femur_frontal: float
+    sd_tibia_transverse: float
+    sd_tibia_frontal: float
+
+
+@lru_cache(maxsize=4)
+def _aor_table(path: str) -> dict[str, PopulationKneeAxis]:
+    with open(path, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    out = {}
+    for r in rows:
+        try:
+            f = np.array([float(r[f"femur_{a}"]) for a in "xyz"])
+            t = np.array([float(r[f"tibia_{a}"]) for a in "xyz"])
+            sds = [np.radians(float(r[k])) for k in (
+                "sd_femur_transverse_deg", "sd_femur_frontal_deg",
+                "sd_tibia_transverse_deg", "sd_tibia_frontal_deg")]  # fmt: skip
+            out[r["sex"]] = PopulationKneeAxis(
+                r["sex"], int(r["n_subjects"]), normalize(f), normalize(t), *sds
+            )
+        except (KeyError, ValueError) as exc:
+            raise InputError(f"malformed row {r}: {exc}", file=path) from None
+    return out
+
+
+def population_knee_axis(sex: str = "all", path: str | Path | None = None) -> PopulationKneeAxis:
+    """The shipped population knee AoR for ``sex`` in ('m', 'f', 'all')."""
+    table = _aor_table(str(models_file(KNEE_AOR_FILE) if path is None else Path(path)))
+    if sex not in table:
+        raise InputError(f"expected sex among {sorted(table)}, got {sex!r}", field="sex")
+    return table[sex]
+
+
+def geometry_from_measures(
+    measures: Measures,
+    *,
+    knee_axis_femur: np.ndarray | None = None,
+    knee_axis_tibia: np.ndarray | None = None,
+    table: RegressionTable | None = None,
+    body_mass_kg: float | None = None,
+) -> tuple[SubjectGeometry, LandmarkPositions]:
+    """Right-leg :class:`SubjectGeometry` from the regression equations (Wang eq 14).
+
+    Knee axes default to the population mean of the subject's sex. Returns the geometry and the
+    predicted landmarks (which carry the Table I row used for every coordinate, for reports).
+    """
+    landmarks = predict_landmarks(measures, table=table)
+    aor = population_knee_axis(measures.sex)
+    geometry = SubjectGeometry(
+        sex=measures.sex,
+        height_m=measures.height_m,
+        femur_landmarks=landmarks.femur,
+        tibia_landmarks=landmarks.tibia,
+        knee_axis_femur=aor.femur_axis if knee_axis_femur is None else knee_axis_femur,
+        knee_axis_tibia=aor.tibia_axis if knee_axis_tibia is None else knee_axis_tibia,
+        body_mass_kg=body_mass_kg,
+    )
+    return geometry, landmarks
+
+
+def scale_model(
+    measures: Measures,
+    out_path: str | Path,
+    *,
+    knee: str = "free",
+    legs: tuple[str, ...] = ("right", "left"),
+    knee_axis_femur: np.ndarray | None = None,
+    knee_axis_tibia: np.ndarray | None = None,
+) -> Path:
+    """Write the subject's scaled URDF (``pipeline scale``) and return its path."""
+    out_path = Path(out_path)
+    if out_path.suffix.lower() != ".urdf":
+        raise InputError("expected an output file ending in .urdf", file=out_path)
+    geometry, _ = geometry_from_measures(
+        measures, knee_axis_femur=knee_axis_femur, knee_axis_tibia=knee_axis_tibia
+    )
+    return build_urdf(geometry, out_path, knee=knee, legs=legs)
