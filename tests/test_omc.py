@@ -279,7 +279,6 @@ def real_results():
 def test_real_data_all_subjects(real_results):
     res, elapsed = real_results
     assert len(res) == 38
-    assert elapsed < 30.0  # load + process 38 subjects (about 3 s here)
     for sid, (_omc, r) in res.items():
         assert r.hip_fit_rms_m < 0.008, sid  # 1-6 mm measured
         assert 0.30 < r.hip_fit.radius < 0.50, sid

@@ -1,0 +1,275 @@
+"""Joint constraints between two IMUs (Hu et al. 2021 §2, after Seel et al. 2012).
+
+Sign convention for positions. ``o_S`` is the joint centre in the frame of sensor ``S`` (the
+vector sensor -> joint). Hu's ``V_{J,S}`` points from the joint to the sensor, ``V = -o``; since
+``Gamma`` is linear in its argument, eq 1-3 read with ``o``:
+
+* eq 2: ``Gamma_S(o) = w_S x (w_S x o) + dw_S x o``  (``a_S + Gamma_S(o_S)`` is the specific
+  force at the joint centre, the same physical vector seen from both sensors);
+* eq 1/3: ``e(t) = |a_1 + Gamma_1(o_1)| - |a_2 + Gamma_2(o_2)|``;
+* eq 9: ``de/do_S = +- (a_S + Gamma_S)^T / |a_S + Gamma_S| ([w]x[w]x + [dw]x)`` (+ for sensor 1).
+
+Hinge (eq 4-6): ``e(t) = |w_1 x j_1| - |w_2 x j_2|`` with ``j_S`` the unit axis in sensor ``S``;
+eq 14 (its denominator is misprinted as squared): ``d|w x j|/dj = ((w x j) x w)^T / |w x j|``.
+Eq 5 (its third component is misprinted as ``sin(theta)``): ``j = [cos p cos t, cos p sin t,
+sin p]`` with pitch ``p`` and yaw ``t``. Eq 16 moves the hinge positions along the axis so that
+``j_1.o_1 + j_2.o_2 = 0`` (the position along a hinge axis is undetermined).
+
+The angular acceleration ``dw`` comes from the gyro by a Savitzky-Golay derivative (local cubic
+fit, 0.11 s window at 100 Hz), which low-passes before differencing: raw 5-point differences
+amplify gyro noise and floor the joint positions at 1-3 mm (DESIGN.md §8).
+Observability (:func:`observability`) inspects the singular values of the Jacobian in tangent
+coordinates at the solution and names the parameter blocks that the data do not determine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from pipeline.errors import InputError
+from pipeline.rotations import matrix_from_quat, normalize, skew
+
+__all__ = [
+    "JointData",
+    "angular_acceleration",
+    "axis_from_spherical",
+    "consistent_axis_signs",
+    "gamma",
+    "hinge_jacobian",
+    "hinge_jacobian_spherical",
+    "hinge_residual",
+    "joint_data",
+    "observability",
+    "project_hinge_positions",
+    "spherical_from_axis",
+    "spherical_jacobian",
+    "spherical_residual",
+    "tangent_basis",
+]
+
+
+@dataclass(frozen=True)
+class JointData:
+    """Gyro ``gyr_*``, accelerometer ``acc_*`` and angular acceleration ``gyr_dot_*`` (N,3) of two
+    sensors in their own frames, on one time base."""
+
+    gyr_1: np.ndarray
+    gyr_2: np.ndarray
+    acc_1: np.ndarray
+    acc_2: np.ndarray
+    gyr_dot_1: np.ndarray
+    gyr_dot_2: np.ndarray
+
+
+def angular_acceleration(
+    time: np.ndarray, gyr: np.ndarray, *, window_s: float = 0.11, polyorder: int = 3
+) -> np.ndarray:
+    """``dw/dt`` by a Savitzky-Golay derivative over ``window_s`` seconds (odd sample count)."""
+    t = np.asarray(time, dtype=float)
+    dt = np.diff(t)
+    if t.size < 7 or np.any(dt <= 0) or np.ptp(dt) > 1e-3 * dt.mean():
+        raise InputError("expected >= 7 uniformly sampled, increasing times", field="time")
+    h = float(dt.mean())
+    win = max(polyorder + 2, int(round(window_s / h)) | 1)
+    return savgol_filter(np.asarray(gyr, float), win, polyorder, deriv=1, delta=h, axis=0)
+
+
+def joint_data(time, gyr_1, acc_1, gyr_2, acc_2, *, window_s: float = 0.11) -> JointData:
+    """Two sensors' signals with filtered angular accelerations (:func:`angular_acceleration`)."""
+    arrs = [np.asarray(a, dtype=float) for a in (gyr_1, acc_1, gyr_2, acc_2)]
+    n = np.asarray(time).size
+    for name, a in zip(("gyr_1", "acc_1", "gyr_2", "acc_2"), arrs, strict=True):
+        if a.shape != (n, 3):
+            raise InputError(f"expected shape ({n}, 3), got {a.shape}", field=name)
+    return JointData(
+        gyr_1=arrs[0],
+        gyr_2=arrs[2],
+        acc_1=arrs[1],
+        acc_2=arrs[3],
+        gyr_dot_1=angular_acceleration(time, arrs[0], window_s=window_s),
+        gyr_dot_2=angular_acceleration(time, arrs[2], window_s=window_s),
+    )
+
+
+def gamma(w: np.ndarray, dw: np.ndarray, o: np.ndarray) -> np.ndarray:
+    """Eq 2: ``Gamma(o) = w x (w x o) + dw x o`` for (N,3) ``w``, ``dw`` and a (3,) ``o``."""
+    return np.cross(w, np.cross(w, o)) + np.cross(dw, o)
+
+
+def _joint_force(d: JointData, o1: np.ndarray, o2: np.ndarray):
+    f1 = d.acc_1 + gamma(d.gyr_1, d.gyr_dot_1, o1)
+    f2 = d.acc_2 + gamma(d.gyr_2, d.gyr_dot_2, o2)
+    return f1, f2
+
+
+def spherical_residual(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.ndarray:
+    """Eq 3: ``e(t) = |a_1 + Gamma_1(o_1)| - |a_2 + Gamma_2(o_2)|`` (N,) in m/s^2."""
+    f1, f2 = _joint_force(data, o1, o2)
+    return np.linalg.norm(f1, axis=1) - np.linalg.norm(f2, axis=1)
+
+
+def _gamma_matrix(w: np.ndarray, dw: np.ndarray) -> np.ndarray:
+    """``K`` with ``Gamma(o) = K o``: ``[w]x [w]x + [dw]x`` (eq 10), (N,3,3)."""
+    W = skew(w)
+    return W @ W + skew(dw)
+
+
+def spherical_jacobian(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.ndarray:
+    """Eq 8-9: ``de/d[o_1, o_2]`` (N,6)."""
+    f1, f2 = _joint_force(data, o1, o2)
+    u1 = f1 / np.linalg.norm(f1, axis=1, keepdims=True)
+    u2 = f2 / np.linalg.norm(f2, axis=1, keepdims=True)
+    J1 = np.einsum("ni,nij->nj", u1, _gamma_matrix(data.gyr_1, data.gyr_dot_1))
+    J2 = np.einsum("ni,nij->nj", u2, _gamma_matrix(data.gyr_2, data.gyr_dot_2))
+    return np.hstack([J1, -J2])
+
+
+def hinge_residual(j1: np.ndarray, j2: np.ndarray, gyr_1: np.ndarray, gyr_2: np.ndarray):
+    """Eq 6: ``e(t) = |w_1 x j_1| - |w_2 x j_2|`` (N,) in rad/s."""
+    return np.linalg.norm(np.cross(gyr_1, j1), axis=1) - np.linalg.norm(np.cross(gyr_2, j2), axis=1)
+
+
+def _norm_cross_grad(w: np.ndarray, j: np.ndarray) -> np.ndarray:
+    c = np.cross(w, j)
+    n = np.maximum(np.linalg.norm(c, axis=1, keepdims=True), 1e-12)
+    return np.cross(c, w) / n
+
+
+def hinge_jacobian(j1: np.ndarray, j2: np.ndarray, gyr_1, gyr_2) -> np.ndarray:
+    """Eq 13-14: ``de/d[j_1, j_2]`` (N,6) for Cartesian axes."""
+    return np.hstack([_norm_cross_grad(gyr_1, j1), -_norm_cross_grad(gyr_2, j2)])
+
+
+def axis_from_spherical(pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """Eq 5 (corrected): ``[cos p cos y, cos p sin y, sin p]``."""
+    p, y = np.asarray(pitch, float), np.asarray(yaw, float)
+    return np.stack([np.cos(p) * np.cos(y), np.cos(p) * np.sin(y), np.sin(p)], axis=-1)
+
+
+def spherical_from_axis(j: np.ndarray) -> tuple[float, float]:
+    """Inverse of :func:`axis_from_spherical`: ``(pitch, yaw)``."""
+    j = normalize(np.asarray(j, float))
+    return float(np.arcsin(np.clip(j[2], -1, 1))), float(np.arctan2(j[1], j[0]))
+
+
+def _daxis(p: float, y: float) -> np.ndarray:
+    """``[dj/dp, dj/dy]`` (3,2)."""
+    return np.array(
+        [
+            [-np.sin(p) * np.cos(y), -np.cos(p) * np.sin(y)],
+            [-np.sin(p) * np.sin(y), np.cos(p) * np.cos(y)],
+            [np.cos(p), 0.0],
+        ]
+    )
+
+
+def hinge_jacobian_spherical(x: np.ndarray, gyr_1, gyr_2) -> np.ndarray:
+    """``de/d[p_1, y_1, p_2, y_2]`` (N,4): eq 13-14 chained with eq 5 (eq 12's parameters)."""
+    j1, j2 = axis_from_spherical(x[0], x[1]), axis_from_spherical(x[2], x[3])
+    J = hinge_jacobian(j1, j2, gyr_1, gyr_2)
+    return np.hstack([J[:, :3] @ _daxis(x[0], x[1]), J[:, 3:] @ _daxis(x[2], x[3])])
+
+
+def project_hinge_positions(o1, o2, j1, j2) -> tuple[np.ndarray, np.ndarray]:
+    """Eq 16: shift both positions along the (sign-consistent) axis by ``s = (j1.o1 + j2.o2)/2``
+    so that ``j1.o1 + j2.o2 = 0``: the point of the axis midway between the two sensors."""
+    s = 0.5 * (np.dot(j1, o1) + np.dot(j2, o2))
+    return np.asarray(o1) - s * np.asarray(j1), np.asarray(o2) - s * np.asarray(j2)
+
+
+def consistent_axis_signs(
+    j1: np.ndarray,
+    j2: np.ndarray,
+    *,
+    quat_1: np.ndarray | None = None,
+    quat_2: np.ndarray | None = None,
+    data: JointData | None = None,
+    o1: np.ndarray | None = None,
+    o2: np.ndarray | None = None,
+    reference_1: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Flip ``j2`` so that both axes are the same physical direction, and both so that ``j1``
+    points along ``reference_1`` (e.g. the subject's right in sensor 1, if known).
+
+    Eq 4 is blind to both signs. With sensor orientations (wxyz, sensor -> world) the test is
+    ``mean((R_1 j_1).(R_2 j_2)) > 0``. Otherwise, the specific force at the joint centre ``f``
+    (eq 2, needs ``data`` and positions) is one physical vector, so ``j_1.f_1 = j_2.f_2`` for
+    consistent signs: the sign of ``sum (j_1.f_1)(j_2.f_2)`` decides.
+    Without a reference, ``j1``'s largest-magnitude component is made positive.
+    """
+    j1, j2 = np.asarray(j1, float), np.asarray(j2, float)
+    if quat_1 is not None and quat_2 is not None:
+        s = np.mean(
+            np.einsum("nij,j,nik,k->n", matrix_from_quat(quat_1), j1, matrix_from_quat(quat_2), j2)
+        )
+    elif data is not None:
+        z = np.zeros(3)
+        f1, f2 = _joint_force(data, z if o1 is None else o1, z if o2 is None else o2)
+        s = np.sum((f1 @ j1) * (f2 @ j2))
+    else:
+        raise InputError("need sensor orientations or signals to fix the axis signs")
+    if s < 0:
+        j2 = -j2
+    ref = np.eye(3)[np.argmax(np.abs(j1))] if reference_1 is None else reference_1
+    if np.dot(j1, ref) < 0:
+        j1, j2 = -j1, -j2
+    return j1, j2
+
+
+def tangent_basis(j: np.ndarray) -> np.ndarray:
+    """Two unit vectors (3,2) spanning the plane orthogonal to the unit vector ``j``."""
+    j = normalize(np.asarray(j, float))
+    a = np.eye(3)[np.argmin(np.abs(j))]
+    b1 = normalize(np.cross(j, a))
+    return np.stack([b1, np.cross(j, b1)], axis=1)
+
+
+def observability(
+    jacobian: np.ndarray,
+    blocks: dict[str, slice],
+    *,
+    residual: np.ndarray | None = None,
+    abs_tol: float = np.inf,
+    directions: dict[str, np.ndarray] | None = None,
+    rel_tol: float = 0.02,
+) -> dict:
+    """Rank and uncertainty diagnostics of a residual Jacobian (N, P) at the solution.
+
+    With ``J / sqrt(N) = U S V^T``, a right-singular direction ``v_k`` is weakly determined when
+    ``s_k / s_max < rel_tol`` (rank), or when its standard deviation under white residuals,
+    ``sd_k = rms(residual) / (sqrt(N) s_k)``, exceeds ``abs_tol`` (parameter units). It is named
+    after a known direction in ``directions`` (``name -> (P,)``, e.g. the shift of both hinge
+    positions along the axis) when ``|v_k . d| > 0.9``, otherwise after the parameter blocks
+    (``name -> column slice``) carrying more than a quarter of its weight.
+    Returns ``{'singular_values', 'condition', 'sd' (P,), 'undetermined': [names], 'message'}``.
+    """
+    J = np.asarray(jacobian, float)
+    n = J.shape[0]
+    _, s, vt = np.linalg.svd(J / np.sqrt(n), full_matrices=False)
+    smax = s[0] if s.size and s[0] > 0 else 1.0
+    rms = 0.0 if residual is None else float(np.sqrt(np.mean(np.square(residual))))
+    sd_k = rms / (np.sqrt(n) * np.maximum(s, 1e-300))
+    weak = [k for k in range(s.size) if s[k] / smax < rel_tol or sd_k[k] > abs_tol]
+    names: list[str] = []
+    for k in weak:
+        hit = [m for m, d in (directions or {}).items() if abs(vt[k] @ normalize(d)) > 0.9]
+        if not hit:
+            hit = [m for m, sl in blocks.items() if np.sum(vt[k, sl] ** 2) > 0.25]
+        names += [m for m in hit if m not in names]
+    cond = float(smax / max(s[-1], 1e-300)) if s.size else float("inf")
+    sd = np.sqrt(np.einsum("kp,k->p", vt**2, np.minimum(sd_k, 1e6) ** 2))
+    if names:
+        msg = f"{len(weak)} weakly determined direction(s): " + "; ".join(names)
+        msg += " undetermined by this motion"
+    else:
+        msg = f"all parameters determined (condition number {cond:.1f})"
+    return {
+        "singular_values": s,
+        "condition": cond,
+        "sd": sd,
+        "undetermined": names,
+        "message": msg,
+    }

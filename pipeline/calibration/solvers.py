@@ -1,0 +1,372 @@
+"""Solvers for the joint-constraint calibration (Hu et al. 2021 §3): Gauss-Newton, DWPSO, GWO.
+
+All three minimise the same costs of :mod:`pipeline.calibration.joint_constraints`:
+
+* axes (hinge, eq 12/18/26): ``x = [p_1, y_1, p_2, y_2]`` spherical coordinates (eq 5), pitch in
+  ``[0, pi]``, yaw in ``[0, 2 pi]``, cost ``sum_t e_hinge(t)^2`` (eq 6);
+* positions (eq 7/17/25): ``x = [o_1, o_2]`` in the box ``[-0.2, 0.2]^6`` m, cost
+  ``sum_t e_sph(t)^2`` (eq 3). For a hinge the positions are then moved along the axis (eq 16).
+
+Gauss-Newton (eq 7-15): ``x <- x - pinv(J) e`` from random starts in the box; the step is halved
+while it increases the cost (a safeguard the paper does not state); the best of ``restarts`` runs
+is kept. DWPSO (eq 17-24): velocity ``F <- mu F + 2 r_1 (eta - x) + 2 r_2 (p - x)``; eq 24 is
+garbled in print, so the dynamic weight decays exponentially from ``mu_max = 0.8`` to
+``mu_min = 0.2`` over the iterations, ``mu = mu_max (mu_min/mu_max)^(g/g_max)``, with random jumps
+(probability ``jump``) to a uniform value in ``[mu_min, mu_max]``. GWO (eq 25-29, Mirjalili 2014):
+``D = |C x_lead - x|``, ``x_lead - A D`` averaged over the three leaders, ``A = 2 psi r - psi``,
+``C = 2 r``, ``psi`` 2 -> 0 (eq 27 omits the absolute value of the original GWO; it is kept).
+All randomness comes from ``np.random.default_rng(seed)``.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.calibration.joint_constraints import (
+    JointData,
+    _gamma_matrix,
+    axis_from_spherical,
+    consistent_axis_signs,
+    hinge_jacobian,
+    hinge_jacobian_spherical,
+    hinge_residual,
+    observability,
+    project_hinge_positions,
+    spherical_jacobian,
+    spherical_residual,
+    tangent_basis,
+)
+from pipeline.errors import InputError
+
+__all__ = [
+    "CalibrationResult",
+    "calibrate",
+    "diagnose",
+    "dwpso",
+    "gauss_newton",
+    "gwo",
+]
+
+BOX = 0.2  # m, Hu eq 7
+AXIS_LO = np.array([0.0, 0.0, 0.0, 0.0])
+AXIS_HI = np.array([np.pi, 2 * np.pi, np.pi, 2 * np.pi])
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Joint axes (unit, sensor frames, same physical direction) and joint-centre positions
+    (sensor -> joint, m, sensor frames); ``None`` where not estimated. ``cost``: mean squared
+    residual(s) at the solution, hinge (rad/s)^2 plus positions (m/s^2)^2."""
+
+    axis_1: np.ndarray | None
+    axis_2: np.ndarray | None
+    position_1_m: np.ndarray | None
+    position_2_m: np.ndarray | None
+    cost: float
+    iterations: int
+    seconds: float
+    method: str
+    observability: dict
+
+
+# ------------------------------------------------------------------------------- cost functions
+
+
+def _axis_costs(X: np.ndarray, d: JointData) -> np.ndarray:
+    """Mean squared eq-6 residual for a population ``X (P,4)`` of spherical coordinates, using
+    ``|w x j|^2 = |w|^2 - (w.j)^2`` for unit ``j``."""
+    j1 = axis_from_spherical(X[:, 0], X[:, 1])
+    j2 = axis_from_spherical(X[:, 2], X[:, 3])
+    w1 = np.sum(d.gyr_1**2, axis=1)[:, None]
+    w2 = np.sum(d.gyr_2**2, axis=1)[:, None]
+    n1 = np.sqrt(np.maximum(w1 - (d.gyr_1 @ j1.T) ** 2, 0.0))
+    n2 = np.sqrt(np.maximum(w2 - (d.gyr_2 @ j2.T) ** 2, 0.0))
+    return np.mean((n1 - n2) ** 2, axis=0)
+
+
+def _quadratic_norms(d: JointData) -> tuple[tuple, tuple]:
+    """``|a + K o|^2 = |a|^2 + 2 (K^T a).o + (o o^T) : K^T K`` per sample, for both sensors."""
+    out = []
+    for a, K in (
+        (d.acc_1, _gamma_matrix(d.gyr_1, d.gyr_dot_1)),
+        (d.acc_2, _gamma_matrix(d.gyr_2, d.gyr_dot_2)),
+    ):
+        Kt = np.swapaxes(K, 1, 2)
+        out.append(
+            (
+                np.sum(a * a, axis=1)[:, None],
+                np.einsum("nij,nj->ni", Kt, a),
+                (Kt @ K).reshape(-1, 9),
+            )
+        )
+    return tuple(out)
+
+
+def _position_costs(X: np.ndarray, Q: tuple) -> np.ndarray:
+    """Mean squared eq-3 residual for a population ``X (P,6)`` of positions."""
+    norms = []
+    for (c, b, M), o in zip(Q, (X[:, :3], X[:, 3:]), strict=True):
+        oo = (o[:, :, None] * o[:, None, :]).reshape(-1, 9)
+        norms.append(np.sqrt(np.maximum(c + 2.0 * (b @ o.T) + M @ oo.T, 0.0)))
+    return np.mean((norms[0] - norms[1]) ** 2, axis=0)
+
+
+def _problem(d: JointData, which: str):
+    """(population cost, residual, jacobian, lo, hi, wrap mask) of 'axes' or 'positions'."""
+    if which == "axes":
+        return (
+            lambda X: _axis_costs(X, d),
+            lambda x: hinge_residual(
+                axis_from_spherical(x[0], x[1]), axis_from_spherical(x[2], x[3]), d.gyr_1, d.gyr_2
+            ),
+            lambda x: hinge_jacobian_spherical(x, d.gyr_1, d.gyr_2),
+            AXIS_LO,
+            AXIS_HI,
+            np.array([False, True, False, True]),
+        )
+    Q = _quadratic_norms(d)
+    return (
+        lambda X: _position_costs(X, Q),
+        lambda x: spherical_residual(x[:3], x[3:], d),
+        lambda x: spherical_jacobian(x[:3], x[3:], d),
+        np.full(6, -BOX),
+        np.full(6, BOX),
+        np.zeros(6, bool),
+    )
+
+
+# ------------------------------------------------------------------------------------ optimisers
+
+
+def gauss_newton(
+    residual: Callable[[np.ndarray], np.ndarray],
+    jacobian: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    *,
+    max_iter: int = 50,
+    tol: float = 1e-10,
+) -> tuple[np.ndarray, float, int]:
+    """Eq 11/15: ``x <- x - pinv(J) e`` until the step is below ``tol``; (x, cost, iters)."""
+    x = np.asarray(x0, float).copy()
+    e = residual(x)
+    cost = float(np.mean(e**2))
+    it = 0
+    for it in range(1, max_iter + 1):  # noqa: B007
+        step = np.linalg.pinv(jacobian(x)) @ e
+        for _ in range(30):
+            xn = x - step
+            en = residual(xn)
+            cn = float(np.mean(en**2))
+            if cn <= cost:
+                break
+            step = 0.5 * step
+        else:
+            break
+        x, e, cost = xn, en, cn
+        if np.linalg.norm(step) < tol:
+            break
+    return x, cost, it
+
+
+def dwpso(
+    cost: Callable[[np.ndarray], np.ndarray],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    *,
+    wrap: np.ndarray | None = None,
+    particles: int = 40,
+    iterations: int = 150,
+    mu_min: float = 0.2,
+    mu_max: float = 0.8,
+    jump: float = 0.05,
+    seed: int = 0,
+) -> tuple[np.ndarray, float, int]:
+    """Dynamic-weight PSO (eq 19-24) on a population cost ``cost(X (P,D)) -> (P,)``."""
+    rng = np.random.default_rng(seed)
+    span = hi - lo
+    wrap = np.zeros(lo.size, bool) if wrap is None else wrap
+    X = lo + span * rng.random((particles, lo.size))
+    F = 0.1 * span * rng.uniform(-1, 1, X.shape)
+    eta, eta_c = X.copy(), cost(X)
+    g = int(np.argmin(eta_c))
+    for k in range(iterations):
+        mu = mu_max * (mu_min / mu_max) ** (k / max(iterations - 1, 1))
+        if rng.random() < jump:
+            mu = rng.uniform(mu_min, mu_max)
+        r1, r2 = rng.random(X.shape), rng.random(X.shape)
+        F = mu * F + 2.0 * r1 * (eta - X) + 2.0 * r2 * (eta[g] - X)  # eq 22
+        F = np.clip(F, -0.2 * span, 0.2 * span)
+        X = _bound(X + F, lo, hi, wrap)  # eq 23
+        c = cost(X)
+        better = c < eta_c  # eq 19
+        eta[better], eta_c[better] = X[better], c[better]
+        g = int(np.argmin(eta_c))  # eq 20
+    return eta[g], float(eta_c[g]), iterations
+
+
+def gwo(
+    cost: Callable[[np.ndarray], np.ndarray],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    *,
+    wrap: np.ndarray | None = None,
+    wolves: int = 40,
+    iterations: int = 150,
+    seed: int = 0,
+) -> tuple[np.ndarray, float, int]:
+    """Grey wolf optimiser (eq 27-29) on a population cost ``cost(X (P,D)) -> (P,)``."""
+    rng = np.random.default_rng(seed)
+    wrap = np.zeros(lo.size, bool) if wrap is None else wrap
+    X = lo + (hi - lo) * rng.random((wolves, lo.size))
+    c = cost(X)
+    order = np.argsort(c)[:3]
+    leaders, leaders_c = X[order].copy(), c[order].copy()
+    for k in range(iterations):
+        psi = 2.0 - 2.0 * k / iterations
+        new = np.zeros_like(X)
+        for L in leaders:
+            h = 2.0 * rng.random(X.shape)  # eq 27
+            kk = 2.0 * psi * rng.random(X.shape) - psi  # eq 28
+            new += L - kk * np.abs(h * L - X)
+        X = _bound(new / 3.0, lo, hi, wrap)  # eq 29
+        c = cost(X)
+        pool = np.vstack([leaders, X])
+        pool_c = np.concatenate([leaders_c, c])
+        order = np.argsort(pool_c)[:3]
+        leaders, leaders_c = pool[order].copy(), pool_c[order].copy()
+    return leaders[0], float(leaders_c[0]), iterations
+
+
+def _bound(X: np.ndarray, lo: np.ndarray, hi: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    Y = np.clip(X, lo, hi)
+    Y[:, wrap] = lo[wrap] + np.mod(X[:, wrap] - lo[wrap], (hi - lo)[wrap])
+    return Y
+
+
+# ----------------------------------------------------------------------------------- calibration
+
+
+def _solve(d: JointData, which: str, method: str, seed: int, opts: dict):
+    pop_cost, res, jac, lo, hi, wrap = _problem(d, which)
+    if method == "gn":
+        rng = np.random.default_rng(seed)
+        best = None
+        total = 0
+        for _ in range(opts.get("restarts", 4 if which == "axes" else 2)):
+            x0 = lo + (hi - lo) * rng.random(lo.size)
+            x, c, it = gauss_newton(res, jac, x0, max_iter=opts.get("max_iter", 50))
+            total += it
+            if best is None or c < best[1]:
+                best = (x, c)
+        return best[0], best[1], total
+    if method == "dwpso":
+        kw = {k: opts[k] for k in ("particles", "iterations", "jump") if k in opts}
+        return dwpso(pop_cost, lo, hi, wrap=wrap, seed=seed, **kw)
+    if method == "gwo":
+        kw = {k: opts[k] for k in ("wolves", "iterations") if k in opts}
+        return gwo(pop_cost, lo, hi, wrap=wrap, seed=seed, **kw)
+    raise InputError(f"expected method 'gn', 'dwpso' or 'gwo', got {method!r}", field="method")
+
+
+def diagnose(
+    data: JointData,
+    j1=None,
+    j2=None,
+    o1=None,
+    o2=None,
+    *,
+    rel_tol: float = 0.02,
+    axis_sd_deg: float = 2.0,
+    position_sd_m: float = 0.005,
+) -> dict:
+    """Observability at a solution: Jacobians of eq 6 (axes, tangent coordinates) and eq 3
+    (positions) (:func:`observability`); a direction is undetermined when rank-deficient
+    (``rel_tol``) or when its predicted SD exceeds ``axis_sd_deg`` / ``position_sd_m``. The
+    shift of hinge positions along the axis is expected and listed under ``'expected'``."""
+    out: dict = {"undetermined": [], "expected": []}
+    msgs = []
+    if j1 is not None:
+        B1, B2 = tangent_basis(j1), tangent_basis(j2)
+        J = hinge_jacobian(j1, j2, data.gyr_1, data.gyr_2)
+        Jt = np.hstack([J[:, :3] @ B1, J[:, 3:] @ B2])
+        blocks = {"axis_1 (sensor 1)": slice(0, 2), "axis_2 (sensor 2)": slice(2, 4)}
+        out["axes"] = observability(
+            Jt,
+            blocks,
+            residual=hinge_residual(j1, j2, data.gyr_1, data.gyr_2),
+            abs_tol=np.deg2rad(axis_sd_deg),
+            rel_tol=rel_tol,
+        )
+        out["undetermined"] += out["axes"]["undetermined"]
+        msgs.append("axes: " + out["axes"]["message"])
+    if o1 is not None:
+        along = "position along the hinge axis"
+        dirs = {} if j1 is None else {along: np.concatenate([j1, j2])}
+        blocks = {"position_1 (sensor 1)": slice(0, 3), "position_2 (sensor 2)": slice(3, 6)}
+        out["positions"] = observability(
+            spherical_jacobian(o1, o2, data),
+            blocks,
+            directions=dirs,
+            rel_tol=rel_tol,
+            residual=spherical_residual(o1, o2, data),
+            abs_tol=position_sd_m,
+        )
+        for n in out["positions"]["undetermined"]:
+            (out["expected"] if n == along else out["undetermined"]).append(n)
+        msg = out["positions"]["message"]
+        if along in out["expected"]:
+            msg += " (the shift along a hinge axis is expected; fixed by eq 16)"
+        msgs.append("positions: " + msg)
+    out["message"] = " | ".join(msgs)
+    return out
+
+
+def calibrate(
+    data: JointData,
+    joint: str = "hinge",
+    method: str = "gn",
+    *,
+    seed: int = 0,
+    quat_1: np.ndarray | None = None,
+    quat_2: np.ndarray | None = None,
+    reference_1: np.ndarray | None = None,
+    **options,
+) -> CalibrationResult:
+    """Calibrate a joint from two sensors' signals with 'gn', 'dwpso' or 'gwo'.
+
+    ``joint='hinge'``: axes (eq 4-6), positions (eq 1-3) moved along the axis (eq 16), axis signs
+    made consistent (:func:`consistent_axis_signs`, with the orientations if given) and ``axis_1``
+    along ``reference_1`` if given. ``joint='spherical'``: positions only. ``options`` go to the
+    optimiser (``restarts``, ``max_iter``, ``particles``, ``wolves``, ``iterations``).
+    """
+    if joint not in ("hinge", "spherical"):
+        raise InputError(f"expected joint 'hinge' or 'spherical', got {joint!r}", field="joint")
+    t0 = _time.perf_counter()
+    xo, co, it = _solve(data, "positions", method, seed, options)
+    o1, o2 = xo[:3], xo[3:]
+    j1 = j2 = None
+    cost = co
+    if joint == "hinge":
+        xa, ca, ita = _solve(data, "axes", method, seed + 1, options)
+        j1, j2 = axis_from_spherical(xa[0], xa[1]), axis_from_spherical(xa[2], xa[3])
+        j1, j2 = consistent_axis_signs(
+            j1, j2, quat_1=quat_1, quat_2=quat_2, data=data, o1=o1, o2=o2, reference_1=reference_1
+        )
+        o1, o2 = project_hinge_positions(o1, o2, j1, j2)
+        cost, it = ca + co, it + ita
+    seconds = _time.perf_counter() - t0
+    return CalibrationResult(
+        axis_1=j1,
+        axis_2=j2,
+        position_1_m=o1,
+        position_2_m=o2,
+        cost=float(cost),
+        iterations=int(it),
+        seconds=seconds,
+        method=method,
+        observability=diagnose(data, j1, j2, o1, o2),
+    )
