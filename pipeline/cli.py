@@ -67,8 +67,16 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         nargs=3,
         metavar=("RX", "RY", "RZ"),
-        help="fixed world rotation (rad, XYZ) as OpenSense's sensor_to_opensim_rotations; "
-        "default: detected from the file (Xsens z-up -> -pi/2 0 0)",
+        help="fixed world rotation (rad, space-fixed XYZ) as OpenSense's "
+        "sensor_to_opensim_rotations, making the world's y axis point up; default 0 0 0 "
+        "(already y-up); an Xsens z-up world needs -1.5708 0 0",
+    )
+    p.add_argument(
+        "--heading",
+        default="anatomical",
+        help="how the subject's forward direction is found at the calibration pose: "
+        "'anatomical' (from hip and knee flexion, independent of sensor mounting; default) or "
+        "OpenSense's 'pelvis_imu:-z' style (an axis of the pelvis sensor)",
     )
     p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
     p.add_argument("--out", type=Path, required=True, help="output directory")
@@ -133,7 +141,7 @@ def _cmd_scale(args) -> int:
 
 
 def _cmd_ik(args) -> int:
-    from pipeline.workflows import run_ik_from_sto
+    from pipeline.opensense import run_ik_from_sto
 
     summary = run_ik_from_sto(
         args.orientations,
@@ -141,6 +149,7 @@ def _cmd_ik(args) -> int:
         args.out,
         knee=args.knee,
         sensor_to_model=args.sensor_to_model,
+        heading=args.heading,
     )
     print(summary)
     return 0
