@@ -17,6 +17,8 @@ timeline ``time``, seconds):
   (default ``Rx(+90 deg)``: a Y-up model stands upright in a Z-up world).
 
 Samples with NaN are not logged (the viewer shows the last valid one until the next).
+``log_motion`` (in :mod:`pipeline.viz_model`, re-exported here) draws a model's motion from its
+configurations: moving segment meshes, landmarks, IMU axes, bones and joint-angle plots.
 ``read_entities`` and ``entity_row_counts`` read a recording back by iterating its chunks
 (``rerun.chunk.RrdReader``; no datafusion extra needed). ``view`` opens the native or web viewer.
 """
@@ -41,6 +43,7 @@ from pipeline.rotations import quat_from_matrix, rot_x
 
 __all__ = [
     "entity_row_counts",
+    "log_motion",  # noqa: F822 (lazy, see __getattr__)
     "log_trial",
     "read_entities",
     "view",
@@ -51,6 +54,15 @@ __all__ = [
 IMC_COLOR = (230, 90, 40)
 REFERENCE_COLOR = (40, 120, 230)
 ERROR_COLOR = (200, 40, 160)
+
+
+def __getattr__(name: str):
+    # ``log_motion`` lives in pipeline.viz_model, which imports this module: resolved lazily.
+    if name == "log_motion":
+        from pipeline.viz_model import log_motion
+
+        return log_motion
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _rr():
@@ -114,6 +126,112 @@ def _env(name: str, value: str):
             os.environ[name] = old
 
 
+def _check_time(time: np.ndarray) -> np.ndarray:
+    t = np.asarray(time, dtype=float)
+    if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
+        raise InputError(f"time must be a finite (N,) array, got shape {t.shape}", field="time")
+    return t
+
+
+@contextmanager
+def _recording(path: Path, app_id: str, recording_name: str | None, up_axis: str):
+    """An offline recording to ``path`` with view coordinates on ``world``; deleted on failure."""
+    rr = _rr()
+    if up_axis not in ("y", "z"):
+        raise InputError(f"up_axis must be 'y' or 'z', got {up_axis!r}", field="up_axis")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rec = rr.RecordingStream(app_id)
+    rec.save(path)
+    try:
+        if recording_name:
+            rec.send_recording_name(recording_name)
+        view_coordinates = (
+            rr.ViewCoordinates.RIGHT_HAND_Z_UP
+            if up_axis == "z"
+            else rr.ViewCoordinates.RIGHT_HAND_Y_UP
+        )
+        rec.log("world", view_coordinates, static=True)
+        yield rec
+        rec.flush()
+    except BaseException:
+        rec.disconnect()
+        path.unlink(missing_ok=True)  # no half-written recording
+        raise
+    rec.disconnect()
+
+
+def _send(rec, entity: str, t: np.ndarray, mask: np.ndarray, columns) -> None:
+    """One ``send_columns`` call: the rows of ``t`` selected by ``mask`` on timeline ``time``."""
+    rr = _rr()
+    rec.send_columns(entity, indexes=[rr.TimeColumn("time", duration=t[mask])], columns=columns)
+
+
+def _log_points(
+    rec, t: np.ndarray, group: str, data: Mapping[str, np.ndarray], color, radius: float
+) -> dict[str, np.ndarray]:
+    """``world/<group>/<name>``: one labelled point per time row (NaN rows skipped)."""
+    rr = _rr()
+    out = {}
+    for name, xyz in data.items():
+        xyz = _check_series(xyz, len(t), (3,), name)
+        ok = _finite(xyz)
+        entity = f"world/{group}/{name}"
+        rec.log(
+            entity,
+            rr.Points3D.from_fields(colors=[color], radii=[radius], labels=[name]),
+            static=True,
+        )
+        if ok.any():
+            _send(rec, entity, t, ok, rr.Points3D.columns(positions=xyz[ok]))
+        out[name] = xyz
+    return out
+
+
+def _log_error_arrows(
+    rec, t: np.ndarray, est: Mapping[str, np.ndarray], ref: Mapping[str, np.ndarray]
+) -> None:
+    """``world/errors/<name>``: arrow reference -> estimate for the names in both."""
+    rr = _rr()
+    for name in est.keys() & ref.keys():
+        ok = _finite(est[name]) & _finite(ref[name])
+        entity = f"world/errors/{name}"
+        rec.log(entity, rr.Arrows3D.from_fields(colors=[ERROR_COLOR]), static=True)
+        if ok.any():
+            cols = rr.Arrows3D.columns(origins=ref[name][ok], vectors=est[name][ok] - ref[name][ok])
+            _send(rec, entity, t, ok, cols)
+
+
+def _log_poses(
+    rec,
+    t: np.ndarray,
+    group: str,
+    poses: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    axis_length: float | None,
+) -> None:
+    """``<group>/<name>``: ``Transform3D`` columns (translation, xyzw quaternion), static axes."""
+    rr = _rr()
+    for name, (R, p) in poses.items():
+        R = _check_series(R, len(t), (3, 3), f"{name} R")
+        p = _check_series(p, len(t), (3,), f"{name} p")
+        ok = _finite(R) & _finite(p)
+        entity = f"{group}/{name}"
+        if axis_length is not None:
+            rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
+        if ok.any():
+            xyzw = quat_from_matrix(R[ok])[:, [1, 2, 3, 0]]  # rerun: scalar-last
+            _send(rec, entity, t, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
+
+
+def _log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:
+    """Entity path -> ``(N,)`` series times ``scale``, as ``Scalars`` (NaN rows skipped)."""
+    rr = _rr()
+    for entity, y in series.items():
+        y = _check_series(y, len(t), (), entity)
+        ok = np.isfinite(y)
+        if ok.any():
+            _send(rec, entity, t, ok, rr.Scalars.columns(scalars=scale * y[ok]))
+
+
 def log_trial(
     path: str | Path,
     time: np.ndarray,
@@ -140,89 +258,23 @@ def log_trial(
     in degrees under ``plots/``; ``urdf_path`` a model logged statically under ``world/model`` with
     its root link posed by ``urdf_root = (R, p)`` in ``world`` (default ``Rx(+90 deg)``, 0).
     ``package_paths`` extend ``ROS_PACKAGE_PATH`` (default: example-robot-data's ``share`` folder
-    and the URDF's parent folders).
+    and the URDF's parent folders). :func:`pipeline.viz_model.log_motion` draws a model's motion.
     """
-    rr = _rr()
     path = Path(path)
-    t = np.asarray(time, dtype=float)
-    if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
-        raise InputError(f"time must be a finite (N,) array, got shape {t.shape}", field="time")
-    n = len(t)
-    if up_axis not in ("y", "z"):
-        raise InputError(f"up_axis must be 'y' or 'z', got {up_axis!r}")
-    path.parent.mkdir(parents=True, exist_ok=True)
-
-    rec = rr.RecordingStream(app_id)
-    rec.save(path)
-    try:
-        if recording_name:
-            rec.send_recording_name(recording_name)
-        view_coordinates = (
-            rr.ViewCoordinates.RIGHT_HAND_Z_UP
-            if up_axis == "z"
-            else rr.ViewCoordinates.RIGHT_HAND_Y_UP
-        )
-        rec.log("world", view_coordinates, static=True)
-
-        def send(entity: str, mask: np.ndarray, columns) -> None:
-            rec.send_columns(
-                entity, indexes=[rr.TimeColumn("time", duration=t[mask])], columns=columns
-            )
-
-        def points(group: str, data: Mapping[str, np.ndarray], color) -> dict[str, np.ndarray]:
-            out = {}
-            for name, xyz in data.items():
-                xyz = _check_series(xyz, n, (3,), name)
-                ok = _finite(xyz)
-                entity = f"world/{group}/{name}"
-                rec.log(
-                    entity,
-                    rr.Points3D.from_fields(colors=[color], radii=[point_radius], labels=[name]),
-                    static=True,
-                )
-                if ok.any():
-                    send(entity, ok, rr.Points3D.columns(positions=xyz[ok]))
-                out[name] = xyz
-            return out
-
-        est = points("landmarks", landmarks, IMC_COLOR)
+    t = _check_time(time)
+    with _recording(path, app_id, recording_name, up_axis) as rec:
+        est = _log_points(rec, t, "landmarks", landmarks, IMC_COLOR, point_radius)
         if reference_landmarks:
-            ref = points("reference", reference_landmarks, REFERENCE_COLOR)
+            ref = _log_points(
+                rec, t, "reference", reference_landmarks, REFERENCE_COLOR, point_radius
+            )
             if error_arrows:
-                for name in est.keys() & ref.keys():
-                    ok = _finite(est[name]) & _finite(ref[name])
-                    entity = f"world/errors/{name}"
-                    rec.log(entity, rr.Arrows3D.from_fields(colors=[ERROR_COLOR]), static=True)
-                    if ok.any():
-                        cols = rr.Arrows3D.columns(
-                            origins=ref[name][ok], vectors=est[name][ok] - ref[name][ok]
-                        )
-                        send(entity, ok, cols)
-
-        for name, (R, p) in (segment_poses or {}).items():
-            R = _check_series(R, n, (3, 3), f"{name} R")
-            p = _check_series(p, n, (3,), f"{name} p")
-            ok = _finite(R) & _finite(p)
-            entity = f"world/segments/{name}"
-            rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
-            if ok.any():
-                xyzw = quat_from_matrix(R[ok])[:, [1, 2, 3, 0]]  # rerun: scalar-last
-                send(entity, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
-
-        for name, q in (joint_angles or {}).items():
-            q = _check_series(q, n, (), name)
-            ok = np.isfinite(q)
-            if ok.any():
-                send(f"plots/{name}", ok, rr.Scalars.columns(scalars=np.degrees(q[ok])))
-
+                _log_error_arrows(rec, t, est, ref)
+        _log_poses(rec, t, "world/segments", segment_poses or {}, axis_length)
+        angles = {f"plots/{name}": q for name, q in (joint_angles or {}).items()}
+        _log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
         if urdf_path is not None:
             _log_urdf(rec, Path(urdf_path), urdf_root, package_paths)
-        rec.flush()
-    except BaseException:
-        rec.disconnect()
-        path.unlink(missing_ok=True)  # no half-written recording
-        raise
-    rec.disconnect()
     return path
 
 
