@@ -1,0 +1,102 @@
+"""The command line: help with examples, one-line errors, exit codes, no partial outputs."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.cli import EXAMPLES, build_parser, main
+
+OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
+
+
+def test_every_command_has_help_with_an_example(capsys):
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    assert set(sub.choices) == set(EXAMPLES) == {
+        "scale", "ik", "calibrate", "simulate", "reproduce", "demo", "view"}  # fmt: skip
+    for name in EXAMPLES:
+        with pytest.raises(SystemExit) as exc:
+            main([name, "--help"])
+        assert exc.value.code == 0
+        out = capsys.readouterr().out
+        assert "example:" in out and f"pipeline {name}" in out
+
+
+HEADER = "DataRate=100.000000\nDataType=Quaternion\nversion=3\nendheader\n"
+COLUMNS = ["pelvis_imu", "femur_r_imu", "tibia_r_imu"]
+
+
+def _sto(rows, columns=COLUMNS, header=HEADER):
+    lines = ["time\t" + "\t".join(columns)]
+    for t, quats in rows:
+        lines.append(f"{t:g}\t" + "\t".join(",".join(f"{v:.9g}" for v in q) for q in quats))
+    return header + "\n".join(lines) + "\n"
+
+
+def _rows(n=50, dt=0.01):
+    q = [1.0, 0.0, 0.0, 0.0]
+    return [(k * dt, [q] * len(COLUMNS)) for k in range(n)]
+
+
+def _bad_files():
+    rows = _rows()
+    unsorted = list(rows)
+    unsorted[10], unsorted[11] = unsorted[11], unsorted[10]
+    repeated = list(rows)
+    repeated[20] = (rows[19][0], rows[20][1])
+    zero_q = [(t, [[0, 0, 0, 0]] + q[1:]) if k == 5 else (t, q) for k, (t, q) in enumerate(rows)]
+    big_q = [(t, [[3, 0, 0, 0]] + q[1:]) if k == 5 else (t, q) for k, (t, q) in enumerate(rows)]
+    nan_gap = [(t, [[np.nan] * 4] + q[1:]) if 10 <= k < 40 else (t, q)
+               for k, (t, q) in enumerate(rows)]  # fmt: skip
+    full = _sto(rows)
+    return {
+        "empty": ("", "empty"),
+        "header only": (HEADER, "column"),
+        "truncated": (full[: len(full) - 20], "truncated"),  # cut mid-row
+        "missing pelvis": (_sto([(t, q[1:]) for t, q in rows], COLUMNS[1:]), "pelvis"),
+        "unsorted time": (_sto(unsorted), "time"),
+        "repeated time": (_sto(repeated), "time"),
+        "zero quaternion": (_sto(zero_q), "quaternion"),
+        "non-unit quaternion": (_sto(big_q), "unit"),
+        "long NaN gap": (_sto(nan_gap), "gap"),
+        "rate mismatch": (_sto(_rows(dt=0.02)), "rate"),
+        "barely moving knee": (_sto(rows), "barely move"),
+    }
+
+
+@pytest.mark.parametrize("case", list(_bad_files()))
+def test_bad_sto_refused_with_one_line(tmp_path, capsys, case):
+    text, expected = _bad_files()[case]
+    path = tmp_path / "bad.sto"
+    path.write_text(text)
+    out = tmp_path / "out"
+    code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
+                 "--out", str(out)])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert expected.lower() in err.lower(), err
+    assert not out.exists() or not any(out.iterdir())  # nothing half-written
+
+
+def test_units_hint_for_height_in_cm(tmp_path, capsys):
+    code = main(["ik", "--orientations", str(tmp_path / "x.sto"), "--sex", "m",
+                 "--height-m", "175", "--out", str(tmp_path)])  # fmt: skip
+    assert code == 2
+    assert "centimetres" in capsys.readouterr().err
+
+
+def test_missing_file(tmp_path, capsys):
+    code = main(["ik", "--orientations", str(tmp_path / "nope.sto"), "--sex", "m",
+                 "--height-m", "1.75", "--out", str(tmp_path / "o")])  # fmt: skip
+    assert code == 2
+    assert "nope.sto" in capsys.readouterr().err
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    from pipeline.errors import InputError
+
+    with pytest.raises(InputError):
+        main(["--debug", "ik", "--orientations", str(tmp_path / "nope.sto"), "--sex", "m",
+              "--height-m", "1.75", "--out", str(tmp_path / "o")])  # fmt: skip
