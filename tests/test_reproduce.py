@@ -95,3 +95,10 @@ def test_rerun_recordings_hold_landmarks_errors_and_angles(out):
                    "world/segments/tibia", "plots/knee_flexion"):  # fmt: skip
         assert any(e.lstrip("/").startswith(entity) for e in counts), (entity, sorted(counts))
     assert counts["/world/landmarks/MM"] > 2000
+
+
+def test_ipopt_correction_beats_the_closed_form_on_uncorrected_malleoli(out):
+    rows = read(out / "trajectory_errors.csv")
+    for lm in ("MM", "LM"):
+        kw = dict(landmark=lm, positions="regression", tibia_input="uncorrected")
+        assert _group(rows, correction="ipopt", **kw) < _group(rows, correction="average", **kw)

@@ -78,9 +78,9 @@ def _correction(name: str, F, T, measured, sex_aor, own_aor, female_aor):
     if name == "none":
         return np.eye(3), np.eye(3)
     if name == "ipopt":
-        from pipeline.calibration.aor_ipopt import correct_aor_ipopt
+        from pipeline.calibration.aor_ipopt import aor_correction_ipopt
 
-        res = correct_aor_ipopt(F, T, sex_aor.femur_axis, sex_aor.tibia_axis)
+        res = aor_correction_ipopt(F, T, sex_aor.femur_axis, sex_aor.tibia_axis)
         return res.R_co_femur, res.R_co_tibia
     ref = {"average": sex_aor, "individual": own_aor, "reference": female_aor}[name]
     return correction_rotations(measured, ref.femur_axis, ref.tibia_axis)
