@@ -204,3 +204,25 @@ def euler_zxy_from_matrix(R: np.ndarray) -> np.ndarray:
     z = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
     y = np.arctan2(-R[..., 2, 0], R[..., 2, 2])
     return np.stack([z, x, y], axis=-1)
+
+
+def rotation_aligning_with_twist(
+    a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray
+) -> np.ndarray:
+    """Rotation ``R`` with ``R a_hat = b_hat`` exactly whose twist about ``b`` best aligns the
+    pairs ``R c_k ~ d_k`` (Wahba's problem with one exact pair).
+
+    ``R = exp3(phi b_hat) @ rotation_aligning(a, b)`` with ``phi = atan2(sum b.(u_k x w_k),
+    sum u_k.w_k)``, where ``u_k`` and ``w_k`` are ``R0 c_k`` and ``d_k`` projected onto the plane
+    orthogonal to ``b`` (this maximises ``sum_k (R c_k).d_k``); ``c``, ``d``: (3,) or (K, 3).
+    With ``c = I`` and ``d = R_ref^T`` it is the rotation nearest to ``R_ref`` (Frobenius norm).
+    If every ``c_k`` or ``d_k`` is parallel to ``b`` the twist is undetermined and ``phi = 0``.
+    """
+    b_hat = normalize(b)
+    R0 = rotation_aligning(a, b_hat)
+    u = np.atleast_2d(np.asarray(c, dtype=float)) @ R0.T
+    w = np.atleast_2d(np.asarray(d, dtype=float))
+    u = u - np.outer(u @ b_hat, b_hat)
+    w = w - np.outer(w @ b_hat, b_hat)
+    phi = np.arctan2(np.sum(np.cross(u, w) @ b_hat), np.sum(u * w))
+    return exp3(phi * b_hat) @ R0
