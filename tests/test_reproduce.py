@@ -85,16 +85,43 @@ def test_orientation_errors_have_both_error_frames(out):
     assert {r["segment"] for r in rows} == {"femur", "tibia"}
 
 
-def test_rerun_recordings_hold_landmarks_errors_and_angles(out):
+def test_rerun_recordings_show_the_moving_model_and_optical_landmarks(out):
     from pipeline.viz import entity_row_counts
 
     files = sorted((out / "rrd").glob("*.rrd"))
     assert len(files) == 16
     counts = entity_row_counts(files[0])
-    for entity in ("world/landmarks/MM", "world/reference/MM", "world/errors/MM",
-                   "world/segments/tibia", "plots/knee_flexion"):  # fmt: skip
-        assert any(e.lstrip("/").startswith(entity) for e in counts), (entity, sorted(counts))
-    assert counts["/world/landmarks/MM"] > 2000
+    names = {e.lstrip("/") for e in counts}
+    for entity in ("world/model/right_tibia/mesh", "world/landmarks/right_MM",
+                   "world/reference/right_MM", "world/errors/right_MM"):  # fmt: skip
+        assert entity in names, (entity, sorted(names))
+    assert any(n.startswith("plots/right_knee") for n in names)
+    assert counts["/world/model/right_tibia"] > 2000
+
+
+def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data():
+    """IK (free knee, no limits) + forward kinematics of the landmark frames == eq 15-17."""
+    if not DATA.exists():
+        pytest.skip("../shared/data/wang2023 not present")
+    from pipeline.evaluation import frame_from_femur
+    from pipeline.io.wang2023 import load_subject
+    from pipeline.landmarks import landmark_trajectories, wang_trajectories
+    from pipeline.omc import process_subject
+    from pipeline.reproduce.wang2023_imc import _positions, subject_motion
+
+    subject = load_subject(DATA / "raw" / "rawData07.mat", require_imc=True)
+    r = process_subject(subject.omc)
+    eF, eT = subject.imc.femur_R[:600], subject.imc.tibia_R_uncorrected[:600]
+    pf, pt = _positions("regression", subject, r)
+    traj = wang_trajectories(eF, eT, pf, pt)
+    G = frame_from_femur(traj["KJC"], eF)
+    sk, ik = subject_motion(subject, r, eF, eT, G, limits=False)
+    fk = landmark_trajectories(sk, ik.q)
+    sk.forward(sk.neutral())
+    hip = sk.frame_position("right_HJC")
+    for name in ("EFM", "EFL", "MM", "LM"):
+        err = np.abs(fk[f"right_{name}"] - hip - traj[name] @ G).max()
+        assert err < 1e-6, (name, err)
 
 
 def test_ipopt_correction_beats_the_closed_form_on_uncorrected_malleoli(out):

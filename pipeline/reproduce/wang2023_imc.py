@@ -171,11 +171,46 @@ def run_imc_stage(omc_stage, *, rerun_dir=None, progress: bool = True) -> ImcSta
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes)
 
 
+def subject_motion(
+    subject,
+    r,
+    eF: np.ndarray,
+    eT: np.ndarray,
+    G_imc: np.ndarray,
+    *,
+    positions: str = "regression",
+    limits: bool = True,
+):
+    """The subject's free-knee model and its configurations reproducing the IMC trajectories.
+
+    The model is built from the subject's landmark positions (``positions``); femur and tibia
+    targets are the IMC orientations expressed in the initial frame of eq 18 (``G_imc^T e``), in
+    which the femur points up at the first paired frame. With ``limits=False`` the model's
+    landmark frames reproduce eq 15-17 exactly (tested); with limits the knee cannot hyperextend.
+    Returns ``(skeleton, ik_result)``.
+    """  # fmt: skip
+    import tempfile
+
+    from pipeline.ik import solve_ik
+    from pipeline.model.geometry import SubjectGeometry
+    from pipeline.model.skeleton import Skeleton
+
+    pf, pt = _positions(positions, subject, r)
+    geometry = SubjectGeometry(
+        sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf, tibia_landmarks=pt,
+        knee_axis_femur=r.knee_aor.femur_axis, knee_axis_tibia=r.knee_aor.tibia_axis,
+    )  # fmt: skip
+    folder = Path(tempfile.mkdtemp(prefix=f"wang2023_s{subject.omc.subject_id:02d}_"))
+    sk = Skeleton.build(geometry, knee="free", out_dir=folder, legs=("right",))
+    targets = {"right_femur": G_imc.T @ eF, "right_tibia": G_imc.T @ eT}
+    return sk, solve_ik(sk.model, targets, limits=limits)
+
+
 def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
-    """One .rrd per subject: OMC and IMC landmarks (regression, average correction, uncorrected
-    tibia), error arrows, segment poses and knee angles over time."""
-    from pipeline.landmarks import jcs_angles
-    from pipeline.viz import log_trial
+    """One .rrd per subject: the moving model (regression geometry, average AoR correction,
+    uncorrected tibia), its landmarks beside the optical ones, error arrows and joint angles, all
+    in the initial frame of eq 18 (femur up at the first frame)."""
+    from pipeline.viz import log_motion
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     C_F, C_T = correction_rotations(knee_aor(F, T), sex_aor.femur_axis, sex_aor.tibia_axis)
@@ -184,27 +219,20 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
     pf, pt = _positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     omc_F, _ = align(r.femur_R, F, lag)
-    R = unify_frames(frame_from_femur(omc_paired["KJC"], omc_F), frame_from_femur(traj["KJC"], eF))
-    imc = {n: traj[n] @ R.T for n in ("EFM", "EFL", "KJC", "MM", "LM")}
-    knee = jcs_angles(R @ eF, R @ eT, "knee", "right")
-    hip_flexion = jcs_angles(np.broadcast_to(np.eye(3), eF.shape), R @ eF, "hip", "right")[:, 0]
+    G_omc = frame_from_femur(omc_paired["KJC"], omc_F)
+    G_imc = frame_from_femur(traj["KJC"], eF)
+    sk, ik = subject_motion(subject, r, eF, eT, G_imc)
+    sk.forward(sk.neutral())
+    hip = sk.frame_position("right_HJC")
+    reference = {f"right_{n}": omc_paired[n] @ G_omc + hip for n in LANDMARKS}
     n = len(eF)
     rerun_dir.mkdir(parents=True, exist_ok=True)
-    return log_trial(
+    return log_motion(
         rerun_dir / f"subject{subject.omc.subject_id:02d}.rrd",
         np.arange(n) / subject.omc.rate_hz,
-        imc,
-        reference_landmarks={k: v for k, v in omc_paired.items()},
-        segment_poses={
-            "femur": (R @ eF, np.zeros((n, 3))),
-            "tibia": (R @ eT, imc["KJC"]),
-        },
-        joint_angles={
-            "knee_flexion": knee[:, 0],
-            "knee_adduction": knee[:, 1],
-            "knee_rotation": knee[:, 2],
-            "hip_flexion_in_omc_frame": hip_flexion,
-        },
+        sk,
+        ik.q,
+        reference_landmarks=reference,
         recording_name=f"wang2023 subject {subject.omc.subject_id}",
     )
 
