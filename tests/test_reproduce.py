@@ -144,3 +144,13 @@ def test_table5_world_frame_errors_follow_the_paper(out):
     assert mean(correction="average", **kw)["z_deg"] < 0.6 * mean(correction="none", **kw)["z_deg"]
     report = (out / "report.md").read_text()
     assert "| world | stored | average |" in report and "| body | stored | average |" in report
+
+
+def test_hinge_ik_alone_corrects_as_well_as_the_closed_form(out):
+    """The AoR applied per frame by a hinge-knee IK, with no constant correction at all."""
+    rows = read(out / "trajectory_errors.csv")
+    for lm in ("MM", "LM"):
+        kw = dict(landmark=lm, positions="regression", tibia_input="uncorrected")
+        none = _group(rows, correction="none", **kw)
+        hinge = _group(rows, correction="hinge_ik", **kw)
+        assert hinge < 0.7 * none and hinge < _group(rows, correction="average", **kw)

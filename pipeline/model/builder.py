@@ -9,6 +9,10 @@ Kept from the template: pelvis + thigh/shank/foot per leg, its naming style (``<
 ``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``, ``pelvis_imu`` and ``<side>_{femur,tibia,foot}_imu``,
 each attached by a fixed joint named ``<frame>_joint``. Mesh widths scale by knee / ankle width
 over assumed template widths of 0.100 m / 0.070 m (viewer only; no dimension downstream uses them).
+The template uses the same STL files with the same positive scales on both legs; they are treated
+as right-leg shapes (z lateral; the thigh shaft sits ~1 mm lateral of its proximal cap). The left
+leg's visuals are their sagittal mirror images: scale ``(s_x, s_y, -s_z)`` and origin ``M p``, so
+a left vertex is ``M`` times the right one in the (mirrored) segment frame.
 
 Every link frame IS the ISB segment frame at ``q = 0`` (femur: origin HJC; tibia: origin KJC;
 foot: origin AJC; axes x anterior, y proximal, z right, left leg mirrored), so the landmark frames
@@ -171,9 +175,22 @@ def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -
 
 
 def _visual(
-    name: str, mesh: str, scale: Sequence[float], xyz: Sequence[float], mat: str
+    name: str,
+    mesh: str,
+    scale: Sequence[float],
+    xyz: Sequence[float],
+    mat: str,
+    mirror: bool = False,
 ) -> ud.Visual:
-    geometry = ud.Geometry(mesh=ud.Mesh(filename=_MESH_URI + mesh, scale=np.asarray(scale)))
+    """Mesh visual; ``mirror``: reflect it through the sagittal plane (``M = diag(1, 1, -1)``).
+
+    A mesh vertex ``v`` lands at ``S v + p``; mirrored, at ``M (S v + p) = (M S) v + M p``: the z
+    scale is negated and the origin reflected (the origins carry no rotation).
+    """
+    scale, xyz = np.asarray(scale, dtype=float), np.asarray(xyz, dtype=float)
+    if mirror:
+        scale, xyz = scale * [1.0, 1.0, -1.0], mirror_point(xyz)
+    geometry = ud.Geometry(mesh=ud.Mesh(filename=_MESH_URI + mesh, scale=scale))
     return ud.Visual(
         name=name, origin=_tf(p=xyz), geometry=geometry, material=ud.Material(name=mat)
     )
@@ -239,6 +256,7 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
     w_knee, w_ankle = g.knee_width / _T_KNEE_WIDTH, g.ankle_width / _T_ANKLE_WIDTH
     w_shank = 0.5 * (w_knee + w_ankle)
     ms = g.mass_scale
+    mirror = side == "left"  # template meshes are right-leg shapes
     links = [
         ud.Link(name=f"{femur}_virtual"),
         ud.Link(name=f"{femur}_virtual_2"),
@@ -252,6 +270,7 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
                     (0.0062 * w_knee, 0.0064 * l_thigh, 0.0069 * w_knee),
                     (0.0, -0.05 * l_thigh, 0.0),
                     mat,
+                    mirror,
                 )
             ],
         ),
@@ -265,8 +284,11 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
                     (0.0063 * w_shank, 0.0066 * l_shank, 0.007 * w_shank),
                     (0.0, 0.0, 0.0),
                     mat,
+                    mirror,
                 ),
-                _visual(f"{side}_knee", "knee_mesh.STL", (0.0056 * w_knee,) * 3, (0, 0, 0), mat),
+                _visual(
+                    f"{side}_knee", "knee_mesh.STL", (0.0056 * w_knee,) * 3, (0, 0, 0), mat, mirror
+                ),
             ],
         ),
         ud.Link(name=f"{foot}_virtual"),
@@ -280,6 +302,7 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
                     (0.0067 * l_foot, 0.0067 * w_ankle, 0.0067 * w_ankle),
                     (0.0, 0.0, 0.0),
                     mat,
+                    mirror,
                 )
             ],
         ),

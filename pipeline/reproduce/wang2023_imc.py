@@ -7,7 +7,10 @@ For each of the 16 IMC subjects and each configuration
 * ``correction``: ``none``; ``average`` (closed form, Wang eq 9-13, towards the mean OMC AoR of the
   subject's sex); ``individual`` (towards the subject's own OMC AoR); ``reference`` (towards the
   *female* mean for everyone: what the reference code did by mistake, kept to explain the paper's
-  numbers); ``ipopt`` when :mod:`pipeline.calibration.aor_ipopt` is available;
+  numbers); ``ipopt`` (the AoR correction as an NLP over the whole trial,
+  :mod:`pipeline.calibration.aor_ipopt`); ``hinge_ik`` (no constant correction: orientation IK
+  on a model whose knee is a hinge about the sex-average AoR, i.e. the AoR constraint at every
+  sample, :func:`hinge_ik_orientations`);
 * ``positions``: ``regression`` (Table I, smallest-SD equation given h, s_L, s_M, k, a) or ``omc``
   (the subject's own landmark positions in the segment frames),
 
@@ -66,12 +69,32 @@ class ImcStage:
 
 
 def _corrections() -> tuple[str, ...]:
-    base = ("none", "average", "individual", "reference")
-    try:
-        import pipeline.calibration.aor_ipopt  # noqa: F401
-    except ImportError:
-        return base
-    return base + ("ipopt",)
+    return ("none", "average", "individual", "reference", "ipopt", "hinge_ik")
+
+
+def hinge_ik_orientations(F, T, sex_aor, geometry_kw: dict):
+    """Femur and tibia orientations of the best hinge-consistent pose at every sample.
+
+    Orientation IK (:func:`pipeline.ik.solve_ik`, equal weights, no limits) on a one-leg model
+    whose knee is a hinge about the population AoR of the subject's sex (``sex_aor``): the AoR
+    constraint applied frame by frame instead of one constant correction (Wang eq 9-13). The
+    landmark positions do not enter orientation IK, so the returned frames serve eq 15-17 with any
+    positions.
+    """
+    import tempfile
+
+    from pipeline.ik import solve_ik
+    from pipeline.landmarks import frame_trajectories
+    from pipeline.model.geometry import SubjectGeometry
+    from pipeline.model.skeleton import Skeleton
+
+    geometry = SubjectGeometry(knee_axis_femur=sex_aor.femur_axis,
+                               knee_axis_tibia=sex_aor.tibia_axis, **geometry_kw)  # fmt: skip
+    sk = Skeleton.build(geometry, knee="hinge", out_dir=tempfile.mkdtemp(prefix="hinge_ik_"),
+                        legs=("right",))  # fmt: skip
+    ik = solve_ik(sk.model, {"right_femur": F, "right_tibia": T}, limits=False)
+    frames = frame_trajectories(sk, ik.q, ["right_femur", "right_tibia"])
+    return frames["right_femur"][0], frames["right_tibia"][0]
 
 
 def _correction(name: str, F, T, measured, sex_aor, own_aor, female_aor):
@@ -127,8 +150,16 @@ def run_imc_stage(omc_stage, *, rerun_dir=None, progress: bool = True) -> ImcSta
                 notes.append(f"subject {sid} ({tibia_input}): no IMC AoR: {exc}")
                 continue
             for correction in corrections:
-                C_F, C_T = _correction(correction, F, T, measured, pop[r.sex], r.knee_aor, pop["f"])
-                eF, eT = apply_correction(F, C_F), apply_correction(T, C_T)
+                if correction == "hinge_ik":
+                    pf, pt = _positions("regression", subject, r)
+                    kw = dict(sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf,
+                              tibia_landmarks=pt)  # fmt: skip
+                    eF, eT = hinge_ik_orientations(F, T, pop[r.sex], kw)
+                else:
+                    C_F, C_T = _correction(
+                        correction, F, T, measured, pop[r.sex], r.knee_aor, pop["f"]
+                    )
+                    eF, eT = apply_correction(F, C_F), apply_correction(T, C_T)
                 _, eF_p = align(r.femur_R, eF, lag)
                 _, eT_p = align(r.femur_R, eT, lag)
                 R_unify = None
