@@ -56,11 +56,32 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "scale", "build a subject-scaled URDF from the regression equations")
     _add_anthropometrics(p)
     p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
+    for seg in ("femur", "tibia"):
+        p.add_argument(
+            f"--knee-axis-{seg}",
+            type=float,
+            nargs=3,
+            metavar=("X", "Y", "Z"),
+            help=f"knee AoR in the {seg} frame (unit vector, pointing right) for the hinge; "
+            "default: the population mean of the subject's sex (Wang 2023 dataset)",
+        )
     p.add_argument("--out", type=Path, required=True, help="output .urdf file")
     p.set_defaults(func=_cmd_scale)
 
     p = _sub(sub, "ik", "inverse kinematics from IMU orientations (.sto)")
-    p.add_argument("--orientations", type=Path, required=True, help="OpenSim .sto quaternions")
+    p.add_argument(
+        "--orientations",
+        type=Path,
+        required=True,
+        help="OpenSim .sto quaternions, or a folder of Xsens MT .txt exports (with --xsens-map)",
+    )
+    p.add_argument(
+        "--xsens-map",
+        nargs="+",
+        metavar="NAME=ID",
+        help="for an Xsens folder: OpenSense sensor name = Xsens sensor id, e.g. "
+        "pelvis_imu=00B421AF femur_r_imu=00B4227B",
+    )
     _add_anthropometrics(p)
     p.add_argument(
         "--sensor-to-model",
@@ -132,10 +153,28 @@ def _measures(args):
     )
 
 
+def _pairs(items: list[str] | None, option: str) -> dict[str, str] | None:
+    if not items:
+        return None
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name or not value:
+            raise InputError(f"expected NAME=VALUE pairs, got {item!r}", field=option)
+        out[name] = value
+    return out
+
+
 def _cmd_scale(args) -> int:
     from pipeline.model.scaling import scale_model
 
-    out = scale_model(_measures(args), args.out, knee=args.knee)
+    out = scale_model(
+        _measures(args),
+        args.out,
+        knee=args.knee,
+        knee_axis_femur=args.knee_axis_femur,
+        knee_axis_tibia=args.knee_axis_tibia,
+    )
     print(f"wrote {out}")
     return 0
 
@@ -150,6 +189,7 @@ def _cmd_ik(args) -> int:
         knee=args.knee,
         sensor_to_model=args.sensor_to_model,
         heading=args.heading,
+        xsens_map=_pairs(args.xsens_map, "--xsens-map"),
     )
     print(summary)
     return 0

@@ -239,6 +239,32 @@ def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
     return cols
 
 
+def load_orientations(path: str | Path, xsens_map: dict[str, str] | None = None):
+    """An OpenSim ``.sto`` file, or a folder of Xsens MT ``.txt`` exports (one per sensor).
+
+    For a folder, ``xsens_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's
+    ``myIMUMappings.xml``), e.g. ``{"pelvis_imu": "00B421AF", ...}``; files are found as
+    ``<prefix><id>.txt`` with the common prefix of the export (``MT_012005D6_009-001_``).
+    """
+    from pipeline.io.xsens import read_xsens_trial
+
+    path = Path(path)
+    if not path.is_dir():
+        return read_orientations_sto(path)
+    if not xsens_map:
+        raise InputError(
+            "a folder of Xsens .txt files needs --xsens-map NAME=ID ... (e.g. "
+            "pelvis_imu=00B421AF femur_r_imu=00B4227B)",
+            file=path,
+        )
+    first_id = next(iter(xsens_map.values()))
+    matches = sorted(path.glob(f"*{first_id}.txt"))
+    if not matches:
+        raise InputError(f"no file ending in {first_id}.txt", file=path, field="xsens_map")
+    prefix = matches[0].name[: -len(f"{first_id}.txt")]
+    return read_xsens_trial(path, {sid: name for name, sid in xsens_map.items()}, prefix=prefix)
+
+
 def run_ik_from_sto(
     sto: str | Path,
     measures: Measures,
@@ -248,6 +274,7 @@ def run_ik_from_sto(
     sensor_to_model: tuple[float, float, float] | None = None,
     heading: str = "anatomical",
     rerun: bool = True,
+    xsens_map: dict[str, str] | None = None,
 ) -> str:
     """``pipeline ik``: read, calibrate, IK, write `.mot`, landmarks `.csv`, URDF, `.rrd`."""
     from pipeline.io.atomic import output_set
@@ -255,8 +282,8 @@ def run_ik_from_sto(
     from pipeline.reproduce.tables import csv_text
 
     sto, out_dir = Path(sto), Path(out_dir)
-    trial = read_orientations_sto(sto)
-    name = sto.stem
+    trial = load_orientations(sto, xsens_map)
+    name = sto.stem if sto.suffix else sto.name
     out_dir.mkdir(parents=True, exist_ok=True)
     with output_set() as out:
         run = run_ik(trial, measures, out.path(out_dir / f"{name}.urdf"), knee=knee,
@@ -297,7 +324,7 @@ def _log(run: IKRun, path: Path) -> None:
 
 
 def _summary(sto: Path, run: IKRun, measures: Measures) -> str:
-    name = sto.stem
+    name = sto.stem if sto.suffix else sto.name
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     lines = [
         f"# IK of {sto.name}",
@@ -306,7 +333,9 @@ def _summary(sto: Path, run: IKRun, measures: Measures) -> str:
         f"- {len(run.time)} frames, {run.time[-1] - run.time[0]:.2f} s; IK {run.seconds_ik:.2f} s "
         f"({fps:.0f} frames/s)",
         f"- heading: {run.heading_method}; subject's right at t0 (world): "
-        + "(" + ", ".join(f"{v:.3f}" for v in run.heading_right) + ")",
+        + "("
+        + ", ".join(f"{v:.3f}" for v in run.heading_right)
+        + ")",
         f"- orientation residual RMS: median {np.degrees(np.nanmedian(run.residual_rms)):.2f} deg, "
         f"95th percentile {np.degrees(np.nanpercentile(run.residual_rms, 95)):.2f} deg",
         "",

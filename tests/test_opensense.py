@@ -118,3 +118,36 @@ def test_real_opensim_files(tmp_path, name, rotation):
     assert knee.max() > 30 and knee.min() > -1  # the knees flex, and never hyperextend here
     if name.startswith("xsens"):  # a walking trial: textbook gait ranges
         assert 20 < hip.max() < 40 and 55 < knee.max() < 80
+
+
+def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
+    """`pipeline ik` on a folder of Xsens MT exports (with --xsens-map) == on the .sto."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_io_xsens import _write
+
+    from pipeline.rotations import matrix_from_quat
+
+    _, _, trial, _ = _walk(tmp_path, n=400)
+    sto = tmp_path / "walk.sto"
+    write_orientations_sto(sto, trial)
+    folder = tmp_path / "xsens"
+    folder.mkdir()
+    ids = {}
+    for k, (name, q) in enumerate(trial.sensors.items()):
+        ids[name] = f"00B421{k:02d}"
+        R = matrix_from_quat(q)
+        zeros = np.zeros((len(R), 3))
+        _write(folder / f"MT_012005D6_009-001_{ids[name]}.txt", R, zeros + [0, 0, 9.81], zeros)
+    common = ["--sex", "m", "--height-m", "1.75", "--knee", "free"]
+    assert main(["ik", "--orientations", str(sto), "--out", str(tmp_path / "a"), *common]) == 0
+    pairs = [f"{n}={i}" for n, i in ids.items()]
+    args = ["ik", "--orientations", str(folder), "--xsens-map", *pairs, "--out",
+            str(tmp_path / "b"), *common]  # fmt: skip
+    assert main(args) == 0
+    a = read_mot(tmp_path / "a" / "walk_ik.mot").columns
+    b = read_mot(tmp_path / "b" / "xsens_ik.mot").columns
+    for key in ("hip_flexion_r", "knee_angle_r", "knee_angle_l"):
+        assert np.abs(a[key] - b[key]).max() < np.radians(0.05), key  # 6-decimal export
+    assert main(["ik", "--orientations", str(folder), "--out", str(tmp_path / "c"), *common]) == 2

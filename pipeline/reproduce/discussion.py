@@ -23,6 +23,23 @@ def imc_discussion(stage) -> str:
                 + ", ".join(f"{c} {v:.1f} mm" for c, v in vals.items())
                 + " (mean over subjects)."
             )
+
+    def g(c, lm):
+        return _group_mean(rows, tibia_input="uncorrected", positions="regression",
+                           correction=c, landmark=lm)  # fmt: skip
+
+    if "hinge_ik" in stage.corrections and "ipopt" in stage.corrections:
+        lines += [
+            "",
+            "**Beyond the paper** (uncorrected tibia, regression positions, mean MM/LM RMS over "
+            f"the 16 subjects): no correction {g('none', 'MM'):.1f}/{g('none', 'LM'):.1f} mm; "
+            f"the paper's closed form {g('average', 'MM'):.1f}/{g('average', 'LM'):.1f} mm; "
+            f"the IPOPT correction over the whole trial {g('ipopt', 'MM'):.1f}/"
+            f"{g('ipopt', 'LM'):.1f} mm; hinge-knee IK about the population AoR with no "
+            f"constant correction {g('hinge_ik', 'MM'):.1f}/{g('hinge_ik', 'LM'):.1f} mm. The "
+            "`individual` rows need the subject's optical AoR, which an IMU-only user does not "
+            "have; they bound what a perfect AoR would give.",
+        ]
     lines += [
         "",
         "Causes of differences, each a documented difference in method (dataset README, "
