@@ -7,8 +7,9 @@ The workflow of OpenSim's OpenSense, on our scaled Pinocchio model:
    angles; ``-pi/2 0 0`` for Xsens' z-up world) so that the world's y axis points up.
 2. **Calibration pose.** The first sample is a standing pose: every segment frame is taken as the
    model's neutral pose turned by a heading rotation ``H`` about the vertical, and each IMU's
-   placement on its segment follows as ``R_seg,imu = (H R_seg^0)^T R_s(t0)`` (R_seg^0 = I for the
-   ISB-aligned neutral pose of our model).
+   placement on its segment follows as ``R_seg,imu = (H R_seg^0)^T R_s(t0)`` with ``R_seg^0`` the
+   segment's orientation in the neutral pose (the identity for the free knee; a hinge about a
+   tilted AoR turns the tibia and foot by the rotation aligning the tibial AoR onto the femoral).
 3. **Heading.** OpenSense aligns a chosen axis of the pelvis sensor with the model's forward axis
    (``heading='pelvis_imu:-z'`` reproduces that). By default (``heading='anatomical'``) we find the
    subject's right from the motion itself, which does not depend on how the sensors were mounted:
@@ -181,11 +182,18 @@ def run_ik(
     H = heading_rotation(right)
 
     geometry, _ = geometry_from_measures(measures)
+    # the model's segment orientations in its neutral (standing) pose: the world axes for a free
+    # knee; a hinge about a tilted AoR turns the tibia (and foot) by the aligning rotation
+    neutral_model = Skeleton.from_urdf(build_urdf(geometry, out_urdf, knee=knee, legs=legs))
+    neutral_model.forward(neutral_model.neutral())
     placements = {}
     for seg, R in rotations.items():
         frame = f"{seg}_imu"
+        if not neutral_model.has_frame(seg):
+            continue
+        R_seg0 = neutral_model.frame_rotation(seg)
         placements[frame] = np.eye(4)
-        placements[frame][:3, :3] = H.T @ R[0]  # neutral segment frames are the world axes
+        placements[frame][:3, :3] = (H @ R_seg0).T @ R[0]
     # keep the default positions of the IMU frames (orientation IK does not observe them)
     from pipeline.model.builder import default_imu_placements
 

@@ -27,10 +27,11 @@ def test_heading_rotation_by_hand():
     np.testing.assert_allclose(heading_rotation(np.array([0, 0, 1.0])), np.eye(3), atol=1e-15)
 
 
-def _walk(tmp_path, heading_deg=130.0, n=600, seed=0):
-    """Gait-like motion on a free-knee model, standing at t0, with random sensor mountings."""
+def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
+    """Gait-like motion on a model, standing at t0, with random sensor mountings."""
     geometry, _ = geometry_from_measures(Measures("m", 1.75))
-    sk = Skeleton.build(geometry, knee="free", out_dir=tmp_path / "truth", root="spherical")
+    sk = Skeleton.build(geometry, knee=knee, out_dir=tmp_path / "truth", root="spherical")
+    knee_joint = "knee_Z" if knee == "free" else "knee"
     rng = np.random.default_rng(seed)
     t = np.arange(n) / 100.0
     phase = 2 * np.pi * t
@@ -44,7 +45,7 @@ def _walk(tmp_path, heading_deg=130.0, n=600, seed=0):
         knee = np.radians(30 - 30 * np.cos(phase + ph + 0.6)) * s
         Q[:, sk.q_index(f"{side}_hip_Z")] = hip  # -10..30 deg: flexion dominates, as in gait
         Q[:, sk.q_index(f"{side}_hip_X")] = np.radians(3) * np.sin(phase + ph) * s
-        Q[:, sk.q_index(f"{side}_knee_Z")] = knee  # positive q = flexion in this model
+        Q[:, sk.q_index(f"{side}_{knee_joint}")] = knee  # positive q = flexion in this model
     frames = frame_trajectories(sk, Q, list(SENSORS))
     sensors, mountings = {}, {}
     for seg, name in SENSORS.items():
@@ -68,6 +69,20 @@ def test_recovers_heading_and_joint_angles_of_a_known_walk(tmp_path):
         err = np.degrees(np.abs(run.joint_angles[key] - truth[key]))
         assert err.max() < 3.0, (key, err.max())  # heading found within a few degrees
     assert np.degrees(np.median(run.residual_rms)) < 0.5
+
+
+def test_hinge_knee_model_reproduces_a_hinge_walk(tmp_path):
+    """With a hinge about the tilted population AoR, the calibration pose is the model's own
+    neutral pose (tibia turned by the aligning rotation), so a hinge walk is reproduced."""
+    sk, Q, trial, H = _walk(tmp_path, knee="hinge")
+    run = run_ik(trial, Measures("m", 1.75), tmp_path / "out.urdf", knee="hinge")
+    from pipeline.landmarks import joint_angles
+
+    truth = joint_angles(sk, Q)
+    assert np.degrees(np.median(run.residual_rms)) < 0.5
+    for key in ("right_knee_flexion", "right_knee_adduction", "right_knee_rotation"):
+        err = np.degrees(np.abs(run.joint_angles[key] - truth[key]))
+        assert err.max() < 3.0, (key, err.max())
 
 
 def test_still_subject_has_no_anatomical_heading(tmp_path):
