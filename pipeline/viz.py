@@ -16,6 +16,10 @@ timeline ``time``, seconds):
   ``ROS_PACKAGE_PATH``. Its root link is placed in ``world`` by a static named-frame transform
   (default ``Rx(+90 deg)``: a Y-up model stands upright in a Z-up world).
 
+The file carries a default blueprint (the viewer's layout, :func:`_blueprint`): the 3D view of
+``world`` on the left, the ``plots`` as time-series views on the right (rerun's own heuristic
+would open one small plot per angle, leave some out and shrink the 3D view to a tile).
+
 Samples with NaN are not logged (the viewer shows the last valid one until the next).
 ``log_motion`` (in :mod:`pipeline.viz_model`, re-exported here) draws a model's motion from its
 configurations: moving segment meshes, landmarks, IMU axes, bones and joint-angle plots.
@@ -133,15 +137,64 @@ def _check_time(time: np.ndarray) -> np.ndarray:
     return t
 
 
-@contextmanager
-def _recording(path: Path, app_id: str, recording_name: str | None, up_axis: str):
-    """An offline recording to ``path`` with view coordinates on ``world``; deleted on failure."""
-    rr = _rr()
+def _check_up_axis(up_axis: str) -> int:
+    """Index (1 or 2) of the vertical coordinate for ``up_axis`` 'y' or 'z'."""
     if up_axis not in ("y", "z"):
         raise InputError(f"up_axis must be 'y' or 'z', got {up_axis!r}", field="up_axis")
+    return 1 if up_axis == "y" else 2
+
+
+def _blueprint(
+    plots: Sequence[tuple[str, str | Sequence[str]]],
+    up_axis: str,
+    camera: tuple[np.ndarray, np.ndarray] | None = None,
+    ground: float | None = None,
+):
+    """Default layout: the 3D view of ``world`` (3/5 of the width) beside the time-series views.
+
+    ``plots``: (view title, origin entity or list of entity paths) per time-series view, laid out
+    in a grid of two columns (one column for a single view). ``camera``: (eye position, look
+    target) in ``world`` (m), orbiting about the target with ``up_axis`` up; ``None`` lets the
+    viewer frame the scene. ``ground``: height (m) along ``up_axis`` of the 3D view's line grid
+    (default: the plane through the origin). The selection panel starts collapsed.
+    """
+    import rerun.blueprint as rrb
+
+    rr = _rr()
+    up = np.zeros(3)
+    up[_check_up_axis(up_axis)] = 1.0
+    options = {}
+    if camera is not None:
+        position, target = (np.asarray(v, dtype=float) for v in camera)
+        options["eye_controls"] = rrb.EyeControls3D(
+            kind=rrb.Eye3DKind.Orbital, position=position, look_target=target, eye_up=up
+        )
+    if ground is not None:
+        plane = rr.components.Plane3D(up, float(ground))  # {P : up . P = ground}
+        options["line_grid"] = rrb.LineGrid3D(visible=True, spacing=0.5, plane=plane)
+    view3d = rrb.Spatial3DView(origin="/world", name="3D", **options)
+    views = []
+    for title, what in plots:
+        if isinstance(what, str):
+            views.append(rrb.TimeSeriesView(origin=what, name=title))
+        else:
+            views.append(rrb.TimeSeriesView(origin="/", contents=list(what), name=title))
+    parts = [rrb.SelectionPanel(state="collapsed")]
+    if not views:
+        return rrb.Blueprint(view3d, *parts)
+    grid = rrb.Grid(*views, grid_columns=2 if len(views) > 1 else 1)
+    return rrb.Blueprint(rrb.Horizontal(view3d, grid, column_shares=[3, 2]), *parts)
+
+
+@contextmanager
+def _recording(path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None):
+    """An offline recording to ``path`` with view coordinates on ``world`` and ``blueprint`` as its
+    default layout; deleted on failure."""
+    rr = _rr()
+    _check_up_axis(up_axis)
     path.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream(app_id)
-    rec.save(path)
+    rec.save(path, default_blueprint=blueprint)
     try:
         if recording_name:
             rec.send_recording_name(recording_name)
@@ -262,7 +315,10 @@ def log_trial(
     """
     path = Path(path)
     t = _check_time(time)
-    with _recording(path, app_id, recording_name, up_axis) as rec:
+    _check_up_axis(up_axis)
+    plots = [("joint angles (deg)", "/plots")] if joint_angles else []
+    blueprint = _blueprint(plots, up_axis)
+    with _recording(path, app_id, recording_name, up_axis, blueprint) as rec:
         est = _log_points(rec, t, "landmarks", landmarks, IMC_COLOR, point_radius)
         if reference_landmarks:
             ref = _log_points(

@@ -17,7 +17,13 @@ whole trial; see :mod:`pipeline.viz`). Layout (timeline ``time``, seconds; model
 * ``world/imus/<frame>``: IMU frame poses as ``Transform3D`` columns with static axes.
 * ``world/bones/<side>``: ``LineStrips3D`` HJC-KJC-AJC, one strip per row.
 * ``plots/<side>_<joint>/<angle>``: ISB joint angles (:func:`pipeline.landmarks.joint_angles`) in
-  degrees; ``plots/<name>`` for ``extra_scalars`` (logged as given).
+  degrees, one colour per angle (``ANGLE_COLORS``: flexion blue, adduction red, rotation green,
+  the colours of the z, x, y axes they turn about); ``plots/<name>`` for ``extra_scalars``
+  (logged as given).
+
+Default layout (blueprint): the 3D view, its camera looking at the legs from the front right
+with the line grid on the ground (the lowest point the feet reach), beside one time-series view
+per joint ("right hip (deg)", ...) and one for ``extra_scalars``.
 """
 
 from __future__ import annotations
@@ -39,8 +45,10 @@ from pipeline.rotations import matrix_from_euler_zyx
 from pipeline.viz import (
     IMC_COLOR,
     REFERENCE_COLOR,
+    _blueprint,
     _check_series,
     _check_time,
+    _check_up_axis,
     _log_error_arrows,
     _log_points,
     _log_poses,
@@ -50,10 +58,11 @@ from pipeline.viz import (
     _send,
 )
 
-__all__ = ["BONE_COLOR", "SegmentMesh", "log_motion", "segment_meshes"]
+__all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_meshes"]
 
 BONE_COLOR = (227, 218, 201)
 BONE_LINE_COLOR = (90, 90, 90)
+ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "rotation": (30, 160, 70)}
 
 
 @dataclass(frozen=True)
@@ -146,6 +155,56 @@ def segment_meshes(skeleton: Skeleton) -> dict[str, SegmentMesh]:
     return out
 
 
+def _lowest_height(
+    traj: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    segments: Mapping[str, str],
+    meshes: Mapping[str, SegmentMesh],
+    points: Sequence[np.ndarray],
+    axis: int,
+) -> float | None:
+    """Lowest value of coordinate ``axis`` over the trial: of the foot meshes (their convex hull
+    vertices ``v`` at ``R v + p``) if any, else of ``points`` ((N, 3) each); ``None`` if no data."""
+    from scipy.spatial import ConvexHull
+
+    heights = []
+    for seg, mesh in meshes.items():
+        if seg.endswith("foot"):
+            R, p = traj[segments[seg]]
+            hull = mesh.vertices[ConvexHull(mesh.vertices).vertices]
+            heights.append(R[:, axis, :] @ hull.T + p[:, axis, None])
+    if not heights:
+        heights = [np.asarray(x)[:, axis] for x in points]
+    finite = [h[np.isfinite(h)] for h in heights]
+    finite = [h for h in finite if h.size]
+    return float(min(h.min() for h in finite)) if finite else None
+
+
+def _camera(
+    traj: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    frames: Sequence[str],
+    ground: float | None,
+    axis: int,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Eye position and look target framing the segment origins ``frames`` from the front right.
+
+    Target: the median origin, centred vertically between ``ground`` and the highest origin; eye:
+    target + 2.6 * height * unit(0.55 anterior (x) + 0.3 up + 1.0 right), ``height`` the vertical
+    span (>= 0.5 m). Model axes: x anterior, ``axis`` up, the remaining one to the right.
+    """
+    p = np.concatenate([traj[f][1] for f in frames])
+    p = p[np.all(np.isfinite(p), axis=1)]
+    if not len(p):
+        return None
+    top = float(p[:, axis].max())
+    bottom = float(p[:, axis].min()) if ground is None else ground
+    target = np.median(p, axis=0)
+    target[axis] = 0.5 * (top + bottom)
+    direction = np.zeros(3)
+    direction[0], direction[axis], direction[3 - axis] = 0.55, 0.3, 1.0
+    distance = 2.6 * max(top - bottom, 0.5)
+    return target + distance * direction / np.linalg.norm(direction), target
+
+
 def _names(selection: bool | Sequence[str], default: Sequence[str], what: str) -> list[str]:
     if selection is True:
         return list(default)
@@ -190,6 +249,7 @@ def log_motion(
     path = Path(path)
     t = _check_time(time)
     n = len(t)
+    vertical = _check_up_axis(up_axis)
     Q = _check_series(Q, n, (skeleton.nq,), "Q")
     lm_names = _names(landmarks, skeleton.landmark_frames, "landmarks")
     imu_names = _names(imu_frames, skeleton.imu_frames, "imu_frames")
@@ -214,8 +274,21 @@ def log_motion(
             joint, angle = key.rsplit("_", 1)
             angles[f"plots/{joint}/{angle}"] = np.where(ok, y, np.nan)
 
+    points = {name: traj[name][1] for name in lm_names}
+    ground = _lowest_height(traj, segments, mesh_data, list(points.values()), vertical)
+    camera = _camera(traj, list(segments.values()), ground, vertical)
+    plots = []
+    for side in skeleton.legs:
+        for joint in ("hip", "knee"):
+            if any(k.startswith(f"plots/{side}_{joint}/") for k in angles):
+                plots.append((f"{side} {joint} (deg)", f"/plots/{side}_{joint}"))
+    plots.sort(key=lambda view: view[0].split()[1])  # hips above knees, right before left
+    if scalars:
+        plots.append(("other", [f"/{entity}" for entity in scalars]))
+    blueprint = _blueprint(plots, up_axis, camera=camera, ground=ground)
+
     rr = _rr()
-    with _recording(path, app_id, recording_name, up_axis) as rec:
+    with _recording(path, app_id, recording_name, up_axis, blueprint) as rec:
         poses = {seg: traj[frame] for seg, frame in segments.items()}
         _log_poses(rec, t, "world/model", poses, None)
         for seg, mesh in mesh_data.items():
@@ -229,7 +302,6 @@ def log_motion(
                 ),
                 static=True,
             )
-        points = {name: traj[name][1] for name in lm_names}
         est = _log_points(rec, t, "landmarks", points, IMC_COLOR, point_radius)
         if reference_landmarks:
             ref = _log_points(
@@ -248,6 +320,10 @@ def log_motion(
             )
             if ok.any():
                 _send(rec, entity, t, ok, rr.LineStrips3D.columns(strips=strip[ok]))
+        for entity in angles:
+            angle = entity.rsplit("/", 1)[1]
+            style = rr.SeriesLines(colors=[ANGLE_COLORS[angle]], names=[angle])
+            rec.log(entity, style, static=True)
         _log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
         _log_scalars(rec, t, scalars)
     return path

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
 
 from pipeline.errors import InputError
-from pipeline.io import atomic, checks
+from pipeline.io import checks
 from pipeline.io.checks import Notes
 from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
 
@@ -263,117 +261,8 @@ def test_acc_in_g_refused_m_per_s2_accepted():
         checks.check_acc_units(a * 1000)
 
 
-# ---------------------------------------------------------------- tables and files
-
-
-def test_parse_table_empty_cells_are_nan_and_bad_cells_named():
-    out = checks.parse_table(["1\t2", "3\t"], ["a", "b"])
-    assert out[0].tolist() == [1.0, 2.0] and np.isnan(out[1, 1])
-    with pytest.raises(InputError, match=r"'x' at row 1 \(line 6\) is not a number") as e:
-        checks.parse_table(["1\t2", "3\tx"], ["a", "b"], first_line=5)
-    assert e.value.field == "b"
-
-
-def test_parse_table_truncated_last_row():
-    with pytest.raises(InputError, match=r"row 2 has 2 fields, expected 3 \(file truncated\?\)"):
-        checks.parse_table(["1,2,3", "4,5,6", "7,8"], ["a", "b", "c"], sep=",")
-
-
-def test_read_text_lines_refuses_missing_empty_binary(tmp_path):
-    with pytest.raises(InputError, match="file not found"):
-        checks.read_text_lines(tmp_path / "nope.sto")
-    (tmp_path / "e.sto").write_text("  \n")
-    with pytest.raises(InputError, match="file is empty"):
-        checks.read_text_lines(tmp_path / "e.sto")
-    (tmp_path / "b.sto").write_bytes(b"\xff\xfe\x00\x81garbage")
-    with pytest.raises(InputError, match="not a UTF-8 text file"):
-        checks.read_text_lines(tmp_path / "b.sto")
-
-
 def test_notes_prefix_like_errors():
     n = Notes()
     n.add("did x", file="a.sto", field="pelvis_imu")
     n.add("did y")
     assert n.as_tuple() == ("a.sto: field pelvis_imu: did x", "did y")
-
-
-# ---------------------------------------------------------------- atomic output
-
-
-def test_atomic_write_replaces_and_leaves_no_temp(tmp_path):
-    p = tmp_path / "out.csv"
-    p.write_text("old")
-    with atomic.atomic_write(p) as f:
-        f.write("new")
-        assert p.read_text() == "old"  # not visible before the end
-    assert p.read_text() == "new"
-    assert os.listdir(tmp_path) == ["out.csv"]
-
-
-def test_atomic_write_error_keeps_old_file_and_no_temp(tmp_path):
-    p = tmp_path / "out.csv"
-    p.write_text("old")
-    with pytest.raises(RuntimeError), atomic.atomic_write(p) as f:
-        f.write("partial")
-        raise RuntimeError("boom")
-    assert p.read_text() == "old"
-    assert os.listdir(tmp_path) == ["out.csv"]
-    q = tmp_path / "new.csv"
-    with pytest.raises(RuntimeError), atomic.atomic_write(q) as f:
-        raise RuntimeError("boom")
-    assert not q.exists()
-
-
-def test_write_text_and_bytes_atomic(tmp_path):
-    atomic.write_text_atomic(tmp_path / "a.txt", "x\ny")
-    atomic.write_bytes_atomic(tmp_path / "b.bin", b"\x00\x01")
-    assert (tmp_path / "a.txt").read_text() == "x\ny"
-    assert (tmp_path / "b.bin").read_bytes() == b"\x00\x01"
-    mode = (tmp_path / "a.txt").stat().st_mode & 0o777
-    umask = os.umask(0)
-    os.umask(umask)
-    assert mode == 0o666 & ~umask  # not mkstemp's private 0600
-
-
-def test_output_set_all_or_nothing(tmp_path):
-    keep = tmp_path / "b.csv"
-    keep.write_text("old b")
-    with pytest.raises(ValueError, match="model failed"), atomic.output_set() as out:
-        with out.open(tmp_path / "a.csv") as f:
-            f.write("a")
-        out.path(tmp_path / "sub" / "c.urdf").write_text("c")
-        with out.open(keep) as f:
-            f.write("new b")
-        raise ValueError("model failed")
-    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["b.csv"]
-    assert keep.read_text() == "old b"
-    with atomic.output_set() as out:
-        with out.open(tmp_path / "a.csv") as f:
-            f.write("a")
-        with out.open(keep) as f:
-            f.write("new b")
-    assert (tmp_path / "a.csv").read_text() == "a" and keep.read_text() == "new b"
-    assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == ["a.csv", "b.csv"]
-
-
-def test_output_set_commit_failure_rolls_back(tmp_path, monkeypatch):
-    keep = tmp_path / "b.csv"
-    keep.write_text("old b")
-    real_replace = os.replace
-    calls = {"n": 0}
-
-    def flaky(src, dst):
-        calls["n"] += 1
-        if calls["n"] == 3:  # a.csv committed, b.csv backed up, then its rename fails
-            raise OSError("disk full")
-        return real_replace(src, dst)
-
-    with pytest.raises(OSError, match="disk full"), atomic.output_set() as out:
-        with out.open(tmp_path / "a.csv") as f:
-            f.write("a")
-        with out.open(keep) as f:
-            f.write("new b")
-        monkeypatch.setattr(atomic.os, "replace", flaky)
-    monkeypatch.undo()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]
-    assert keep.read_text() == "old b"

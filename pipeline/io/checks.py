@@ -7,17 +7,19 @@ written to a :class:`Notes` list that the reader returns, so that nothing is cha
 CLI prints the notes.
 
 Conventions: rows are counted from 0 over the data rows; readers that know where the data start in
-the file pass ``first_line`` so messages also give the 1-based file line.
+the file pass ``first_line`` so messages also give the 1-based file line. Reading and parsing text
+tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text` and are
+re-exported here.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.io.text import FileLike, _where, parse_table, read_text_lines
 from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
 
 __all__ = [
@@ -41,8 +43,6 @@ __all__ = [
 
 DEFAULT_MAX_GAP_S = 0.1
 """Longest run of missing samples (seconds) that is interpolated; longer gaps are refused."""
-
-FileLike = str | Path | None
 
 
 @dataclass
@@ -75,10 +75,6 @@ class Notes:
 
     def __len__(self) -> int:
         return len(self.items)
-
-
-def _where(row: int, first_line: int | None) -> str:
-    return f"row {row}" if first_line is None else f"row {row} (line {first_line + row})"
 
 
 # --------------------------------------------------------------------------------------------
@@ -478,67 +474,3 @@ def check_acc_units(acc: np.ndarray, *, file: FileLike = None, field: str | None
             file=file,
             field=field,
         )
-
-
-# --------------------------------------------------------------------------------------------
-# tables
-
-
-def parse_table(
-    lines: list[str],
-    labels: list[str],
-    *,
-    sep: str = "\t",
-    file: FileLike = None,
-    first_line: int | None = None,
-) -> np.ndarray:
-    """Parse delimited text rows into an ``(N, len(labels))`` float array.
-
-    Refuses a row with the wrong number of fields (typically a file cut mid-row) and a cell that
-    is not a number, naming the row, the file line and the column. Empty cells and ``NaN`` become
-    NaN (missing samples, handled by :func:`fill_gaps`).
-    """
-    n = len(labels)
-    rows = [ln.rstrip("\r\n").split(sep) for ln in lines]
-    for r, cells in enumerate(rows):
-        if len(cells) != n:
-            hint = " (file truncated?)" if r == len(rows) - 1 and len(cells) < n else ""
-            raise InputError(
-                f"{_where(r, first_line)} has {len(cells)} fields, expected {n}{hint}", file=file
-            )
-    if not rows:
-        return np.zeros((0, n))
-    try:
-        return np.array(rows, dtype=float)
-    except ValueError:
-        pass
-    out = np.empty((len(rows), n))
-    for r, cells in enumerate(rows):
-        for c, cell in enumerate(cells):
-            s = cell.strip()
-            if not s:
-                out[r, c] = np.nan
-                continue
-            try:
-                out[r, c] = float(s)
-            except ValueError:
-                raise InputError(
-                    f"{s!r} at {_where(r, first_line)} is not a number", file=file, field=labels[c]
-                ) from None
-    return out
-
-
-def read_text_lines(path: str | Path) -> list[str]:
-    """Lines of a text file (without line ends); refuses a missing, unreadable or empty file."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError("file not found" if not p.exists() else "not a file", file=p)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise InputError(f"not a UTF-8 text file ({e.reason} at byte {e.start})", file=p) from None
-    except OSError as e:
-        raise InputError(f"cannot read: {e.strerror}", file=p) from None
-    if not text.strip():
-        raise InputError("file is empty", file=p)
-    return text.splitlines()

@@ -10,13 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.anthropometry import (
-    EQUATION_INPUTS,
-    SubjectSample,
-    fit_table,
-    load_table1,
-)
+from pipeline.anthropometry import EQUATION_INPUTS, load_table1
 from pipeline.omc import landmarks_in_frames
+from pipeline.regression import SubjectSample, fit_table
 from pipeline.reproduce.tables import markdown_table, mean_sd
 
 CAUSES = {

@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from pipeline.anthropometry import FitResult, SubjectSample, fit_results_to_rows, fit_table
 from pipeline.calibration.aor import PopulationAoR, population_aor
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_set
 from pipeline.io.wang2023 import Subject, load_subject, subject_paths
 from pipeline.omc import OmcResult, process_subject
+from pipeline.regression import FitResult, SubjectSample, fit_results_to_rows, fit_table
 from pipeline.reproduce.tables import csv_text
 
 SUBJECT_COLUMNS = (

@@ -1,0 +1,93 @@
+"""Motions of the simulator (pipeline.simulate_motions): q, v, a exact and consistent, limit-safe
+for every motion and seed, deterministic, and bad requests refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.errors import InputError
+from pipeline.model import Skeleton, SubjectGeometry
+from pipeline.rotations import matrix_from_quat
+from pipeline.simulate_motions import MOTIONS, joint_trajectories
+
+
+@pytest.fixture(scope="module")
+def skeleton(tmp_path_factory):
+    geometry = SubjectGeometry.default(1.75, "m", "right")
+    return Skeleton.build(
+        geometry, knee="hinge", out_dir=tmp_path_factory.mktemp("motions"), root="freeflyer"
+    )
+
+
+def _vee(M):
+    return 0.5 * np.stack(
+        [M[..., 2, 1] - M[..., 1, 2], M[..., 0, 2] - M[..., 2, 0], M[..., 1, 0] - M[..., 0, 1]],
+        axis=-1,
+    )
+
+
+@pytest.mark.parametrize("knee", ["hinge", "free"])
+def test_joint_limits_respected(tmp_path, knee):
+    sk = Skeleton.build(
+        SubjectGeometry.default(1.62, "f", "right"), knee=knee, out_dir=tmp_path, root="freeflyer"
+    )
+    t = np.arange(3000) / 100.0
+    for motion in MOTIONS:
+        for seed in range(4):
+            q, v, a = joint_trajectories(sk, motion, t, seed)
+            assert np.all(q[:, 7:] >= sk.lower_limits[7:]), (motion, seed)
+            assert np.all(q[:, 7:] <= sk.upper_limits[7:]), (motion, seed)
+            np.testing.assert_allclose(np.linalg.norm(q[:, 3:7], axis=1), 1.0)
+
+
+@pytest.mark.parametrize("motion", MOTIONS)
+def test_v_and_a_are_the_time_derivatives_of_q(skeleton, motion):
+    rate = 1000.0
+    h = 1.0 / rate
+    t = np.arange(2000) / rate
+    q, v, a = joint_trajectories(skeleton, motion, t, seed=1)
+    nq, nv = skeleton.model.nq, skeleton.model.nv
+    assert q.shape == (2000, nq) and v.shape == a.shape == (2000, nv)
+    assert nq - 7 == nv - 6  # 1-DoF joints after the free flyer
+
+    def close(fd, exact):
+        # central differences err by h^2/6 |x'''| (at most 2e-5 of the largest value here)
+        np.testing.assert_allclose(fd, exact, atol=1e-4 * max(1.0, np.abs(exact).max()))
+
+    # a = dv/dt for every component (the root velocity is in the pelvis frame, as in Pinocchio)
+    close((v[2:] - v[:-2]) / (2 * h), a[1:-1])
+    # joint angles: v = dq/dt
+    close((q[2:, 7:] - q[:-2, 7:]) / (2 * h), v[1:-1, 6:])
+    # root: q[3:7] is (x, y, z, w); v[:3] = R^T p', [v[3:6]]x = R^T R'
+    R = matrix_from_quat(q[:, [6, 3, 4, 5]])
+    dp = (q[2:, :3] - q[:-2, :3]) / (2 * h)
+    close(np.einsum("nji,nj->ni", R[1:-1], dp), v[1:-1, :3])
+    close(_vee(np.swapaxes(R[1:-1], 1, 2) @ (R[2:] - R[:-2]) / (2 * h)), v[1:-1, 3:6])
+
+
+def test_static_is_the_neutral_pose_at_rest(skeleton):
+    q, v, a = joint_trajectories(skeleton, "static", np.arange(50) / 100.0, seed=4)
+    np.testing.assert_array_equal(q[:, 7:], 0.0)
+    np.testing.assert_array_equal(v, 0.0)
+    np.testing.assert_array_equal(a, 0.0)
+    np.testing.assert_allclose(q, np.tile(q[0], (50, 1)))  # pelvis fixed
+    # pelvis y (up) along world z: rot_x(90 deg), quaternion (x, y, z, w) = (sin 45, 0, 0, cos 45)
+    np.testing.assert_allclose(np.abs(q[0, 3:7]), [np.sqrt(0.5), 0, 0, np.sqrt(0.5)], atol=1e-12)
+
+
+def test_seeded_alias_and_refusals(skeleton):
+    t = np.arange(100) / 100.0
+    gait = joint_trajectories(skeleton, "gait", t, seed=3)
+    for x, y in zip(joint_trajectories(skeleton, "rich", t, seed=3), gait, strict=True):
+        np.testing.assert_array_equal(x, y)  # 'rich' is an alias of 'gait'
+    rng = np.random.default_rng(3)
+    for x, y in zip(joint_trajectories(skeleton, "gait", t, seed=rng), gait, strict=True):
+        np.testing.assert_array_equal(x, y)  # an int seed is default_rng(seed)
+    other = joint_trajectories(skeleton, "gait", t, seed=4)[0]
+    assert not np.allclose(other, gait[0])
+    with pytest.raises(InputError, match="expected a motion in"):
+        joint_trajectories(skeleton, "running", t)
+    fixed = Skeleton.from_urdf(skeleton.urdf_path)
+    with pytest.raises(InputError, match="freeflyer"):
+        joint_trajectories(fixed, "gait", t)
