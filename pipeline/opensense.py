@@ -307,14 +307,14 @@ def run_ik_from_sto(
         with out.open(out_dir / f"{name}_landmarks.csv") as fh:
             fh.write(csv_text(rows, columns))
         if rerun:
-            _log(run, out.path(out_dir / f"{name}.rrd"))
+            _log(run, out.path(out_dir / f"{name}.rrd"), name)
         summary = _summary(sto, run, measures)
         with out.open(out_dir / f"{name}_summary.md") as fh:
             fh.write(summary)
     return summary
 
 
-def _log(run: IKRun, path: Path) -> None:
+def _log(run: IKRun, path: Path, name: str) -> None:
     from pipeline.model.skeleton import Skeleton
 
     try:
@@ -323,12 +323,12 @@ def _log(run: IKRun, path: Path) -> None:
         log_motion = None
     if log_motion is not None:
         sk = Skeleton.from_urdf(run.urdf, root="spherical")
-        log_motion(path, run.time - run.time[0], sk, run.q, recording_name=path.stem)
+        log_motion(path, run.time - run.time[0], sk, run.q, recording_name=name)
         return
     from pipeline.viz import log_trial
 
     log_trial(path, run.time - run.time[0], run.landmarks,
-              joint_angles=run.joint_angles, recording_name=path.stem, up_axis="y")  # fmt: skip
+              joint_angles=run.joint_angles, recording_name=name, up_axis="y")  # fmt: skip
 
 
 def _summary(sto: Path, run: IKRun, measures: Measures) -> str:

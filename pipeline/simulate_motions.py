@@ -85,7 +85,9 @@ def _motion_name(motion: str) -> str:
     return m
 
 
-def _angle_fns(motion: str, side: str, rng: np.random.Generator) -> dict[str, Sinusoids]:
+def _angle_fns(
+    motion: str, side: str, rng: np.random.Generator, base: float, phase: float
+) -> dict[str, Sinusoids]:
     """Per joint suffix (``hip_Z``, ``knee``, ``knee_Z``, ...) a seeded :class:`Sinusoids`."""
     if motion == "static":
         const = _STATIC
@@ -100,8 +102,8 @@ def _angle_fns(motion: str, side: str, rng: np.random.Generator) -> dict[str, Si
         out["knee_Z"] = out["knee"]
         return out
     spec = {"gait": _GAIT, "supine_hip_flexion": _SUPINE_RIGHT, "still_thigh": _STILL_RIGHT}
-    base = rng.uniform(*_BASE_HZ[motion])
-    shift = rng.uniform(0, 2 * np.pi) + (np.pi if side == "left" else 0.0)
+    # one stride rate and phase per trial; the left leg half a stride (pi) after the right
+    shift = phase + (np.pi if side == "left" else 0.0)
     out = {}
     for name, (off, terms) in spec[motion].items():
         scale = rng.uniform(0.9, 1.0, len(terms))  # never beyond the designed (limit-safe) range
@@ -130,7 +132,7 @@ def _heading(amp_m: float, freq: float, phase: float, speed: float) -> Callable:
     return fn
 
 
-def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float):
+def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float, f: float):
     """Pelvis ``R (N,3,3)``, body ``w``, ``dw``, world ``p``, ``dp``, ``ddp`` (N,3)."""
     n = t.size
     if motion != "gait":
@@ -139,7 +141,6 @@ def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float)
         p = np.tile([0.0, 0.0, z], (n, 1))
         zero = np.zeros((n, 3))
         return np.broadcast_to(R0, (n, 3, 3)).copy(), zero, zero, p, zero, zero
-    f = rng.uniform(*_BASE_HZ["gait"])
     ph = rng.uniform(0, 2 * np.pi, 6)
     speed, weave, fw = rng.uniform(1.1, 1.3), rng.uniform(0.7, 0.9), 0.08
     R, w, dw = chain_kinematics(
@@ -185,13 +186,15 @@ def joint_trajectories(
     q = np.zeros((t.size, model.nq))
     v = np.zeros((t.size, model.nv))
     a = np.zeros((t.size, model.nv))
-    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton))
+    base = rng.uniform(*_BASE_HZ[motion]) if motion in _BASE_HZ else 1.0  # stride rate, Hz
+    phase = rng.uniform(0, 2 * np.pi)
+    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton), base)
     vl = np.einsum("nji,nj->ni", R, dp)
     q[:, :3], q[:, 3:7] = p, quat_from_matrix(R)[:, [1, 2, 3, 0]]
     v[:, :3], v[:, 3:6] = vl, w
     a[:, :3], a[:, 3:6] = np.einsum("nji,nj->ni", R, ddp) - np.cross(w, vl), dw
     for side in skeleton.legs:
-        fns = _angle_fns(motion, side, rng)
+        fns = _angle_fns(motion, side, rng, base, phase)
         for name in skeleton.joint_names:
             if not name.startswith(side + "_"):
                 continue

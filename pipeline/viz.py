@@ -5,7 +5,8 @@ call per entity for the whole trial, 50-100x faster than a ``log`` call per fram
 timeline ``time``, seconds):
 
 * ``world``: view coordinates (right-handed, ``up_axis`` up).
-* ``world/landmarks/<name>``: estimated landmark (``Points3D``), one point per time row.
+* ``world/landmarks/<name>``: estimated landmark (``Points3D``), one point per time row, its
+  label hidden (shown on hover: labels of nearby landmarks overlap).
 * ``world/reference/<name>``: reference landmark (e.g. OMC), another colour.
 * ``world/errors/<name>``: arrow from the reference to the estimate (Wang eq 20 error).
 * ``world/segments/<name>``: segment pose as a ``Transform3D`` column (translation and the
@@ -231,7 +232,9 @@ def _log_points(
         entity = f"world/{group}/{name}"
         rec.log(
             entity,
-            rr.Points3D.from_fields(colors=[color], radii=[radius], labels=[name]),
+            rr.Points3D.from_fields(
+                colors=[color], radii=[radius], labels=[name], show_labels=False
+            ),
             static=True,
         )
         if ok.any():

@@ -11,7 +11,8 @@ whole trial; see :mod:`pipeline.viz`). Layout (timeline ``time``, seconds; model
   ``<side>_foot``.
 * ``world/model/<segment>/mesh``: static ``Mesh3D`` in the segment frame: the URDF visuals of the
   link (STL, scaled by the visual's ``scale``, placed by its ``origin``; the tibia includes the
-  knee cap mesh), vertex normals, one bone colour. It moves with its parent's transform.
+  knee cap mesh), vertex normals, one translucent bone colour (alpha 150/255: the landmarks,
+  bones and IMU axes inside show through). It moves with its parent's transform.
 * ``world/landmarks/<frame>``: landmark frames (e.g. ``right_EFM``) as labelled ``Points3D``;
   ``world/reference/<name>`` and ``world/errors/<name>`` for ``reference_landmarks``.
 * ``world/imus/<frame>``: IMU frame poses as ``Transform3D`` columns with static axes.
@@ -60,7 +61,7 @@ from pipeline.viz import (
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_meshes"]
 
-BONE_COLOR = (227, 218, 201)
+BONE_COLOR = (227, 218, 201, 150)
 BONE_LINE_COLOR = (90, 90, 90)
 ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "rotation": (30, 160, 70)}
 
@@ -188,7 +189,7 @@ def _camera(
     """Eye position and look target framing the segment origins ``frames`` from the front right.
 
     Target: the median origin, centred vertically between ``ground`` and the highest origin; eye:
-    target + 2.6 * height * unit(0.55 anterior (x) + 0.3 up + 1.0 right), ``height`` the vertical
+    target + 1.5 * height * unit(0.55 anterior (x) + 0.3 up + 1.0 right), ``height`` the vertical
     span (>= 0.5 m). Model axes: x anterior, ``axis`` up, the remaining one to the right.
     """
     p = np.concatenate([traj[f][1] for f in frames])
@@ -201,7 +202,7 @@ def _camera(
     target[axis] = 0.5 * (top + bottom)
     direction = np.zeros(3)
     direction[0], direction[axis], direction[3 - axis] = 0.55, 0.3, 1.0
-    distance = 2.6 * max(top - bottom, 0.5)
+    distance = 1.5 * max(top - bottom, 0.5)
     return target + distance * direction / np.linalg.norm(direction), target
 
 

@@ -91,3 +91,16 @@ def test_seeded_alias_and_refusals(skeleton):
     fixed = Skeleton.from_urdf(skeleton.urdf_path)
     with pytest.raises(InputError, match="freeflyer"):
         joint_trajectories(fixed, "gait", t)
+
+
+def test_gait_legs_move_in_antiphase():
+    """One stride rate per trial, the left leg half a stride after the right."""
+    from pipeline.model import Skeleton, SubjectGeometry
+    from pipeline.simulate_motions import joint_trajectories
+
+    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="hinge", root="freeflyer")
+    t = np.arange(1500) / 100.0
+    for seed in range(3):
+        q, _, _ = joint_trajectories(sk, "gait", t, seed)
+        right, left = q[:, sk.q_index("right_hip_Z")], q[:, sk.q_index("left_hip_Z")]
+        assert np.corrcoef(right, left)[0, 1] < -0.9, seed

@@ -197,3 +197,31 @@ def test_log_motion_is_reexported():
     assert "log_motion" in viz.__all__
     with pytest.raises(AttributeError):
         viz.no_such_function  # noqa: B018
+
+
+def test_default_layout_and_hidden_labels(recording):
+    """The file's default blueprint: the 3D view of /world beside one plot of /plots; landmark
+    labels are stored but hidden (shown on hover)."""
+    from rerun.chunk import RrdReader
+
+    path = recording[0]
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    views = {}
+    for c in reader.stream(store=store).to_chunks():
+        rb = c.to_record_batch()
+        if "ViewBlueprint:class_identifier" in rb.schema.names:
+            row = {n: rb.column(n).to_pylist()[0][0] for n in rb.schema.names if ":" in n}
+            views[row["ViewBlueprint:display_name"]] = (
+                row["ViewBlueprint:class_identifier"],
+                row["ViewBlueprint:space_origin"],
+            )
+    assert views == {"3D": ("3D", "/world"), "joint angles (deg)": ("TimeSeries", "/plots")}
+    for c in reader.stream().to_chunks():
+        if c.entity_path == "/world/landmarks/EFM" and c.is_static:
+            rb = c.to_record_batch()
+            assert rb.column("Points3D:labels").to_pylist() == [["EFM"]]
+            assert rb.column("Points3D:show_labels").to_pylist() == [[False]]
+            break
+    else:
+        raise AssertionError("no static landmark style")

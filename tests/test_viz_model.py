@@ -13,7 +13,7 @@ from pipeline.landmarks import joint_angles
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat, rot_z
 from pipeline.viz import entity_row_counts, log_motion, read_entities
-from pipeline.viz_model import segment_meshes
+from pipeline.viz_model import ANGLE_COLORS, segment_meshes
 
 N = 3000
 NAN_ROW = 17  # one configuration with a NaN: not logged
@@ -226,3 +226,77 @@ def test_bad_inputs_are_input_errors(motion, tmp_path):
     with pytest.raises(InputError, match="up_axis"):
         log_motion(tmp_path / "c.rrd", t[:10], sk, Q[:10], up_axis="x", meshes=False)
     assert not (tmp_path / "c.rrd").exists()
+
+
+def _blueprint(path: Path) -> dict[str, dict[str, list]]:
+    """The recording's default blueprint: entity path -> component name -> first row's value."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    out: dict[str, dict[str, list]] = {}
+    for c in reader.stream(store=store).to_chunks():
+        rb = c.to_record_batch()
+        row = {n: rb.column(n).to_pylist()[0] for n in rb.schema.names}
+        out.setdefault(c.entity_path, {}).update(row)
+    return out
+
+
+def _views(bp: dict[str, dict[str, list]]) -> dict[str, tuple[str, str, str]]:
+    """View title -> (class, origin, blueprint entity path)."""
+    return {
+        v["ViewBlueprint:display_name"][0]: (
+            v["ViewBlueprint:class_identifier"][0],
+            v["ViewBlueprint:space_origin"][0],
+            path,
+        )
+        for path, v in bp.items()
+        if "ViewBlueprint:class_identifier" in v
+    }
+
+
+def test_default_layout_3d_view_and_one_plot_per_joint(motion):
+    path, sk, _, Q, ok, _ = motion
+    bp = _blueprint(path)
+    views = _views(bp)
+    assert views["3D"][:2] == ("3D", "/world")
+    for side in ("right", "left"):
+        for joint in ("hip", "knee"):
+            assert views[f"{side} {joint} (deg)"][:2] == ("TimeSeries", f"/plots/{side}_{joint}")
+    assert views["other"][0] == "TimeSeries"
+    other = bp[f"{views['other'][2]}/ViewContents"]["ViewContents:query"]
+    assert other == ["/plots/residual/right_knee"]
+    # The line grid lies on the ground: the lowest point any foot-mesh vertex reaches.
+    grid = bp[f"{views['3D'][2]}/LineGrid3D"]["LineGrid3D:plane"][0]
+    lowest = np.inf
+    for k in np.flatnonzero(ok)[::97]:
+        sk.forward(Q[k])
+        for side in ("right", "left"):
+            T = sk.frame_pose(f"{side}_foot")
+            v = segment_meshes(sk)[f"{side}_foot"].vertices
+            lowest = min(lowest, (v @ T[:3, :3].T + T[:3, 3])[:, 1].min())
+    np.testing.assert_allclose(grid[:3], [0.0, 1.0, 0.0])
+    assert lowest - 0.005 < grid[3] <= lowest + 1e-6  # frames in between may reach lower
+    # The camera looks at the legs from the front (+x) right (+z), above, y up.
+    eye = bp[f"{views['3D'][2]}/EyeControls3D"]
+    target, position = (
+        np.array(eye["EyeControls3D:look_target"][0]),
+        np.array(eye["EyeControls3D:position"][0]),
+    )
+    np.testing.assert_allclose(eye["EyeControls3D:eye_up"][0], [0.0, 1.0, 0.0])
+    assert grid[3] < target[1] < 0.0
+    offset = position - target
+    assert offset[0] > 0.0 and offset[2] > 0.0 and offset[1] > 0.0
+    assert 1.0 < np.linalg.norm(offset) < 3.0
+
+
+def test_angle_colours_and_translucent_meshes(motion):
+    path = motion[0]
+    for joint in ("right_hip", "left_knee"):
+        for angle, rgb in ANGLE_COLORS.items():
+            style = _rows(path, f"/plots/{joint}/{angle}", static=True)
+            assert style["SeriesLines:names"] == [[angle]]
+            r, g, b = rgb
+            assert style["SeriesLines:colors"] == [[(r << 24) | (g << 16) | (b << 8) | 0xFF]]
+    albedo = _rows(path, "/world/model/left_tibia/mesh", static=True)["Mesh3D:albedo_factor"]
+    assert 0 < (albedo[0][0] & 0xFF) < 255  # landmarks, bones and IMU axes show through

@@ -106,7 +106,8 @@ def test_cli_each_method_runs(capsys, sim, method):
     assert tuple(res) == CALIBRATION_KEYS and res["method"] == method
     _, j1, j2, o1, o2 = _knee_truth(sim)
     e_axis, e_pos = _errors(res, j1, j2, o1, o2)
-    assert e_axis < 1.0
+    # GWO with the CLI's small swarm is the least accurate (tests/test_solvers.py: <= 2 deg)
+    assert e_axis < (2.0 if method == "gwo" else 1.0)
     if method == "gn":
         assert e_pos < 0.003
 
