@@ -180,7 +180,11 @@ def _blueprint(
             views.append(rrb.TimeSeriesView(origin=what, name=title))
         else:
             views.append(rrb.TimeSeriesView(origin="/", contents=list(what), name=title))
-    parts = [rrb.SelectionPanel(state="collapsed")]
+    # open playing from the start in a loop (the viewer would otherwise jump to the last frame)
+    parts = [
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(timeline="time", play_state="Playing", loop_mode="All"),
+    ]
     if not views:
         return rrb.Blueprint(view3d, *parts)
     grid = rrb.Grid(*views, grid_columns=2 if len(views) > 1 else 1)

@@ -300,3 +300,13 @@ def test_angle_colours_and_translucent_meshes(motion):
             assert style["SeriesLines:colors"] == [[(r << 24) | (g << 16) | (b << 8) | 0xFF]]
     albedo = _rows(path, "/world/model/left_tibia/mesh", static=True)["Mesh3D:albedo_factor"]
     assert 0 < (albedo[0][0] & 0xFF) < 255  # landmarks, bones and IMU axes show through
+
+
+def test_recording_opens_playing_from_the_start_in_a_loop(motion):
+    """The time panel of the default blueprint: 'time' timeline, playing, looping over all."""
+    from rerun.blueprint.components import LoopMode, PlayState
+
+    panel = _blueprint(motion[0])["/time_panel"]
+    assert panel["TimePanelBlueprint:timeline"] == ["time"]
+    assert panel["TimePanelBlueprint:play_state"] == [PlayState.Playing.value]
+    assert panel["TimePanelBlueprint:loop_mode"] == [LoopMode.All.value]
