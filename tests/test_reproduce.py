@@ -109,7 +109,7 @@ def test_rerun_recordings_show_the_moving_model_and_optical_landmarks(out):
     assert counts["/world/model/right_tibia"] > 2000
 
 
-def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data():
+def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data(tmp_path):
     """IK (free knee, no limits) + forward kinematics of the landmark frames == eq 15-17."""
     if not DATA.exists():
         pytest.skip("../shared/data/wang2023 not present")
@@ -125,7 +125,7 @@ def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data():
     pf, pt = _positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     G = frame_from_femur(traj["KJC"], eF)
-    sk, ik = subject_motion(subject, r, eF, eT, G, limits=False)
+    sk, ik = subject_motion(subject, r, eF, eT, G, limits=False, out_dir=tmp_path)
     fk = landmark_trajectories(sk, ik.q)
     sk.forward(sk.neutral())
     hip = sk.frame_position("right_HJC")
