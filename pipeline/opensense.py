@@ -43,7 +43,14 @@ from pipeline.io.opensim import (
     rotate_world,
     sensor_to_opensim_matrix,
 )
-from pipeline.rotations import axis_angle, euler_zxy_from_matrix, matrix_from_quat, normalize, rot_y
+from pipeline.rotations import (
+    angle_between,
+    axis_angle,
+    euler_zxy_from_matrix,
+    matrix_from_quat,
+    normalize,
+    rot_y,
+)
 
 UP = np.array([0.0, 1.0, 0.0])
 HEADINGS = ("anatomical",) + tuple(f"pelvis_imu:{s}{a}" for s in ("", "-") for a in "xyz")
@@ -96,11 +103,14 @@ def _dominant_axis(R_ref: np.ndarray, R_moving: np.ndarray, top: float = 0.2) ->
     return R_ref[0] @ normalize(v), float(np.max(angle[ok]))
 
 
-def anatomical_right(rotations: dict[str, np.ndarray], min_excursion: float = 0.35) -> np.ndarray:
+def anatomical_right(
+    rotations: dict[str, np.ndarray], min_excursion: float = 0.35, notes: list[str] | None = None
+) -> np.ndarray:
     """The subject's right at t0 from hip (+right) and knee (-right) flexion (module doc, step 3).
 
     Raises :class:`InputError` when the motion is too small to define an axis (less than
-    ``min_excursion`` rad of hip or knee rotation).
+    ``min_excursion`` rad of hip or knee rotation). When a cue points more than 45 deg away from
+    the others' mean (horizontal directions), a note says so: the heading may then be unreliable.
     """
     cues = []
     for side in ("right", "left"):
@@ -117,6 +127,14 @@ def anatomical_right(rotations: dict[str, np.ndarray], min_excursion: float = 0.
             field="heading",
         )
     right = np.mean(cues, axis=0)
+    if notes is not None and len(cues) > 1:
+        flat = [c - UP * (c @ UP) for c in cues]
+        spread = max(np.degrees(angle_between(c, right - UP * (right @ UP))) for c in flat)
+        if spread > 45.0:
+            notes.append(
+                f"the hip and knee flexion axes disagree by up to {spread:.0f} deg: the anatomical "
+                "heading may be unreliable; check the result or give --heading"
+            )
     horizontal = right - UP * (right @ UP)
     if np.linalg.norm(horizontal) < 0.3 * np.linalg.norm(right):
         raise InputError(
@@ -176,7 +194,7 @@ def run_ik(
         notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
 
     if heading == "anatomical":
-        right = anatomical_right(rotations)
+        right = anatomical_right(rotations, notes=notes)
     else:
         right = _pelvis_axis_right(rotations, heading)
     H = heading_rotation(right)

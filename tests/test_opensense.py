@@ -166,3 +166,21 @@ def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
     for key in ("hip_flexion_r", "knee_angle_r", "knee_angle_l"):
         assert np.abs(a[key] - b[key]).max() < np.radians(0.05), key  # 6-decimal export
     assert main(["ik", "--orientations", str(folder), "--out", str(tmp_path / "c"), *common]) == 2
+
+
+def test_disagreeing_heading_cues_are_reported(tmp_path):
+    """A knee cue pointing the 'wrong' way (e.g. mostly hyperextension) is flagged, not hidden."""
+    from pipeline.io.opensim import map_sensors
+    from pipeline.rotations import matrix_from_quat
+
+    _, _, trial, _ = _walk(tmp_path, n=400)
+    rotations = {s: matrix_from_quat(q) for s, q in map_sensors(trial).items()}
+    notes: list[str] = []
+    anatomical_right(rotations, notes=notes)
+    assert notes == []  # a consistent walk: all four cues agree
+    # mirror the right shank's motion relative to the thigh: its cue now points left
+    F, T = rotations["right_femur"], rotations["right_tibia"]
+    rel = np.swapaxes(F, 1, 2) @ T
+    rotations["right_tibia"] = F @ (rel[0] @ np.swapaxes(rel[0].T @ rel, 1, 2))
+    anatomical_right(rotations, notes=notes)
+    assert notes and "disagree" in notes[0]
