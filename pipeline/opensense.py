@@ -265,7 +265,9 @@ def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
     return cols
 
 
-def load_orientations(path: str | Path, xsens_map: dict[str, str] | None = None):
+def load_orientations(
+    path: str | Path, xsens_map: dict[str, str] | None = None
+) -> OrientationTrial:
     """An OpenSim ``.sto`` file, or a folder of Xsens MT ``.txt`` exports (one per sensor).
 
     For a folder, ``xsens_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's

@@ -127,7 +127,9 @@ def spherical_jacobian(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.nd
     return np.hstack([J1, -J2])
 
 
-def hinge_residual(j1: np.ndarray, j2: np.ndarray, gyr_1: np.ndarray, gyr_2: np.ndarray):
+def hinge_residual(
+    j1: np.ndarray, j2: np.ndarray, gyr_1: np.ndarray, gyr_2: np.ndarray
+) -> np.ndarray:
     """Eq 6: ``e(t) = |w_1 x j_1| - |w_2 x j_2|`` (N,) in rad/s."""
     return np.linalg.norm(np.cross(gyr_1, j1), axis=1) - np.linalg.norm(np.cross(gyr_2, j2), axis=1)
 

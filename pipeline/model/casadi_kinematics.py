@@ -57,7 +57,7 @@ _SMALL_ANGLE_SQ = 1e-8
 # symbolic SO(3) helpers
 
 
-def skew_sym(v):
+def skew_sym(v: ca.SX | ca.MX) -> ca.SX | ca.MX:
     """Cross-product matrix ``[v]x`` of a 3-vector (SX, MX or DM)."""
     return ca.vertcat(
         ca.horzcat(0, -v[2], v[1]),
@@ -66,14 +66,16 @@ def skew_sym(v):
     )
 
 
-def axis_rotation_sym(axis: Sequence[float], cos_q, sin_q):
+def axis_rotation_sym(
+    axis: Sequence[float], cos_q: ca.SX | ca.MX, sin_q: ca.SX | ca.MX
+) -> ca.SX | ca.MX:
     """Rotation about a constant unit ``axis``: ``I + sin q [a]x + (1 - cos q) [a]x²``."""
     a = np.asarray(axis, dtype=float)
     K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
     return ca.DM.eye(3) + sin_q * ca.DM(K) + (1 - cos_q) * ca.DM(K @ K)
 
 
-def exp3_sym(w):
+def exp3_sym(w: ca.SX | ca.MX) -> ca.SX | ca.MX:
     """Exponential map so(3) -> SO(3) of a symbolic rotation vector, smooth at ``w = 0``.
 
     ``exp([w]x) = I + A [w]x + B [w]x²`` with ``A = sin t / t``, ``B = (1 - cos t) / t²``,
@@ -90,7 +92,7 @@ def exp3_sym(w):
     return ca.DM.eye(3) + A * K + B * ca.mtimes(K, K)
 
 
-def matrix_from_quat_xyzw_sym(q):
+def matrix_from_quat_xyzw_sym(q: ca.SX | ca.MX) -> ca.SX | ca.MX:
     """Rotation matrix of a quaternion in Pinocchio's order ``(x, y, z, w)`` (Eigen's formula)."""
     x, y, z, w = q[0], q[1], q[2], q[3]
     return ca.vertcat(
@@ -222,11 +224,11 @@ class CasadiKinematics:
         out = self._frame_function(self.frame_id(frame))(q)
         return out[0], out[1]
 
-    def frame_rotation(self, frame: str | int, q):
+    def frame_rotation(self, frame: str | int, q: ca.SX | ca.MX | np.ndarray) -> ca.SX | ca.MX:
         """World rotation (3x3) of a frame at ``q``."""
         return self.frame_placement(frame, q)[0]
 
-    def frame_position(self, frame: str | int, q):
+    def frame_position(self, frame: str | int, q: ca.SX | ca.MX | np.ndarray) -> ca.SX | ca.MX:
         """World position (3x1) of a frame's origin at ``q``."""
         return self.frame_placement(frame, q)[1]
 

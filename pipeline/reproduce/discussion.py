@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+if TYPE_CHECKING:
+    from pipeline.reproduce.wang2023_imc import ImcStage
 
-def _group_mean(rows, **kw) -> float:
+
+def _group_mean(rows: list[dict], **kw: object) -> float:
     sel = [r["rms_mm"] for r in rows if all(r[k] == v for k, v in kw.items())]
     return float(np.mean(sel)) if sel else float("nan")
 
 
-def imc_discussion(stage) -> str:
+def imc_discussion(stage: ImcStage) -> str:
     rows = stage.trajectory_rows
     lines = ["## Differences from the paper and their causes", ""]
     for tibia_input in ("stored", "uncorrected"):
@@ -24,7 +29,7 @@ def imc_discussion(stage) -> str:
                 + " (mean over subjects)."
             )
 
-    def g(c, lm):
+    def g(c: str, lm: str) -> float:
         return _group_mean(rows, tibia_input="uncorrected", positions="regression",
                            correction=c, landmark=lm)  # fmt: skip
 

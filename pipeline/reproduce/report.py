@@ -8,12 +8,19 @@ the dataset README and measured here (e.g. the first-sample ablation below), not
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from pipeline.anthropometry import EQUATION_INPUTS, load_table1
 from pipeline.omc import landmarks_in_frames
 from pipeline.regression import SubjectSample, fit_table
 from pipeline.reproduce.tables import markdown_table, mean_sd
+
+if TYPE_CHECKING:
+    from pipeline.reproduce.wang2023 import OmcStage
+    from pipeline.reproduce.wang2023_imc import ImcStage
+    from pipeline.reproduce.wang2023_xsens import XsensStage
 
 CAUSES = {
     "shank": (
@@ -59,7 +66,7 @@ def _group_mean_inputs(samples: list[SubjectSample], sex: str) -> dict[str, floa
     return {k: float(np.mean([v[k] for v in values])) for k in keys}
 
 
-def first_sample_samples(stage) -> list[SubjectSample]:
+def first_sample_samples(stage: OmcStage) -> list[SubjectSample]:
     """The reference's choice: landmark positions in segment frames at the first valid sample."""
     from pipeline.reproduce.wang2023 import _sample
 
@@ -82,7 +89,7 @@ def first_sample_samples(stage) -> list[SubjectSample]:
     return out
 
 
-def table1_section(stage) -> str:
+def table1_section(stage: OmcStage) -> str:
     from pipeline.reproduce.wang2023 import _sample
 
     paper = load_table1()
@@ -152,7 +159,7 @@ def table1_section(stage) -> str:
     return "\n".join(text)
 
 
-def table3_section(stage) -> str:
+def table3_section(stage: OmcStage) -> str:
     rows = []
     for sex in ("m", "f", "all"):
         p = stage.population[sex]
@@ -200,7 +207,7 @@ def table3_section(stage) -> str:
     )
 
 
-def subjects_section(stage) -> str:
+def subjects_section(stage: OmcStage) -> str:
     rows = []
     for sex, paper in (("m", "176.0±5.2"), ("f", "162.4±5.0")):
         rs = [(s, r) for s, r in zip(stage.subjects, stage.results, strict=True) if r.sex == sex]
@@ -236,7 +243,9 @@ def subjects_section(stage) -> str:
     )
 
 
-def render_report(stage, imc_stage=None, xsens_stage=None) -> str:
+def render_report(
+    stage: OmcStage, imc_stage: ImcStage | None = None, xsens_stage: XsensStage | None = None
+) -> str:
     parts = [
         "# Wang et al. 2023 reproduction",
         "",

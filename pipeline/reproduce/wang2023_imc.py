@@ -25,6 +25,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from tqdm import tqdm
@@ -44,6 +45,14 @@ from pipeline.evaluation import (
 )
 from pipeline.io.wang2023 import IMC_OMC_INDEX_OFFSET
 from pipeline.landmarks import wang_trajectories
+
+if TYPE_CHECKING:
+    from pipeline.calibration.aor import PopulationAoR
+    from pipeline.ik import IKResult
+    from pipeline.io.wang2023 import Subject
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.omc import OmcResult
+    from pipeline.reproduce.wang2023 import OmcStage
 from pipeline.reproduce.tables import csv_text, markdown_table, mean_sd
 
 LANDMARKS = ("EFM", "EFL", "MM", "LM")
@@ -72,7 +81,9 @@ def _corrections() -> tuple[str, ...]:
     return ("none", "average", "individual", "reference", "ipopt", "hinge_ik")
 
 
-def hinge_ik_orientations(F, T, sex_aor, geometry_kw: dict):
+def hinge_ik_orientations(
+    F: np.ndarray, T: np.ndarray, sex_aor: PopulationAoR, geometry_kw: dict
+) -> tuple[np.ndarray, np.ndarray]:
     """Femur and tibia orientations of the best hinge-consistent pose at every sample.
 
     Orientation IK (:func:`pipeline.ik.solve_ik`, equal weights, no limits) on a one-leg model
@@ -118,7 +129,9 @@ def _positions(kind: str, subject, result):
     return p.femur, p.tibia
 
 
-def run_imc_stage(omc_stage, *, rerun_dir=None, progress: bool = True) -> ImcStage:
+def run_imc_stage(
+    omc_stage: OmcStage, *, rerun_dir: str | Path | None = None, progress: bool = True
+) -> ImcStage:
     """All configurations for every subject with IMC data (see module docstring)."""
     t0 = time.perf_counter()
     corrections = _corrections()
@@ -203,8 +216,8 @@ def run_imc_stage(omc_stage, *, rerun_dir=None, progress: bool = True) -> ImcSta
 
 
 def subject_motion(
-    subject,
-    r,
+    subject: Subject,
+    r: OmcResult,
     eF: np.ndarray,
     eT: np.ndarray,
     G_imc: np.ndarray,
@@ -212,7 +225,7 @@ def subject_motion(
     positions: str = "regression",
     limits: bool = True,
     out_dir: Path,
-):
+) -> tuple[Skeleton, IKResult]:
     """The subject's free-knee model and its configurations reproducing the IMC trajectories.
 
     The model is built from the subject's landmark positions (``positions``); femur and tibia
