@@ -28,8 +28,9 @@ angles are never wrapped, so trajectories are continuous. Stopping: when the lin
 of the error left in ``q``, ``|dq_k|^2 / (|dq_{k-1}| - |dq_k|)``, or the step itself is below
 ``tol / 10``, so that the returned ``q`` is within ``tol`` (rad, max over DoFs) of the optimum.
 Joint limits of 1-DoF joints are a box on ``dq`` solved by a small active-set QP (projected Gauss-
-Newton); configurations never leave the box. DoFs that no target can rotate (translations of a
-free-flyer root, prismatic joints, an ankle without a foot target) are left untouched at ``q0``.
+Newton, :mod:`pipeline.ik_bounds`); configurations never leave the box. DoFs that no target can
+rotate (translations of a free-flyer root, prismatic joints, an ankle without a foot target) are
+left untouched at ``q0``.
 
 Missing data: tasks whose target is non-finite at a frame are dropped for that frame (DoFs they
 alone observe are held at the previous solution); a frame with no finite target gets a NaN row,
@@ -47,11 +48,10 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from pipeline.errors import InputError
+from pipeline.ik_bounds import box_margin, box_step, joint_box
 from pipeline.rotations import log3
 
 __all__ = ["IKResult", "OrientationTask", "frame_rotations", "orientation_residuals", "solve_ik"]
-
-_UNBOUNDED = 1e30  # pinocchio's default "no limit" is +-DBL_MAX
 
 
 @dataclass(frozen=True)
@@ -216,43 +216,6 @@ def _q_of_v(model: pin.Model, v: int) -> int:
     return model.joints[j].idx_q
 
 
-def _margin(qb: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
-    """Smallest distance of the bounded coordinates to their box (inf if there are none)."""
-    return float(min((qb - lo).min(), (hi - qb).min())) if qb.size else np.inf
-
-
-def _box_step(
-    H: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray, d0: np.ndarray
-) -> np.ndarray:
-    """argmin 1/2 d^T H d + g^T d s.t. lo <= d <= hi (H SPD): primal-dual active set.
-
-    ``d0`` is the unconstrained minimiser; the bounds it violates seed the active set.
-    """
-    n = g.size
-    d = d0.copy()
-    at_lo, at_hi = d0 < lo, d0 > hi
-    for _ in range(3 * n + 3):
-        fixed = at_lo | at_hi
-        d[at_lo], d[at_hi] = lo[at_lo], hi[at_hi]
-        free = np.flatnonzero(~fixed)
-        if free.size:
-            fx = np.flatnonzero(fixed)
-            rhs = -g[free] - H[free][:, fx] @ d[fx]
-            d[free] = dposv(H[free][:, free], rhs)[1]
-        new_lo, new_hi = d < lo, d > hi
-        if new_lo.any() or new_hi.any():
-            at_lo |= new_lo
-            at_hi |= new_hi
-            continue
-        grad = H @ d + g  # KKT: >= 0 at a lower bound, <= 0 at an upper bound
-        wrong = np.where(at_lo, -grad, 0.0) + np.where(at_hi, grad, 0.0)
-        k = int(np.argmax(wrong))
-        if wrong[k] <= 1e-12:
-            break
-        at_lo[k] = at_hi[k] = False
-    return np.clip(d, lo, hi)
-
-
 def solve_ik(
     model: pin.Model,
     targets: Mapping[str | OrientationTask, np.ndarray],
@@ -310,18 +273,7 @@ def solve_ik(
     cs = slice(cols[0], cols[-1] + 1) if np.all(np.diff(cols) == 1) else cols
 
     # box limits on tangent DoFs of 1-DoF joints (q and v coincide there)
-    lo = np.full(na, -np.inf)
-    hi = np.full(na, np.inf)
-    qidx = np.full(na, -1)
-    if limits:
-        for a, v in enumerate(cols):
-            j = next(j for j in range(1, model.njoints) if _owns(model, j, int(v)))
-            if model.nqs[j] == 1 and model.nvs[j] == 1:
-                iq = model.joints[j].idx_q
-                lo_q, hi_q = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
-                lo[a] = lo_q if abs(lo_q) < _UNBOUNDED else -np.inf
-                hi[a] = hi_q if abs(hi_q) < _UNBOUNDED else np.inf
-                qidx[a] = iq
+    lo, hi, qidx = joint_box(model, cols, limits)
     bounded = qidx >= 0
     bq, blo, bhi = qidx[bounded], lo[bounded], hi[bounded]
     has_limits = bool(bounded.any())
@@ -373,7 +325,7 @@ def solve_ik(
             q[cq] += Q[n - 1, cq] - Q[n - 2, cq]  # constant-velocity prediction
             if has_limits:
                 q[bq] = np.clip(q[bq], blo, bhi)
-        margin = _margin(q[bq], blo, bhi) if has_limits else np.inf
+        margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
         prev = np.inf
         for it in range(1, max_iters + 1):
             iters[n] = it
@@ -400,7 +352,7 @@ def solve_ik(
                     dhi = np.full(na, np.inf)
                     dlo[bsel] = np.minimum(blo - qb, 0.0)
                     dhi[bsel] = np.maximum(bhi - qb, 0.0)
-                    d = _box_step(H, g, dlo, dhi, d)
+                    d = box_step(H, g, dlo, dhi, d)
                     dn = max(d.max(), -d.min())
                     clipped = True
             if euclid:
@@ -410,7 +362,7 @@ def solve_ik(
                 q = pin.integrate(model, q, v)
             if clipped:
                 q[bq] = np.clip(q[bq], blo, bhi)
-                margin = _margin(q[bq], blo, bhi)
+                margin = box_margin(q[bq], blo, bhi)
             else:
                 margin -= dn
             # stop when the linear-rate estimate of the error left after this step,

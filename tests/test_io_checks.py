@@ -8,7 +8,7 @@ import pytest
 from pipeline.errors import InputError
 from pipeline.io import checks
 from pipeline.io.checks import Notes
-from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
+from pipeline.rotations import exp3, matrix_from_quat, quat_from_matrix
 
 RATE = 100.0
 
@@ -104,84 +104,6 @@ def test_mismatched_lengths_and_rates_refused():
         checks.check_same_rate({"a": 100.0, "b": 60.0})
 
 
-# ---------------------------------------------------------------- gaps
-
-
-def test_short_vector_gap_interpolated_exactly_and_reported():
-    t = _t()
-    truth = np.column_stack([2 * t + 1, -t, np.full_like(t, 3.0)])  # linear: exact
-    v = truth.copy()
-    v[50:55] = np.nan
-    v[80, 1] = np.nan  # one component missing makes the sample missing
-    notes = Notes()
-    out = checks.fill_gaps(t, v, notes=notes, file="f.csv", field="acc")
-    np.testing.assert_allclose(out, truth, atol=1e-12)
-    assert np.isnan(v[50]).all()  # input untouched
-    assert len(notes) == 2
-    assert "f.csv: field acc: filled 5 missing sample(s) from t=0.5 s to t=0.54 s" in notes.items[0]
-
-
-def test_gap_at_ends_held_and_reported():
-    t = _t(50)
-    v = np.arange(50.0)
-    v[:3] = np.nan
-    v[-2:] = np.nan
-    notes = Notes()
-    out = checks.fill_gaps(t, v, notes=notes)
-    assert out[:3].tolist() == [3.0] * 3 and out[-2:].tolist() == [47.0] * 2
-    assert all("held the nearest valid sample" in n for n in notes)
-
-
-def test_long_gap_refused_with_time_range():
-    t = _t()
-    v = np.ones((200, 3))
-    v[100:120] = np.nan  # 0.2 s
-    with pytest.raises(
-        InputError, match=r"gap of 20 missing samples \(0\.2 s\) from t=1 s to t=1\.19 s"
-    ):
-        checks.fill_gaps(t, v, max_gap_s=0.1)
-    out = checks.fill_gaps(t, v, max_gap_s=0.25)  # allowed when the user says so
-    assert np.isfinite(out).all()
-
-
-def test_gap_exactly_max_length_is_filled():
-    t = _t()
-    v = np.ones(200)
-    v[10:20] = np.nan  # 10 samples = 0.1 s
-    assert np.isfinite(checks.fill_gaps(t, v, max_gap_s=0.1)).all()
-
-
-def test_all_missing_refused():
-    with pytest.raises(InputError, match="no finite values"):
-        checks.fill_gaps(_t(10), np.full((10, 3), np.nan))
-
-
-def test_quaternion_gap_filled_by_slerp_matches_truth():
-    t = _t()
-    truth = _rotation_about_axis(t)
-    q = truth.copy()
-    q[60:68] = np.nan
-    q[68:] *= -1  # neighbour in the other hemisphere: same rotation, slerp must not care
-    notes = Notes()
-    out = checks.fill_gaps(t, q, kind="quaternion", notes=notes)
-    err = angle_between_rotations(out[60:68], truth[60:68])
-    assert err.max() < 1e-9
-    assert "slerp" in notes.items[0]
-
-
-def test_zero_quaternion_next_to_gap_refused():
-    q = _rotation_about_axis(_t(20))
-    q[5:7] = np.nan
-    q[7] = 0.0
-    with pytest.raises(InputError, match="zero quaternion at row 7"):
-        checks.fill_gaps(_t(20), q, kind="quaternion")
-
-
-def angle_between_rotations(q1, q2):
-    R = np.swapaxes(matrix_from_quat(q1), -1, -2) @ matrix_from_quat(q2)
-    return np.linalg.norm(log3(R), axis=-1)
-
-
 # ---------------------------------------------------------------- quaternions
 
 
@@ -266,3 +188,11 @@ def test_notes_prefix_like_errors():
     n.add("did x", file="a.sto", field="pelvis_imu")
     n.add("did y")
     assert n.as_tuple() == ("a.sto: field pelvis_imu: did x", "did y")
+
+
+def test_moved_names_still_importable_from_checks():
+    from pipeline.io import gaps, notes
+
+    assert checks.fill_gaps is gaps.fill_gaps
+    assert checks.DEFAULT_MAX_GAP_S == gaps.DEFAULT_MAX_GAP_S == 0.1
+    assert checks.Notes is notes.Notes

@@ -9,18 +9,20 @@ CLI prints the notes.
 Conventions: rows are counted from 0 over the data rows; readers that know where the data start in
 the file pass ``first_line`` so messages also give the 1-based file line. Reading and parsing text
 tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text` and are
-re-exported here.
+re-exported here, as are :class:`Notes` (:mod:`pipeline.io.notes`) and the gap filling
+:func:`fill_gaps` (:mod:`pipeline.io.gaps`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
+from pipeline.io.notes import Notes
 from pipeline.io.text import FileLike, _where, parse_table, read_text_lines
-from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
 
 __all__ = [
     "DEFAULT_MAX_GAP_S",
@@ -40,42 +42,6 @@ __all__ = [
     "parse_table",
     "read_text_lines",
 ]
-
-DEFAULT_MAX_GAP_S = 0.1
-"""Longest run of missing samples (seconds) that is interpolated; longer gaps are refused."""
-
-
-@dataclass
-class Notes:
-    """What a reader changed or noticed: a list of one-line, human-readable messages.
-
-    Readers collect notes while checking and store them (as a tuple) on the object they return;
-    the CLI prints them. ``Notes`` is a thin wrapper on a list so that checks can add to the same
-    list through several calls.
-    """
-
-    items: list[str] = field(default_factory=list)
-
-    def add(self, message: str, *, file: FileLike = None, field: str | None = None) -> None:
-        """Append a message, prefixed like an :class:`InputError` (``file: field F: ...``)."""
-        parts = [str(file)] if file else []
-        if field:
-            parts.append(f"field {field}")
-        parts.append(message)
-        self.items.append(": ".join(parts))
-
-    def extend(self, other: Notes | list[str] | tuple[str, ...]) -> None:
-        self.items.extend(other.items if isinstance(other, Notes) else other)
-
-    def as_tuple(self) -> tuple[str, ...]:
-        return tuple(self.items)
-
-    def __iter__(self):
-        return iter(self.items)
-
-    def __len__(self) -> int:
-        return len(self.items)
-
 
 # --------------------------------------------------------------------------------------------
 # time and rate
@@ -227,98 +193,6 @@ def check_same_rate(rates: dict[str, float], *, rtol: float = 0.01, file: FileLi
         detail = ", ".join(f"{k}: {v:g} Hz" for k, v in rates.items())
         raise InputError(f"streams have different sampling rates ({detail})", file=file)
     return ref
-
-
-# --------------------------------------------------------------------------------------------
-# gaps
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Half-open index runs ``[a, b)`` where ``mask`` is True."""
-    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
-    d = np.diff(m)
-    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True))
-
-
-def _slerp_fill(q: np.ndarray, t: np.ndarray, a: int, b: int) -> None:
-    """Fill ``q[a:b]`` in place by slerp between ``q[a-1]`` and ``q[b]`` (geodesic on SO(3))."""
-    R0 = matrix_from_quat(q[a - 1])
-    R1 = matrix_from_quat(q[b])
-    w = log3(R0.T @ R1)
-    s = (t[a:b] - t[a - 1]) / (t[b] - t[a - 1])
-    filled = quat_from_matrix(R0 @ exp3(s[:, None] * w))
-    ref = q[a - 1] / np.linalg.norm(q[a - 1])
-    filled[filled @ ref < 0] *= -1
-    q[a:b] = filled
-
-
-def fill_gaps(
-    time: np.ndarray,
-    values: np.ndarray,
-    *,
-    kind: str = "vector",
-    max_gap_s: float = DEFAULT_MAX_GAP_S,
-    notes: Notes | None = None,
-    file: FileLike = None,
-    field: str | None = None,
-) -> np.ndarray:
-    """Interpolate short runs of missing (non-finite) samples; refuse long ones.
-
-    A sample (row) is missing when any of its components is not finite. A run of ``n`` missing
-    samples lasts ``n * dt`` (dt = median interval). Runs up to ``max_gap_s`` are filled, inside
-    the recording by linear interpolation (``kind="vector"``) or slerp (``kind="quaternion"``,
-    constant angular velocity between the neighbours), and at either end by holding the nearest
-    valid sample. Each filled run is reported in ``notes`` with its time range. Longer runs are
-    refused with their time range. Returns a new array (the input is not modified).
-    """
-    if kind not in ("vector", "quaternion"):
-        raise ValueError(f"kind must be 'vector' or 'quaternion', got {kind!r}")
-    t = np.asarray(time, dtype=float)
-    v = np.array(values, dtype=float, copy=True)
-    squeeze = v.ndim == 1
-    if squeeze:
-        v = v[:, None]
-    if v.shape[0] != t.size:
-        raise InputError(f"{v.shape[0]} samples but {t.size} time stamps", file=file, field=field)
-    missing = ~np.all(np.isfinite(v), axis=1)
-    if not missing.any():
-        return v[:, 0] if squeeze else v
-    if missing.all():
-        raise InputError("no finite values at all (every sample missing)", file=file, field=field)
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    runs = _runs(missing)
-    for a, b in runs:
-        dur = (b - a) * dt
-        if dur > max_gap_s + 1e-9:
-            raise InputError(
-                f"gap of {b - a} missing samples ({dur:.3g} s) from t={t[a]:.4g} s to "
-                f"t={t[b - 1]:.4g} s (rows {a}-{b - 1}) is longer than the {max_gap_s:g} s that "
-                "may be interpolated",
-                file=file,
-                field=field,
-            )
-    for a, b in runs:
-        if a == 0 or b == t.size:
-            v[a:b] = v[b] if a == 0 else v[a - 1]
-            how = "held the nearest valid sample"
-        elif kind == "quaternion":
-            for r in (a - 1, b):
-                if np.linalg.norm(v[r]) < 1e-9:
-                    raise InputError(f"zero quaternion at row {r}", file=file, field=field)
-            _slerp_fill(v, t, a, b)
-            how = "slerp"
-        else:
-            s = ((t[a:b] - t[a - 1]) / (t[b] - t[a - 1]))[:, None]
-            v[a:b] = (1 - s) * v[a - 1] + s * v[b]
-            how = "linear interpolation"
-        if notes is not None:
-            notes.add(
-                f"filled {b - a} missing sample(s) from t={t[a]:.4g} s to t={t[b - 1]:.4g} s "
-                f"({how})",
-                file=file,
-                field=field,
-            )
-    return v[:, 0] if squeeze else v
 
 
 # --------------------------------------------------------------------------------------------
