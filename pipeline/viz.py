@@ -17,9 +17,9 @@ timeline ``time``, seconds):
   ``ROS_PACKAGE_PATH``. Its root link is placed in ``world`` by a static named-frame transform
   (default ``Rx(+90 deg)``: a Y-up model stands upright in a Z-up world).
 
-The file carries a default blueprint (the viewer's layout, :func:`_blueprint`): the 3D view of
-``world`` on the left, the ``plots`` as time-series views on the right (rerun's own heuristic
-would open one small plot per angle, leave some out and shrink the 3D view to a tile).
+The file carries a default blueprint (the viewer's layout,
+:func:`pipeline.viz_layout.default_blueprint`): the 3D view of ``world`` on the left, the
+``plots`` as time-series views on the right.
 
 Samples with NaN are not logged (the viewer shows the last valid one until the next).
 ``log_motion`` (in :mod:`pipeline.viz_model`, re-exported here) draws a model's motion from its
@@ -45,6 +45,8 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.rotations import quat_from_matrix, rot_x
+from pipeline.viz_layout import default_blueprint as _blueprint
+from pipeline.viz_layout import up_axis_index as _check_up_axis
 
 __all__ = [
     "entity_row_counts",
@@ -136,59 +138,6 @@ def _check_time(time: np.ndarray) -> np.ndarray:
     if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
         raise InputError(f"time must be a finite (N,) array, got shape {t.shape}", field="time")
     return t
-
-
-def _check_up_axis(up_axis: str) -> int:
-    """Index (1 or 2) of the vertical coordinate for ``up_axis`` 'y' or 'z'."""
-    if up_axis not in ("y", "z"):
-        raise InputError(f"up_axis must be 'y' or 'z', got {up_axis!r}", field="up_axis")
-    return 1 if up_axis == "y" else 2
-
-
-def _blueprint(
-    plots: Sequence[tuple[str, str | Sequence[str]]],
-    up_axis: str,
-    camera: tuple[np.ndarray, np.ndarray] | None = None,
-    ground: float | None = None,
-):
-    """Default layout: the 3D view of ``world`` (3/5 of the width) beside the time-series views.
-
-    ``plots``: (view title, origin entity or list of entity paths) per time-series view, laid out
-    in a grid of two columns (one column for a single view). ``camera``: (eye position, look
-    target) in ``world`` (m), orbiting about the target with ``up_axis`` up; ``None`` lets the
-    viewer frame the scene. ``ground``: height (m) along ``up_axis`` of the 3D view's line grid
-    (default: the plane through the origin). The selection panel starts collapsed.
-    """
-    import rerun.blueprint as rrb
-
-    rr = _rr()
-    up = np.zeros(3)
-    up[_check_up_axis(up_axis)] = 1.0
-    options = {}
-    if camera is not None:
-        position, target = (np.asarray(v, dtype=float) for v in camera)
-        options["eye_controls"] = rrb.EyeControls3D(
-            kind=rrb.Eye3DKind.Orbital, position=position, look_target=target, eye_up=up
-        )
-    if ground is not None:
-        plane = rr.components.Plane3D(up, float(ground))  # {P : up . P = ground}
-        options["line_grid"] = rrb.LineGrid3D(visible=True, spacing=0.5, plane=plane)
-    view3d = rrb.Spatial3DView(origin="/world", name="3D", **options)
-    views = []
-    for title, what in plots:
-        if isinstance(what, str):
-            views.append(rrb.TimeSeriesView(origin=what, name=title))
-        else:
-            views.append(rrb.TimeSeriesView(origin="/", contents=list(what), name=title))
-    # open playing from the start in a loop (the viewer would otherwise jump to the last frame)
-    parts = [
-        rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(timeline="time", play_state="Playing", loop_mode="All"),
-    ]
-    if not views:
-        return rrb.Blueprint(view3d, *parts)
-    grid = rrb.Grid(*views, grid_columns=2 if len(views) > 1 else 1)
-    return rrb.Blueprint(rrb.Horizontal(view3d, grid, column_shares=[3, 2]), *parts)
 
 
 @contextmanager

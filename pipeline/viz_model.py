@@ -46,10 +46,8 @@ from pipeline.rotations import matrix_from_euler_zyx
 from pipeline.viz import (
     IMC_COLOR,
     REFERENCE_COLOR,
-    _blueprint,
     _check_series,
     _check_time,
-    _check_up_axis,
     _log_error_arrows,
     _log_points,
     _log_poses,
@@ -58,6 +56,8 @@ from pipeline.viz import (
     _rr,
     _send,
 )
+from pipeline.viz_layout import default_blueprint as _blueprint
+from pipeline.viz_layout import up_axis_index as _check_up_axis
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_meshes"]
 

@@ -9,15 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.calibration.aor_ipopt import (
-    aor_correction_ipopt,
-    hinge_axes,
-    hinge_fit,
-    motion_weights,
-)
+from pipeline.calibration.aor_ipopt import aor_correction_ipopt, hinge_axes, hinge_fit
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry, mirror_axis
-from pipeline.rotations import angle_between, exp3, log3, normalize, rot_z, rotation_aligning
+from pipeline.rotations import angle_between, exp3, log3, normalize, rotation_aligning
 
 DEG = np.pi / 180
 A_F = normalize(np.array([-0.2, -0.1, 1.0]))  # reference = true knee axes of the model
@@ -98,33 +93,6 @@ def test_hinge_axes_read_from_the_model(skeleton):
     assert np.allclose(a_T, [0, 0, 1], atol=1e-12)
     with pytest.raises(InputError, match="hinge"):
         hinge_axes(Skeleton.build(g, knee="free", legs=("right",)).model, "right")
-
-
-def test_l2_identity_and_excitation_by_hand():
-    """|M u - v|² = 2 - 2 vᵀ M u; pure hinge: axes exact, excitation = 1 - |mean e^{iθ}|."""
-    rng = np.random.default_rng(0)
-    theta = np.linspace(0, 1.5, 400)
-    M0 = exp3(np.array([0.1, -0.2, 0.05]))
-    a = normalize(np.array([0.1, 0.05, 1.0]))
-    M = M0 @ exp3(theta[:, None] * a)
-    u, v = normalize(rng.normal(size=3)), normalize(rng.normal(size=3))
-    assert np.allclose(np.sum((M @ u - v) ** 2, axis=1), 2 - 2 * (M @ u) @ v)
-    fit = hinge_fit(np.repeat(np.eye(3)[None], len(M), axis=0), M, weights="uniform")
-    assert angle_between(fit.tibia_axis, a) < 1e-12
-    assert angle_between(fit.femur_axis, M0 @ a) < 1e-12
-    assert fit.excitation == pytest.approx(1 - np.abs(np.mean(np.exp(1j * theta))), abs=1e-12)
-
-
-def test_motion_weights_at_constant_speed_and_rest():
-    n, rate, speed = 400, 100.0, 30 * DEG  # knee turns at 30 deg/s for 2 s, then rests
-    ang = np.minimum(np.arange(n), 200) / rate * speed
-    F = np.repeat(np.eye(3)[None], n, axis=0)
-    w = motion_weights(F, rot_z(-ang), rate, motion_window=0.5, static_speed=10 * DEG)
-    assert w[100] == pytest.approx(30 / (30 + 10), abs=1e-9)  # φ/(φ + φ0), φ = ω · window
-    assert np.all(w[226:] < 1e-9) and np.all(w[30:170] > 0.7)
-    T = rot_z(-ang)
-    T[50] = np.nan
-    assert motion_weights(F, T)[50] == 0
 
 
 def test_noise_free_misalignment_removed_exactly(skeleton):

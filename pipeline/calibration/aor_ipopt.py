@@ -44,10 +44,10 @@ exactly ``2 - 2 vᵀ S u`` with ``S = Σ w_k M_k / Σ w_k`` (``|u| = |v| = 1``),
 grow with the trial. ``S``'s singular values give the excitation ``1 - σ₂/σ₁`` (0 for a still
 knee: the axis is then undetermined and only the prior and the regulariser define the result).
 
-**Sample weights** (``weights='motion'``): a still knee adds no axis information (and in real data
-rests are where posture-specific errors sit), so ``w_k = φ_k / (φ_k + φ_0)`` with ``φ_k`` the knee
-rotation angle between samples ``k - h`` and ``k + h`` (``h = motion_window / 2`` s) and ``φ_0 =
-static_speed · motion_window``. ``'uniform'`` or an array of weights can be given instead.
+**Sample weights** (``weights='motion'``, :func:`~pipeline.calibration.hinge_fit.motion_weights`):
+``w_k = φ_k / (φ_k + φ_0)`` with ``φ_k`` the knee rotation over ``motion_window`` s around sample
+``k`` (a still knee adds no axis information); ``'uniform'`` or an array can be given instead.
+The data term alone, in closed form, is :func:`~pipeline.calibration.hinge_fit.hinge_fit`.
 
 **Parameterisation** (DESIGN.md §4, on-manifold): ``C = R0 exp(δ)`` around the closed-form start
 ``R0`` (:func:`~pipeline.calibration.aor.correction_rotations` from
@@ -69,9 +69,16 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.calibration.aor import KneeAoR, correction_rotations, knee_aor
+from pipeline.calibration.hinge_fit import (
+    HingeFit,
+    _relative,
+    _weights,
+    hinge_fit,
+    motion_weights,
+)
 from pipeline.errors import InputError
 from pipeline.model.casadi_kinematics import exp3_sym
-from pipeline.rotations import angle_between, log3, normalize
+from pipeline.rotations import angle_between, normalize
 
 __all__ = [
     "LOSSES",
@@ -149,90 +156,6 @@ def hinge_axes(model: pin.Model, side: str = "right") -> tuple[np.ndarray, np.nd
         a = normalize(R.T @ axis_w)
         out.append(a if a[2] >= 0 else -a)
     return out[0], out[1]
-
-
-def _relative(femur_R: np.ndarray, tibia_R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    F = np.asarray(femur_R, dtype=float)
-    T = np.asarray(tibia_R, dtype=float)
-    if F.ndim != 3 or F.shape[1:] != (3, 3) or F.shape != T.shape:
-        raise InputError(
-            f"expected femur and tibia orientations of shape (N, 3, 3), got {F.shape}, {T.shape}"
-        )
-    valid = np.all(np.isfinite(F), axis=(1, 2)) & np.all(np.isfinite(T), axis=(1, 2))
-    M = np.where(valid[:, None, None], np.swapaxes(F, 1, 2) @ T, np.eye(3))
-    return M, valid
-
-
-def motion_weights(
-    femur_R: np.ndarray,
-    tibia_R: np.ndarray,
-    rate_hz: float = 100.0,
-    motion_window: float = 0.5,
-    static_speed: float = np.deg2rad(10.0),
-) -> np.ndarray:
-    """``w_k = φ_k / (φ_k + φ_0)``: knee rotation ``φ_k`` between samples ``k ∓ h`` (module doc).
-
-    ``h = round(motion_window * rate_hz / 2)`` samples (clipped at the ends), ``φ_0 =
-    static_speed * motion_window`` rad. Zero where a sample is missing.
-    """
-    M, valid = _relative(femur_R, tibia_R)
-    n = len(M)
-    h = max(1, int(round(motion_window * rate_hz / 2)))
-    k = np.arange(n)
-    lo, hi = np.clip(k - h, 0, n - 1), np.clip(k + h, 0, n - 1)
-    phi = np.linalg.norm(log3(np.swapaxes(M[lo], 1, 2) @ M[hi]), axis=1)
-    phi0 = static_speed * motion_window
-    w = phi / (phi + phi0)
-    return np.where(valid & valid[lo] & valid[hi], w, 0.0)
-
-
-@dataclass(frozen=True)
-class HingeFit:
-    """Whole-trial least-squares hinge axes (unit, pointing right) and the excitation."""
-
-    femur_axis: np.ndarray
-    tibia_axis: np.ndarray
-    excitation: float
-    mean_relative_rotation: np.ndarray
-
-
-def _weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed):
-    n = len(valid)
-    if isinstance(weights, str):
-        if weights == "motion":
-            return motion_weights(femur_R, tibia_R, rate_hz, motion_window, static_speed)
-        if weights == "uniform":
-            return valid.astype(float)
-        raise InputError(f"expected weights 'motion', 'uniform' or an array, got {weights!r}")
-    w = np.asarray(weights, dtype=float)
-    if w.shape != (n,) or np.any(~np.isfinite(w)) or np.any(w < 0):
-        raise InputError(f"expected {n} finite weights >= 0", field="weights")
-    return np.where(valid, w, 0.0)
-
-
-def hinge_fit(
-    femur_R: np.ndarray,
-    tibia_R: np.ndarray,
-    weights: str | np.ndarray = "motion",
-    rate_hz: float = 100.0,
-    motion_window: float = 0.5,
-    static_speed: float = np.deg2rad(10.0),
-) -> HingeFit:
-    """Knee axes minimising ``Σ w_k |M_k u - v|²`` over unit ``u`` (tibia), ``v`` (femur).
-
-    The data term of :func:`aor_correction_ipopt` alone: since ``|M u - v|² = 2 - 2 vᵀ M u``,
-    the minimiser is the top singular pair of ``S = Σ w_k M_k / Σ w_k`` (``S u = σ₁ v``); the
-    excitation ``1 - σ₂/σ₁`` is 0 when the knee does not move. A whole-trial alternative to Wang
-    eq 1-8 (use the same estimator for a reference AoR and for the IMC data).
-    """
-    M, valid = _relative(femur_R, tibia_R)
-    w = _weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed)
-    if w.sum() <= 0:
-        raise InputError("no valid sample with a positive weight (knee never moves?)")
-    S = np.einsum("n,nij->ij", w, M) / w.sum()
-    U, sv, Vt = np.linalg.svd(S)
-    sign = 1.0 if U[2, 0] >= 0 else -1.0
-    return HingeFit(sign * U[:, 0], sign * Vt[0], float(1 - sv[1] / sv[0]), S)
 
 
 def _tangent_basis(a: np.ndarray) -> np.ndarray:

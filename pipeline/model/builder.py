@@ -2,17 +2,14 @@
 
 Kept from the template: pelvis + thigh/shank/foot per leg, its naming style (``<side>_hip_Z``,
 ``<side>_hip_X``, ``<side>_hip_Y``, ``<side>_knee_Z``, ``<side>_ankle_Z``, ``<side>_ankle_X``,
-``*_virtual`` intermediate links), its STL meshes (scaled) and its Dumas et al. (2007) inertias
-(scaled). The upper body is dropped. Links are renamed to the segment names used downstream:
-``pelvis``, ``<side>_femur``, ``<side>_tibia``, ``<side>_foot``. The knee is ``<side>_knee``
-(hinge, 1 DoF) or ``<side>_knee_Z``, ``_X``, ``_Y`` (free). Fixed frames are massless links
-``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``, ``pelvis_imu`` and ``<side>_{femur,tibia,foot}_imu``,
-each attached by a fixed joint named ``<frame>_joint``. Mesh widths scale by knee / ankle width
-over assumed template widths of 0.100 m / 0.070 m (viewer only; no dimension downstream uses them).
-The template uses the same STL files with the same positive scales on both legs; they are treated
-as right-leg shapes (z lateral; the thigh shaft sits ~1 mm lateral of its proximal cap). The left
-leg's visuals are their sagittal mirror images: scale ``(s_x, s_y, -s_z)`` and origin ``M p``, so
-a left vertex is ``M`` times the right one in the (mirrored) segment frame.
+``*_virtual`` intermediate links), its STL meshes (scaled, :mod:`pipeline.model.meshes`) and its
+Dumas et al. (2007) inertias (scaled). The upper body is dropped. Links are renamed to the
+segment names used downstream: ``pelvis``, ``<side>_femur``, ``<side>_tibia``, ``<side>_foot``.
+The knee is ``<side>_knee`` (hinge, 1 DoF) or ``<side>_knee_Z``, ``_X``, ``_Y`` (free). Fixed
+frames are massless links ``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``, ``pelvis_imu`` and
+``<side>_{femur,tibia,foot}_imu``, each attached by a fixed joint named ``<frame>_joint``. The
+left leg's mesh visuals are the sagittal mirror images of the right leg's (see
+:mod:`pipeline.model.meshes`).
 
 Every link frame IS the ISB segment frame at ``q = 0`` (femur: origin HJC; tibia: origin KJC;
 foot: origin AJC; axes x anterior, y proximal, z right, left leg mirrored), so the landmark frames
@@ -59,7 +56,7 @@ import yourdfpy as ud
 
 from pipeline.errors import InputError
 from pipeline.model.geometry import TEMPLATE_HEIGHT_M, SubjectGeometry, mirror_point
-from pipeline.paths import example_robot_data_share
+from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals, resolve_package_uri
 from pipeline.rotations import rotation_aligning
 
 __all__ = [
@@ -77,12 +74,10 @@ __all__ = [
 KNEE_MODES = ("hinge", "free")
 LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
 SEGMENTS = ("femur", "tibia", "foot")
-_MESH_URI = "package://example-robot-data/robots/human_description/meshes/"
 
 # Template (human.urdf, right leg, H = 1.80 m) lengths used as scaling references (m).
 _T_THIGH, _T_SHANK = 0.439, 0.44
 _T_FOOT = 0.1497 * TEMPLATE_HEIGHT_M  # Dumas male foot ratio, matches the foot mesh (0.271 m)
-_T_KNEE_WIDTH, _T_ANKLE_WIDTH = 0.100, 0.070  # assumed epicondylar / bimalleolar widths at 1.80 m
 
 # Template inertials (right side): mass, com, (ixx, ixy, ixz, iyy, iyz, izz).
 _INERTIA = {
@@ -110,11 +105,6 @@ _LIMITS = {
     "knee_Y": (60.0, 6.0, -0.785398, 0.785398),
     "ankle_Z": (126.0, 12.7, -1.570795, 0.7853975),
     "ankle_X": (20.0, 6.0, -0.523598333, 0.785398),
-}
-_COLORS = {
-    "middle": (0.0, 0.0, 0.8, 1.0),
-    "right": (0.8, 0.0, 0.0, 1.0),
-    "left": (0.0, 0.8, 0.0, 1.0),
 }
 
 
@@ -145,14 +135,6 @@ def joint_names(knee: str = "hinge", legs: Sequence[str] = ("right", "left")) ->
     return [f"{s}_{j}" for s in legs for j in per_leg]
 
 
-def resolve_package_uri(uri: str) -> Path:
-    """File behind ``package://example-robot-data/...`` (ROS_PACKAGE_PATH = the share folder)."""
-    prefix = "package://"
-    if not uri.startswith(prefix):
-        return Path(uri)
-    return example_robot_data_share().parent / uri[len(prefix) :]
-
-
 def _tf(
     R: np.ndarray | None = None, p: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
 ) -> np.ndarray:
@@ -172,28 +154,6 @@ def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -
         inertia, com = M @ inertia @ M, mirror_point(com)
     inertia = inertia * mass_scale * length_ratio**2
     return ud.Inertial(origin=_tf(p=com), mass=float(m0 * mass_scale), inertia=inertia)
-
-
-def _visual(
-    name: str,
-    mesh: str,
-    scale: Sequence[float],
-    xyz: Sequence[float],
-    mat: str,
-    mirror: bool = False,
-) -> ud.Visual:
-    """Mesh visual; ``mirror``: reflect it through the sagittal plane (``M = diag(1, 1, -1)``).
-
-    A mesh vertex ``v`` lands at ``S v + p``; mirrored, at ``M (S v + p) = (M S) v + M p``: the z
-    scale is negated and the origin reflected (the origins carry no rotation).
-    """
-    scale, xyz = np.asarray(scale, dtype=float), np.asarray(xyz, dtype=float)
-    if mirror:
-        scale, xyz = scale * [1.0, 1.0, -1.0], mirror_point(xyz)
-    geometry = ud.Geometry(mesh=ud.Mesh(filename=_MESH_URI + mesh, scale=scale))
-    return ud.Visual(
-        name=name, origin=_tf(p=xyz), geometry=geometry, material=ud.Material(name=mat)
-    )
 
 
 def _revolute(
@@ -250,62 +210,17 @@ def _placement(name: str, value: object) -> np.ndarray:
 def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple[list, list]:
     side, lat = g.side, g.lateral_sign
     femur, tibia, foot = f"{side}_femur", f"{side}_tibia", f"{side}_foot"
-    mat = f"body_color_{side[0].upper()}"
     l_thigh, l_shank = g.thigh_length / _T_THIGH, g.shank_length / _T_SHANK
     l_foot = g.foot_length_m / _T_FOOT
-    w_knee, w_ankle = g.knee_width / _T_KNEE_WIDTH, g.ankle_width / _T_ANKLE_WIDTH
-    w_shank = 0.5 * (w_knee + w_ankle)
     ms = g.mass_scale
-    mirror = side == "left"  # template meshes are right-leg shapes
+    visuals = leg_visuals(g, l_thigh, l_shank, l_foot)
     links = [
         ud.Link(name=f"{femur}_virtual"),
         ud.Link(name=f"{femur}_virtual_2"),
-        ud.Link(
-            name=femur,
-            inertial=_inertial("femur", ms, l_thigh, side),
-            visuals=[
-                _visual(
-                    femur,
-                    "upperleg_mesh.STL",
-                    (0.0062 * w_knee, 0.0064 * l_thigh, 0.0069 * w_knee),
-                    (0.0, -0.05 * l_thigh, 0.0),
-                    mat,
-                    mirror,
-                )
-            ],
-        ),
-        ud.Link(
-            name=tibia,
-            inertial=_inertial("tibia", ms, l_shank, side),
-            visuals=[
-                _visual(
-                    tibia,
-                    "lowerleg_mesh.STL",
-                    (0.0063 * w_shank, 0.0066 * l_shank, 0.007 * w_shank),
-                    (0.0, 0.0, 0.0),
-                    mat,
-                    mirror,
-                ),
-                _visual(
-                    f"{side}_knee", "knee_mesh.STL", (0.0056 * w_knee,) * 3, (0, 0, 0), mat, mirror
-                ),
-            ],
-        ),
+        ud.Link(name=femur, inertial=_inertial("femur", ms, l_thigh, side), visuals=visuals[femur]),
+        ud.Link(name=tibia, inertial=_inertial("tibia", ms, l_shank, side), visuals=visuals[tibia]),
         ud.Link(name=f"{foot}_virtual"),
-        ud.Link(
-            name=foot,
-            inertial=_inertial("foot", ms, l_foot, side),
-            visuals=[
-                _visual(
-                    foot,
-                    "foot_mesh.STL",
-                    (0.0067 * l_foot, 0.0067 * w_ankle, 0.0067 * w_ankle),
-                    (0.0, 0.0, 0.0),
-                    mat,
-                    mirror,
-                )
-            ],
-        ),
+        ud.Link(name=foot, inertial=_inertial("foot", ms, l_foot, side), visuals=visuals[foot]),
     ]
     jn = f"{side}_"
     joints = [
@@ -402,15 +317,7 @@ def build_urdf(
     pelvis = ud.Link(
         name="pelvis",
         inertial=_inertial("pelvis", geometry.mass_scale, s, "right"),
-        visuals=[
-            _visual(
-                "pelvis",
-                "pelvis_mesh.STL",
-                (0.006430 * s, 0.005897 * s, 0.005897 * s),
-                (0.0, -0.05 * s, 0.0),
-                "body_color",
-            )
-        ],
+        visuals=pelvis_visuals(s),
     )
     links, joints = [pelvis], []
     link, joint = _fixed_frame("pelvis_imu", "pelvis", imus["pelvis_imu"])
@@ -420,12 +327,8 @@ def build_urdf(
         leg_links, leg_joints = _leg(g, knee, imus)
         links += leg_links
         joints += leg_joints
-    materials = [
-        ud.Material(name=n, color=ud.Color(rgba=np.array(_COLORS[k])))
-        for n, k in (("body_color", "middle"), ("body_color_R", "right"), ("body_color_L", "left"))
-    ]
     robot = ud.Robot(name=f"lower_limb_{knee}_knee_ISB_model", links=links, joints=joints)
-    robot.materials = materials
+    robot.materials = materials()
     urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)

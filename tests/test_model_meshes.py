@@ -1,0 +1,147 @@
+"""URDF mesh visuals (pipeline.model.meshes): template STL references, scaling, left-leg mirror."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yourdfpy
+
+from pipeline.model import Skeleton, SubjectGeometry, build_urdf, resolve_package_uri
+from pipeline.rotations import normalize
+
+M = np.diag([1.0, 1.0, -1.0])
+
+
+def subject(**over) -> SubjectGeometry:
+    """An asymmetric, non-trivial right-leg geometry (tilted knee axes, off-plane landmarks)."""
+    kw = dict(
+        sex="f",
+        height_m=1.62,
+        femur_landmarks={"EFM": [0.006, -0.372, -0.047], "EFL": [-0.004, -0.386, 0.045]},
+        tibia_landmarks={"MM": [-0.012, -0.356, -0.031], "LM": [0.010, -0.374, 0.033]},
+        knee_axis_femur=normalize(np.array([0.08, -0.12, 1.0])),
+        knee_axis_tibia=normalize(np.array([-0.05, 0.10, 1.0])),
+    )
+    kw.update(over)
+    return SubjectGeometry(**kw)
+
+
+def test_resolve_package_uri_is_reexported_and_maps_to_the_share_folder():
+    from pipeline.model import builder, meshes
+    from pipeline.paths import example_robot_data_share
+
+    assert builder.resolve_package_uri is meshes.resolve_package_uri
+    uri = "package://example-robot-data/robots/human_description/meshes/foot_mesh.STL"
+    expected = example_robot_data_share().parent / uri[len("package://") :]
+    assert resolve_package_uri(uri) == expected
+    assert str(resolve_package_uri("/abs/file.stl")) == "/abs/file.stl"
+
+
+def test_mesh_references_resolve_and_follow_template_style(tmp_path):
+    path = build_urdf(subject(), tmp_path / "m.urdf", knee="hinge")
+    urdf = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
+    meshes = [v.geometry.mesh for link in urdf.robot.links for v in link.visuals]
+    assert len(meshes) == 1 + 2 * 4  # pelvis + (thigh, shank, knee, foot) per leg
+    for mesh in meshes:
+        assert mesh.filename.startswith(
+            "package://example-robot-data/robots/human_description/meshes/"
+        )
+        assert resolve_package_uri(mesh.filename).is_file(), mesh.filename
+    for link in urdf.robot.links:  # right leg and pelvis as the template; left leg z-mirrored
+        for v in link.visuals:
+            sign = [1.0, 1.0, -1.0] if link.name.startswith("left") else [1.0, 1.0, 1.0]
+            assert np.all(np.asarray(v.geometry.mesh.scale) * sign > 0), link.name
+
+
+# ---- mesh handedness ----------------------------------------------------------------------------
+def _visual_vertices(urdf: yourdfpy.URDF, link: str) -> np.ndarray:
+    """A link's visual mesh vertices in the link (segment) frame: ``R_o (s * v) + p_o``."""
+    import trimesh
+
+    out = []
+    for visual in urdf.link_map[link].visuals:
+        mesh = visual.geometry.mesh
+        v = trimesh.load(resolve_package_uri(mesh.filename), force="mesh").vertices
+        T = visual.origin
+        out.append((v * np.asarray(mesh.scale)) @ T[:3, :3].T + T[:3, 3])
+    return np.concatenate(out)
+
+
+@pytest.fixture(scope="module")
+def mesh_urdf(tmp_path_factory):
+    path = build_urdf(subject(), tmp_path_factory.mktemp("meshes") / "m.urdf", knee="free")
+    return path, yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
+
+
+def test_left_leg_meshes_are_mirror_images_of_right_ones(mesh_urdf):
+    """Symmetric subject: every left-leg mesh vertex is M = diag(1, 1, -1) times the right one."""
+    _, urdf = mesh_urdf
+    for seg in ("femur", "tibia", "foot"):
+        right = _visual_vertices(urdf, f"right_{seg}")
+        left = _visual_vertices(urdf, f"left_{seg}")
+        assert np.ptp(right[:, 2]) > 0.05  # a real mesh, several cm wide
+        np.testing.assert_allclose(left, right @ M, rtol=0, atol=1e-9, err_msg=seg)
+
+
+def test_femur_mesh_shaft_lies_lateral_of_its_proximal_cap_on_both_legs(mesh_urdf):
+    """The template thigh mesh is a stylised, nearly z-symmetric shape; its one handed feature
+    (found by inspecting upperleg_mesh.STL slice by slice) is that the whole shaft is shifted by
+    ~1.1 mm x (knee-width scale) to +z, lateral for a right leg, relative to its rounded proximal
+    cap (centred on z = 0), as a femoral shaft lies lateral of the head. That direction must be
+    lateral on both legs, i.e. along EFL - EFM taken from the landmark frames (before the mirror
+    fix the left shaft was shifted medially)."""
+    path, urdf = mesh_urdf
+    sk = Skeleton.from_urdf(path)
+    q = sk.neutral()
+
+    def z_mid(v):
+        return 0.5 * (v[:, 2].min() + v[:, 2].max())
+
+    for side in ("right", "left"):
+        v = _visual_vertices(urdf, f"{side}_femur")
+        y, h = v[:, 1], np.ptp(v[:, 1])
+        cap = v[y > y.max() - 0.05 * h]
+        shaft = v[(y > y.min() + 0.2 * h) & (y < y.min() + 0.8 * h)]
+        efm = sk.relative_pose(f"{side}_EFM", f"{side}_femur", q)[:3, 3]
+        efl = sk.relative_pose(f"{side}_EFL", f"{side}_femur", q)[:3, 3]
+        lateral = np.sign(efl[2] - efm[2])
+        assert lateral == (1.0 if side == "right" else -1.0)
+        offset = z_mid(shaft) - z_mid(cap)
+        assert 0.0005 < lateral * offset < 0.002, (side, offset)
+        assert lateral * v[:, 2].mean() > 0  # the bulk of the thigh mesh is lateral too
+
+
+def test_mirrored_meshes_load_in_pinocchio_and_render_outward(mesh_urdf):
+    """pin.buildGeomFromUrdf accepts the negative z scale (vertices mirrored), and the viewer's
+    merged meshes keep outward normals (positive signed volume, normals mirrored) on the left."""
+    import trimesh
+
+    from pipeline.paths import example_robot_data_share
+    from pipeline.viz_model import segment_meshes
+
+    path, _ = mesh_urdf
+    model = pin.buildModelFromUrdf(str(path))
+    share = str(example_robot_data_share().parent)
+    geom = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.VISUAL, package_dirs=[share])
+    assert geom.ngeoms == 1 + 2 * 4
+
+    def placed(name):
+        obj = geom.geometryObjects[geom.getGeometryId(name)]
+        v = np.asarray(obj.geometry.vertices())
+        return v @ obj.placement.rotation.T + obj.placement.translation, np.asarray(obj.meshScale)
+
+    for seg in ("femur", "tibia", "foot"):
+        (right, s_r), (left, s_l) = placed(f"right_{seg}_0"), placed(f"left_{seg}_0")
+        np.testing.assert_allclose(s_l, s_r * [1.0, 1.0, -1.0])
+        np.testing.assert_allclose(left, right @ M, rtol=0, atol=1e-9)
+
+    meshes = segment_meshes(Skeleton.from_urdf(path))
+    for seg in ("femur", "tibia", "foot"):
+        right, left = meshes[f"right_{seg}"], meshes[f"left_{seg}"]
+        np.testing.assert_allclose(left.vertices, right.vertices @ M, atol=1e-9)
+        np.testing.assert_allclose(left.normals, right.normals @ M, atol=1e-9)
+        vol = [
+            trimesh.Trimesh(m.vertices, m.triangles, process=False).volume for m in (right, left)
+        ]
+        assert vol[0] > 1e-4 and vol[1] == pytest.approx(vol[0], rel=1e-9), seg
