@@ -4,25 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import rotation_about_axis, times
 
 from pipeline.errors import InputError
 from pipeline.io import checks
 from pipeline.io.checks import Notes
-from pipeline.rotations import exp3, matrix_from_quat, quat_from_matrix
-
-RATE = 100.0
-
-
-def _t(n: int = 200, rate: float = RATE) -> np.ndarray:
-    return np.arange(n) / rate
-
-
-def _rotation_about_axis(t: np.ndarray, axis=(1.0, 2.0, 2.0), w=1.5) -> np.ndarray:
-    """Quaternions of a constant-rate rotation about a fixed axis (a geodesic: slerp is exact)."""
-    a = np.asarray(axis) / np.linalg.norm(axis)
-    R0 = exp3(np.array([0.3, -0.2, 0.1]))
-    return quat_from_matrix(R0 @ exp3(w * t[:, None] * a))
-
+from pipeline.rotations import matrix_from_quat
 
 # ---------------------------------------------------------------- time stamps
 
@@ -33,7 +20,7 @@ def test_time_ok_and_returned_as_float():
 
 
 def test_repeated_time_stamp_names_first_row():
-    t = _t(10)
+    t = times(10)
     t[4] = t[3]
     with pytest.raises(InputError, match=r"repeated time stamp 0\.03 s at row 4 \(line 11\)") as e:
         checks.check_time(t, file="a.sto", first_line=7)
@@ -41,7 +28,7 @@ def test_repeated_time_stamp_names_first_row():
 
 
 def test_unsorted_time_stamps_name_first_row():
-    t = _t(10)
+    t = times(10)
     t[[5, 6]] = t[[6, 5]]
     with pytest.raises(InputError, match=r"not sorted: 0\.05 s at row 6 comes after 0\.06 s"):
         checks.check_time(t)
@@ -75,13 +62,13 @@ def test_rate_estimate_and_jitter_match_construction():
 
 
 def test_rate_matches_declared():
-    info = checks.check_rate(_t(), 100.0)
+    info = checks.check_rate(times(), 100.0)
     assert info.rate_hz == pytest.approx(100.0)
 
 
 def test_wrong_declared_rate_refused():
     with pytest.raises(InputError, match=r"declared rate 50 Hz but the time stamps give 100 Hz"):
-        checks.check_rate(_t(), 50.0, file="x.sto")
+        checks.check_rate(times(), 50.0, file="x.sto")
 
 
 def test_jitter_and_dropped_samples_noted_not_refused():
@@ -90,7 +77,7 @@ def test_jitter_and_dropped_samples_noted_not_refused():
     notes = Notes()
     checks.check_rate(t, None, notes=notes)
     assert any("irregular sampling" in n for n in notes)
-    t2 = np.delete(_t(), [50, 51])
+    t2 = np.delete(times(), [50, 51])
     notes2 = Notes()
     checks.check_rate(t2, 100.0, notes=notes2)
     assert any("1 interval(s) longer than 1.5 sampling periods" in n for n in notes2)
@@ -108,7 +95,7 @@ def test_mismatched_lengths_and_rates_refused():
 
 
 def test_slightly_non_unit_normalised_and_noted():
-    q = _rotation_about_axis(_t(20))
+    q = rotation_about_axis(times(20))
     notes = Notes()
     out = checks.check_quaternions(q * 1.05, notes=notes, field="pelvis_imu")
     np.testing.assert_allclose(out, q, atol=1e-12)
@@ -116,21 +103,21 @@ def test_slightly_non_unit_normalised_and_noted():
 
 
 def test_tiny_norm_error_normalised_silently():
-    q = _rotation_about_axis(_t(20)) * (1 + 1e-6)
+    q = rotation_about_axis(times(20)) * (1 + 1e-6)
     notes = Notes()
     checks.check_quaternions(q, notes=notes)
     assert len(notes) == 0
 
 
 def test_far_from_unit_refused_with_norm_and_row():
-    q = _rotation_about_axis(_t(20))
+    q = rotation_about_axis(times(20))
     q[7] *= 0.5
     with pytest.raises(InputError, match=r"not unit quaternions \(norm 0\.5 at row 7"):
         checks.check_quaternions(q)
 
 
 def test_zero_and_nonfinite_quaternions_refused():
-    q = _rotation_about_axis(_t(20))
+    q = rotation_about_axis(times(20))
     q[3] = 0
     with pytest.raises(InputError, match="zero quaternion at row 3"):
         checks.check_quaternions(q)
@@ -142,7 +129,7 @@ def test_zero_and_nonfinite_quaternions_refused():
 
 
 def test_hemisphere_flips_fixed_silently():
-    q = _rotation_about_axis(_t(50))
+    q = rotation_about_axis(times(50))
     flipped = q.copy()
     flipped[10:20] *= -1
     flipped[30] *= -1
@@ -166,7 +153,7 @@ def test_positions_in_mm_given_as_m_refused():
 
 
 def test_gyro_in_deg_per_s_refused_rad_per_s_accepted():
-    t = _t(1000)
+    t = times(1000)
     w = np.column_stack([3 * np.sin(2 * np.pi * t), 0.5 * np.cos(3 * t), 0.1 * t])  # rad/s
     checks.check_gyro_units(w)
     with pytest.raises(InputError, match="looks like deg/s"):

@@ -4,28 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import rotation_about_axis, times
 
 from pipeline.errors import InputError
 from pipeline.io.gaps import fill_gaps
 from pipeline.io.notes import Notes
-from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
-
-RATE = 100.0
-
-
-def _t(n: int = 200, rate: float = RATE) -> np.ndarray:
-    return np.arange(n) / rate
-
-
-def _rotation_about_axis(t: np.ndarray, axis=(1.0, 2.0, 2.0), w=1.5) -> np.ndarray:
-    """Quaternions of a constant-rate rotation about a fixed axis (a geodesic: slerp is exact)."""
-    a = np.asarray(axis) / np.linalg.norm(axis)
-    R0 = exp3(np.array([0.3, -0.2, 0.1]))
-    return quat_from_matrix(R0 @ exp3(w * t[:, None] * a))
+from pipeline.rotations import log3, matrix_from_quat
 
 
 def test_short_vector_gap_interpolated_exactly_and_reported():
-    t = _t()
+    t = times()
     truth = np.column_stack([2 * t + 1, -t, np.full_like(t, 3.0)])  # linear: exact
     v = truth.copy()
     v[50:55] = np.nan
@@ -39,7 +27,7 @@ def test_short_vector_gap_interpolated_exactly_and_reported():
 
 
 def test_gap_at_ends_held_and_reported():
-    t = _t(50)
+    t = times(50)
     v = np.arange(50.0)
     v[:3] = np.nan
     v[-2:] = np.nan
@@ -50,7 +38,7 @@ def test_gap_at_ends_held_and_reported():
 
 
 def test_long_gap_refused_with_time_range():
-    t = _t()
+    t = times()
     v = np.ones((200, 3))
     v[100:120] = np.nan  # 0.2 s
     with pytest.raises(
@@ -62,7 +50,7 @@ def test_long_gap_refused_with_time_range():
 
 
 def test_gap_exactly_max_length_is_filled():
-    t = _t()
+    t = times()
     v = np.ones(200)
     v[10:20] = np.nan  # 10 samples = 0.1 s
     assert np.isfinite(fill_gaps(t, v, max_gap_s=0.1)).all()
@@ -70,12 +58,12 @@ def test_gap_exactly_max_length_is_filled():
 
 def test_all_missing_refused():
     with pytest.raises(InputError, match="no finite values"):
-        fill_gaps(_t(10), np.full((10, 3), np.nan))
+        fill_gaps(times(10), np.full((10, 3), np.nan))
 
 
 def test_quaternion_gap_filled_by_slerp_matches_truth():
-    t = _t()
-    truth = _rotation_about_axis(t)
+    t = times()
+    truth = rotation_about_axis(t)
     q = truth.copy()
     q[60:68] = np.nan
     q[68:] *= -1  # neighbour in the other hemisphere: same rotation, slerp must not care
@@ -87,11 +75,11 @@ def test_quaternion_gap_filled_by_slerp_matches_truth():
 
 
 def test_zero_quaternion_next_to_gap_refused():
-    q = _rotation_about_axis(_t(20))
+    q = rotation_about_axis(times(20))
     q[5:7] = np.nan
     q[7] = 0.0
     with pytest.raises(InputError, match="zero quaternion at row 7"):
-        fill_gaps(_t(20), q, kind="quaternion")
+        fill_gaps(times(20), q, kind="quaternion")
 
 
 def angle_between_rotations(q1, q2):

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from _helpers import MIRROR, asymmetric_subject
 
 from pipeline.errors import InputError
 from pipeline.model import (
     Skeleton,
-    SubjectGeometry,
     build_urdf,
     imu_frame_names,
     joint_names,
@@ -20,30 +20,13 @@ from pipeline.rotations import (
     euler_zxy_from_matrix,
     exp3,
     matrix_from_euler_zxy,
-    normalize,
 )
-
-M = np.diag([1.0, 1.0, -1.0])
-
-
-def subject(**over) -> SubjectGeometry:
-    """An asymmetric, non-trivial right-leg geometry (tilted knee axes, off-plane landmarks)."""
-    kw = dict(
-        sex="f",
-        height_m=1.62,
-        femur_landmarks={"EFM": [0.006, -0.372, -0.047], "EFL": [-0.004, -0.386, 0.045]},
-        tibia_landmarks={"MM": [-0.012, -0.356, -0.031], "LM": [0.010, -0.374, 0.033]},
-        knee_axis_femur=normalize(np.array([0.08, -0.12, 1.0])),
-        knee_axis_tibia=normalize(np.array([-0.05, 0.10, 1.0])),
-    )
-    kw.update(over)
-    return SubjectGeometry(**kw)
 
 
 @pytest.fixture(scope="module")
 def models(tmp_path_factory):
     out = tmp_path_factory.mktemp("models")
-    g = subject()
+    g = asymmetric_subject()
     return {
         k: Skeleton.from_urdf(build_urdf(g, out / f"{k}.urdf", knee=k)) for k in ("hinge", "free")
     }
@@ -61,7 +44,7 @@ def q_free(sk: Skeleton, side: str, hip: np.ndarray, knee: np.ndarray, q=None) -
 
 # ---- geometry -----------------------------------------------------------------------------------
 def test_geometry_derived_dimensions_by_hand():
-    g = subject()
+    g = asymmetric_subject()
     np.testing.assert_allclose(g.kjc_femur, [0.001, -0.379, -0.001])
     np.testing.assert_allclose(g.ajc_tibia, [-0.001, -0.365, 0.001])
     assert g.thigh_length == pytest.approx(np.sqrt(0.001**2 + 0.379**2 + 0.001**2))
@@ -75,7 +58,7 @@ def test_geometry_derived_dimensions_by_hand():
 
 
 def test_mirrored_flips_landmark_z_and_keeps_axes_rightward():
-    g = subject()
+    g = asymmetric_subject()
     m = g.mirrored()
     assert m.side == "left" and m.mirrored().side == "right"
     np.testing.assert_allclose(m.femur_landmarks["EFL"], [-0.004, -0.386, -0.045])
@@ -110,12 +93,12 @@ def test_mirrored_flips_landmark_z_and_keeps_axes_rightward():
 )
 def test_implausible_geometry_rejected(over, field):
     with pytest.raises(InputError) as e:
-        subject(**over)
+        asymmetric_subject(**over)
     assert e.value.field == field
 
 
 def test_builder_rejects_bad_options(tmp_path):
-    g = subject()
+    g = asymmetric_subject()
     with pytest.raises(InputError):
         build_urdf(g, tmp_path / "a.urdf", knee="ball")
     with pytest.raises(InputError):
@@ -150,12 +133,14 @@ def test_masses_scale_with_height_cubed_or_body_mass(tmp_path):
         return pin.computeTotalMass(sk.model)
 
     template = 10.65 + 2 * (9.22 + 3.6 + 0.9)  # human.urdf pelvis + legs at 1.80 m / 75 kg
-    assert total_mass(subject()) == pytest.approx(template * (1.62 / 1.80) ** 3)
-    assert total_mass(subject(body_mass_kg=60.0)) == pytest.approx(template * 60.0 / 75.0)
+    assert total_mass(asymmetric_subject()) == pytest.approx(template * (1.62 / 1.80) ** 3)
+    assert total_mass(asymmetric_subject(body_mass_kg=60.0)) == pytest.approx(
+        template * 60.0 / 75.0
+    )
 
 
 def test_imu_frames_default_sites_and_custom_placement(tmp_path):
-    g = subject()
+    g = asymmetric_subject()
     R = exp3(np.array([0.1, -0.2, 0.3]))
     p = np.array([0.01, -0.2, -0.05])
     path = build_urdf(g, tmp_path / "i.urdf", imu_placements={"left_tibia_imu": (R, p)})
@@ -177,7 +162,7 @@ def test_imu_frames_default_sites_and_custom_placement(tmp_path):
 # ---- kinematics ---------------------------------------------------------------------------------
 @pytest.mark.parametrize("knee", ["hinge", "free"])
 def test_landmark_frames_at_geometry_positions(models, knee):
-    sk, g = models[knee], subject()
+    sk, g = models[knee], asymmetric_subject()
     rng = np.random.default_rng(1)
     for side in ("right", "left"):
         gs = g.for_side(side)
@@ -204,7 +189,7 @@ def test_landmark_frames_at_geometry_positions(models, knee):
 
 @pytest.mark.parametrize("knee", ["hinge", "free"])
 def test_segment_dimensions_by_fk_equal_geometry(models, knee):
-    sk, g = models[knee], subject()
+    sk, g = models[knee], asymmetric_subject()
     q = np.random.default_rng(2).uniform(-1.2, 1.2, sk.nq)
     sk.forward(q)
     for side in ("right", "left"):
@@ -222,7 +207,7 @@ def test_segment_dimensions_by_fk_equal_geometry(models, knee):
 @pytest.mark.parametrize("side", ["right", "left"])
 def test_free_knee_reproduces_wang_eq_15_17(models, side):
     """FK of EFL/EFM/LM/MM equals eq 15-17 computed by hand from e_F and e_T (ZXY angles)."""
-    sk, g = models["free"], subject().for_side(side)
+    sk, g = models["free"], asymmetric_subject().for_side(side)
     lat = 1.0 if side == "right" else -1.0
     rng = np.random.default_rng(3)
     for _ in range(20):
@@ -247,7 +232,7 @@ def test_free_knee_reproduces_wang_eq_15_17(models, side):
 
 @pytest.mark.parametrize("side", ["right", "left"])
 def test_hinge_keeps_knee_axis_fixed_in_both_segments(models, side):
-    sk, g = models["hinge"], subject().for_side(side)
+    sk, g = models["hinge"], asymmetric_subject().for_side(side)
     rng = np.random.default_rng(4)
     j = sk.q_index(f"{side}_knee")
     for _ in range(10):
@@ -297,7 +282,7 @@ def test_left_leg_mirrors_right_leg(models, knee):
             )
         for seg in ("femur", "tibia", "foot"):  # rotations: M R M
             R_r, R_l = sk.frame_rotation(f"right_{seg}"), sk.frame_rotation(f"left_{seg}")
-            np.testing.assert_allclose(R_l, M @ R_r @ M, atol=1e-12)
+            np.testing.assert_allclose(R_l, MIRROR @ R_r @ MIRROR, atol=1e-12)
 
 
 def test_isb_signs_of_hip_joints(models):
@@ -322,7 +307,7 @@ def test_isb_signs_of_hip_joints(models):
 
 
 def test_freeflyer_root_moves_everything(tmp_path):
-    path = build_urdf(subject(), tmp_path / "ff.urdf", knee="free", legs=("right",))
+    path = build_urdf(asymmetric_subject(), tmp_path / "ff.urdf", knee="free", legs=("right",))
     sk = Skeleton.from_urdf(path, root="freeflyer")
     assert sk.nq == 7 + 8 and sk.legs == ("right",) and sk.q_slice("root_joint") == slice(0, 7)
     q = sk.neutral()
@@ -330,7 +315,7 @@ def test_freeflyer_root_moves_everything(tmp_path):
     R = exp3(np.array([0.0, 0.0, 0.5]))
     q[3:7] = pin.Quaternion(R).coeffs()  # x, y, z, w
     sk.forward(q)
-    g = subject()
+    g = asymmetric_subject()
     np.testing.assert_allclose(
         sk.frame_position("right_EFM"), [1, 2, 3] + R @ (g.right_hip + g.femur_landmarks["EFM"])
     )

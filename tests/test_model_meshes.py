@@ -6,25 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yourdfpy
+from _helpers import MIRROR, asymmetric_subject
 
-from pipeline.model import Skeleton, SubjectGeometry, build_urdf, resolve_package_uri
-from pipeline.rotations import normalize
-
-M = np.diag([1.0, 1.0, -1.0])
-
-
-def subject(**over) -> SubjectGeometry:
-    """An asymmetric, non-trivial right-leg geometry (tilted knee axes, off-plane landmarks)."""
-    kw = dict(
-        sex="f",
-        height_m=1.62,
-        femur_landmarks={"EFM": [0.006, -0.372, -0.047], "EFL": [-0.004, -0.386, 0.045]},
-        tibia_landmarks={"MM": [-0.012, -0.356, -0.031], "LM": [0.010, -0.374, 0.033]},
-        knee_axis_femur=normalize(np.array([0.08, -0.12, 1.0])),
-        knee_axis_tibia=normalize(np.array([-0.05, 0.10, 1.0])),
-    )
-    kw.update(over)
-    return SubjectGeometry(**kw)
+from pipeline.model import Skeleton, build_urdf, resolve_package_uri
 
 
 def test_resolve_package_uri_is_reexported_and_maps_to_the_share_folder():
@@ -39,7 +23,7 @@ def test_resolve_package_uri_is_reexported_and_maps_to_the_share_folder():
 
 
 def test_mesh_references_resolve_and_follow_template_style(tmp_path):
-    path = build_urdf(subject(), tmp_path / "m.urdf", knee="hinge")
+    path = build_urdf(asymmetric_subject(), tmp_path / "m.urdf", knee="hinge")
     urdf = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
     meshes = [v.geometry.mesh for link in urdf.robot.links for v in link.visuals]
     assert len(meshes) == 1 + 2 * 4  # pelvis + (thigh, shank, knee, foot) per leg
@@ -70,7 +54,9 @@ def _visual_vertices(urdf: yourdfpy.URDF, link: str) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def mesh_urdf(tmp_path_factory):
-    path = build_urdf(subject(), tmp_path_factory.mktemp("meshes") / "m.urdf", knee="free")
+    path = build_urdf(
+        asymmetric_subject(), tmp_path_factory.mktemp("meshes") / "m.urdf", knee="free"
+    )
     return path, yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
 
 
@@ -81,7 +67,7 @@ def test_left_leg_meshes_are_mirror_images_of_right_ones(mesh_urdf):
         right = _visual_vertices(urdf, f"right_{seg}")
         left = _visual_vertices(urdf, f"left_{seg}")
         assert np.ptp(right[:, 2]) > 0.05  # a real mesh, several cm wide
-        np.testing.assert_allclose(left, right @ M, rtol=0, atol=1e-9, err_msg=seg)
+        np.testing.assert_allclose(left, right @ MIRROR, rtol=0, atol=1e-9, err_msg=seg)
 
 
 def test_femur_mesh_shaft_lies_lateral_of_its_proximal_cap_on_both_legs(mesh_urdf):
@@ -134,13 +120,13 @@ def test_mirrored_meshes_load_in_pinocchio_and_render_outward(mesh_urdf):
     for seg in ("femur", "tibia", "foot"):
         (right, s_r), (left, s_l) = placed(f"right_{seg}_0"), placed(f"left_{seg}_0")
         np.testing.assert_allclose(s_l, s_r * [1.0, 1.0, -1.0])
-        np.testing.assert_allclose(left, right @ M, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(left, right @ MIRROR, rtol=0, atol=1e-9)
 
     meshes = segment_meshes(Skeleton.from_urdf(path))
     for seg in ("femur", "tibia", "foot"):
         right, left = meshes[f"right_{seg}"], meshes[f"left_{seg}"]
-        np.testing.assert_allclose(left.vertices, right.vertices @ M, atol=1e-9)
-        np.testing.assert_allclose(left.normals, right.normals @ M, atol=1e-9)
+        np.testing.assert_allclose(left.vertices, right.vertices @ MIRROR, atol=1e-9)
+        np.testing.assert_allclose(left.normals, right.normals @ MIRROR, atol=1e-9)
         vol = [
             trimesh.Trimesh(m.vertices, m.triangles, process=False).volume for m in (right, left)
         ]

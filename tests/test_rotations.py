@@ -53,8 +53,9 @@ def test_project_to_so3():
     R = rot.exp3(rng.normal(size=(4, 3)))
     noisy = R + 1e-3 * rng.normal(size=R.shape)
     P = rot.project_to_so3(noisy)
-    np.testing.assert_allclose(np.einsum("nji,njk->nik", P, P), np.broadcast_to(np.eye(3), P.shape),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        np.einsum("nji,njk->nik", P, P), np.broadcast_to(np.eye(3), P.shape), atol=1e-12
+    )
     np.testing.assert_allclose(np.linalg.det(P), 1.0)
     assert np.max(np.abs(P - R)) < 5e-3
 

@@ -6,37 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import blueprint_views, read_blueprint
 
 from pipeline.errors import InputError
 from pipeline.viz_layout import default_blueprint, up_axis_index
 
 
 def _saved(blueprint, path: Path) -> dict[str, dict[str, list]]:
-    """Blueprint entity path -> component name -> first row's value (as the viewer reads it)."""
-    from rerun.chunk import RrdReader
-
+    """Save ``blueprint`` and read it back as the viewer does."""
     blueprint.save("test_viz_layout", path)
-    reader = RrdReader(path)
-    (store,) = reader.blueprints()
-    out: dict[str, dict[str, list]] = {}
-    for c in reader.stream(store=store).to_chunks():
-        rb = c.to_record_batch()
-        row = {n: rb.column(n).to_pylist()[0] for n in rb.schema.names if ":" in n}
-        out.setdefault(c.entity_path, {}).update(row)
-    return out
-
-
-def _views(bp: dict[str, dict[str, list]]) -> dict[str, tuple[str, str, str]]:
-    """View title -> (class, origin, blueprint entity path)."""
-    return {
-        v["ViewBlueprint:display_name"][0]: (
-            v["ViewBlueprint:class_identifier"][0],
-            v["ViewBlueprint:space_origin"][0],
-            path,
-        )
-        for path, v in bp.items()
-        if "ViewBlueprint:class_identifier" in v
-    }
+    return read_blueprint(path)
 
 
 def _containers(bp: dict[str, dict[str, list]]) -> dict[str, dict[str, list]]:
@@ -56,7 +35,7 @@ def test_up_axis_index():
 def test_3d_view_beside_a_two_column_grid_of_plots(tmp_path):
     plots = [("a", "/plots/a"), ("b", ["/plots/x", "/plots/y"]), ("c", "/plots/c")]
     bp = _saved(default_blueprint(plots, "z"), tmp_path / "bp.rbl")
-    views = _views(bp)
+    views = blueprint_views(bp)
     assert {k: v[:2] for k, v in views.items()} == {
         "3D": ("3D", "/world"),
         "a": ("TimeSeries", "/plots/a"),
@@ -80,7 +59,7 @@ def test_single_plot_one_column_and_no_plot_only_3d(tmp_path):
     (grid,) = [v for v in _containers(bp).values() if "ContainerBlueprint:grid_columns" in v]
     assert grid["ContainerBlueprint:grid_columns"] == [1]
     bp = _saved(default_blueprint([], "z"), tmp_path / "none.rbl")
-    assert {k: v[:2] for k, v in _views(bp).items()} == {"3D": ("3D", "/world")}
+    assert {k: v[:2] for k, v in blueprint_views(bp).items()} == {"3D": ("3D", "/world")}
     assert not any("ContainerBlueprint:col_shares" in v for v in bp.values())
 
 
@@ -92,7 +71,7 @@ def test_orbital_camera_and_ground_grid_follow_up_axis(tmp_path, up_axis):
     eye, target = np.array([1.5, 0.4, 1.2]), np.array([0.0, -0.5, 0.1])
     blueprint = default_blueprint([], up_axis, camera=(eye, target), ground=-0.9)
     bp = _saved(blueprint, tmp_path / "cam.rbl")
-    path3d = _views(bp)["3D"][2]
+    path3d = blueprint_views(bp)["3D"][2]
     controls = bp[f"{path3d}/EyeControls3D"]
     assert controls["EyeControls3D:kind"] == [rrb.Eye3DKind.Orbital.value]
     np.testing.assert_allclose(controls["EyeControls3D:position"][0], eye, rtol=1e-6)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import blueprint_views, read_blueprint
 
 from pipeline.errors import InputError
 from pipeline.landmarks import joint_angles
@@ -228,37 +229,10 @@ def test_bad_inputs_are_input_errors(motion, tmp_path):
     assert not (tmp_path / "c.rrd").exists()
 
 
-def _blueprint(path: Path) -> dict[str, dict[str, list]]:
-    """The recording's default blueprint: entity path -> component name -> first row's value."""
-    from rerun.chunk import RrdReader
-
-    reader = RrdReader(path)
-    (store,) = reader.blueprints()
-    out: dict[str, dict[str, list]] = {}
-    for c in reader.stream(store=store).to_chunks():
-        rb = c.to_record_batch()
-        row = {n: rb.column(n).to_pylist()[0] for n in rb.schema.names}
-        out.setdefault(c.entity_path, {}).update(row)
-    return out
-
-
-def _views(bp: dict[str, dict[str, list]]) -> dict[str, tuple[str, str, str]]:
-    """View title -> (class, origin, blueprint entity path)."""
-    return {
-        v["ViewBlueprint:display_name"][0]: (
-            v["ViewBlueprint:class_identifier"][0],
-            v["ViewBlueprint:space_origin"][0],
-            path,
-        )
-        for path, v in bp.items()
-        if "ViewBlueprint:class_identifier" in v
-    }
-
-
 def test_default_layout_3d_view_and_one_plot_per_joint(motion):
     path, sk, _, Q, ok, _ = motion
-    bp = _blueprint(path)
-    views = _views(bp)
+    bp = read_blueprint(path)
+    views = blueprint_views(bp)
     assert views["3D"][:2] == ("3D", "/world")
     for side in ("right", "left"):
         for joint in ("hip", "knee"):
@@ -306,7 +280,7 @@ def test_recording_opens_playing_from_the_start_in_a_loop(motion):
     """The time panel of the default blueprint: 'time' timeline, playing, looping over all."""
     from rerun.blueprint.components import LoopMode, PlayState
 
-    panel = _blueprint(motion[0])["/time_panel"]
+    panel = read_blueprint(motion[0])["/time_panel"]
     assert panel["TimePanelBlueprint:timeline"] == ["time"]
     assert panel["TimePanelBlueprint:play_state"] == [PlayState.Playing.value]
     assert panel["TimePanelBlueprint:loop_mode"] == [LoopMode.All.value]

@@ -1,0 +1,66 @@
+"""Helpers shared by several test files (not collected: no ``test_`` prefix)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.model import SubjectGeometry
+from pipeline.rotations import exp3, normalize, quat_from_matrix
+
+#: Reflection through the sagittal plane (z -> -z), right leg <-> left leg.
+MIRROR = np.diag([1.0, 1.0, -1.0])
+RATE = 100.0
+
+
+def asymmetric_subject(**over: object) -> SubjectGeometry:
+    """An asymmetric, non-trivial right-leg geometry (tilted knee axes, off-plane landmarks)."""
+    kw = dict(
+        sex="f",
+        height_m=1.62,
+        femur_landmarks={"EFM": [0.006, -0.372, -0.047], "EFL": [-0.004, -0.386, 0.045]},
+        tibia_landmarks={"MM": [-0.012, -0.356, -0.031], "LM": [0.010, -0.374, 0.033]},
+        knee_axis_femur=normalize(np.array([0.08, -0.12, 1.0])),
+        knee_axis_tibia=normalize(np.array([-0.05, 0.10, 1.0])),
+    )
+    kw.update(over)
+    return SubjectGeometry(**kw)
+
+
+def times(n: int = 200, rate: float = RATE) -> np.ndarray:
+    return np.arange(n) / rate
+
+
+def rotation_about_axis(t: np.ndarray, axis=(1.0, 2.0, 2.0), w: float = 1.5) -> np.ndarray:
+    """Quaternions of a constant-rate rotation about a fixed axis (a geodesic: slerp is exact)."""
+    a = np.asarray(axis) / np.linalg.norm(axis)
+    R0 = exp3(np.array([0.3, -0.2, 0.1]))
+    return quat_from_matrix(R0 @ exp3(w * t[:, None] * a))
+
+
+def read_blueprint(path: str | Path) -> dict[str, dict[str, list]]:
+    """A file's (default) blueprint: entity path -> ``Archetype:field`` -> first row's value."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    out: dict[str, dict[str, list]] = {}
+    for c in reader.stream(store=store).to_chunks():
+        rb = c.to_record_batch()
+        row = {n: rb.column(n).to_pylist()[0] for n in rb.schema.names if ":" in n}
+        out.setdefault(c.entity_path, {}).update(row)
+    return out
+
+
+def blueprint_views(bp: dict[str, dict[str, list]]) -> dict[str, tuple[str, str, str]]:
+    """View title -> (class, origin, blueprint entity path)."""
+    return {
+        v["ViewBlueprint:display_name"][0]: (
+            v["ViewBlueprint:class_identifier"][0],
+            v["ViewBlueprint:space_origin"][0],
+            path,
+        )
+        for path, v in bp.items()
+        if "ViewBlueprint:class_identifier" in v
+    }
