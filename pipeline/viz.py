@@ -210,6 +210,22 @@ def _log_error_arrows(
             _send(rec, entity, t, ok, cols)
 
 
+def _log_landmarks(
+    rec,
+    t: np.ndarray,
+    landmarks: Mapping[str, np.ndarray],
+    reference: Mapping[str, np.ndarray] | None,
+    error_arrows: bool,
+    radius: float,
+) -> None:
+    """Estimated landmarks, optional reference landmarks (e.g. optical) and the error arrows."""
+    est = _log_points(rec, t, "landmarks", landmarks, IMC_COLOR, radius)
+    if reference:
+        ref = _log_points(rec, t, "reference", reference, REFERENCE_COLOR, radius)
+        if error_arrows:
+            _log_error_arrows(rec, t, est, ref)
+
+
 def _log_poses(
     rec,
     t: np.ndarray,
@@ -275,13 +291,7 @@ def log_trial(
     plots = [("joint angles (deg)", "/plots")] if joint_angles else []
     blueprint = _blueprint(plots, up_axis)
     with _recording(path, app_id, recording_name, up_axis, blueprint) as rec:
-        est = _log_points(rec, t, "landmarks", landmarks, IMC_COLOR, point_radius)
-        if reference_landmarks:
-            ref = _log_points(
-                rec, t, "reference", reference_landmarks, REFERENCE_COLOR, point_radius
-            )
-            if error_arrows:
-                _log_error_arrows(rec, t, est, ref)
+        _log_landmarks(rec, t, landmarks, reference_landmarks, error_arrows, point_radius)
         _log_poses(rec, t, "world/segments", segment_poses or {}, axis_length)
         angles = {f"plots/{name}": q for name, q in (joint_angles or {}).items()}
         _log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))

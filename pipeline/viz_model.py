@@ -44,12 +44,9 @@ from pipeline.model.builder import resolve_package_uri
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import matrix_from_euler_zyx
 from pipeline.viz import (
-    IMC_COLOR,
-    REFERENCE_COLOR,
     _check_series,
     _check_time,
-    _log_error_arrows,
-    _log_points,
+    _log_landmarks,
     _log_poses,
     _log_scalars,
     _recording,
@@ -303,13 +300,7 @@ def log_motion(
                 ),
                 static=True,
             )
-        est = _log_points(rec, t, "landmarks", points, IMC_COLOR, point_radius)
-        if reference_landmarks:
-            ref = _log_points(
-                rec, t, "reference", reference_landmarks, REFERENCE_COLOR, point_radius
-            )
-            if error_arrows:
-                _log_error_arrows(rec, t, est, ref)
+        _log_landmarks(rec, t, points, reference_landmarks, error_arrows, point_radius)
         _log_poses(rec, t, "world/imus", {m: traj[m] for m in imu_names}, imu_axis_length)
         for side in bone_legs:
             strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
