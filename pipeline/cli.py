@@ -141,7 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _measures(args):
-    from pipeline.anthropometry import Measures
+    from pipeline.model.anthropometry import Measures
 
     return Measures(
         sex=args.sex,
@@ -180,7 +180,7 @@ def _cmd_scale(args) -> int:
 
 
 def _cmd_ik(args) -> int:
-    from pipeline.opensense import run_ik_from_sto
+    from pipeline.process import run_ik_from_sto
 
     summary = run_ik_from_sto(
         args.orientations,
@@ -196,14 +196,14 @@ def _cmd_ik(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
-    from pipeline.workflows import run_calibration
+    from pipeline.commands.workflows import run_calibration
 
     print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json))
     return 0
 
 
 def _cmd_simulate(args) -> int:
-    from pipeline.workflows import run_simulation
+    from pipeline.commands.workflows import run_simulation
 
     print(run_simulation(args.out, args.motion, args.duration_s, args.seed))
     return 0
@@ -217,14 +217,14 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_demo(args) -> int:
-    from pipeline.demo import run_demo
+    from pipeline.commands.demo import run_demo
 
     print(run_demo(args.out, seed=args.seed))
     return 0
 
 
 def _cmd_view(args) -> int:
-    from pipeline.viz import view
+    from pipeline.viz.recording import view
 
     if not args.rrd.exists():
         raise InputError("no such recording", file=args.rrd)

@@ -1,4 +1,4 @@
-"""Benchmark pipeline.ik.solve_ik on a one-leg model: frames/s, single-threaded.
+"""Benchmark pipeline.ik.solver.solve_ik on a one-leg model: frames/s, single-threaded.
 
 Targets: a smooth 3,000-frame (30 s at 100 Hz) gait-like trial (hip flexion/adduction/rotation,
 knee flexion with small off-axis knee rotations, ankle) generated on a free-knee model, with
@@ -23,7 +23,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from pipeline.ik import frame_rotations, solve_ik  # noqa: E402
+from pipeline.ik.solver import frame_rotations, solve_ik  # noqa: E402
 from pipeline.rotations import exp3, normalize  # noqa: E402
 
 # OpenSense on a lower-limb model of the same dimensions, two legs + pelvis (7 sensors), measured
@@ -151,7 +151,7 @@ def main() -> None:
         )
     # the same trial on example-robot-data's full human.urdf (36 DoF; right leg targets)
     try:
-        from pipeline.paths import human_urdf
+        from pipeline.model.resources import human_urdf
 
         human = pin.buildModelFromUrdf(str(human_urdf()))
         names = ("right_upperleg", "right_lowerleg", "right_foot")

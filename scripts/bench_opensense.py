@@ -21,11 +21,11 @@ For each OpenSim orientation file (``shared/data/opensim``):
    When another pelvis sensor axis points nearer our anatomical forward direction than ``-z``
    (on both files here: ``+z``, 174 deg away from ``-z``), OpenSense runs a second time with that
    ``base_heading_axis`` so that the anatomical variants are compared with a like-for-like heading.
-3. **Ours**: :func:`pipeline.opensense.run_ik` with the same ``sensor_to_model``, heading
+3. **Ours**: :func:`pipeline.process.run_ik` with the same ``sensor_to_model``, heading
    ``anatomical`` (our default) and ``pelvis_imu:-z`` (OpenSense's convention), knee ``hinge``
    (1 DOF, our population knee axis, which is tilted ~14 deg from the femoral z axis, unlike
    the OpenSim pin) and ``free``. IK time: ``run.seconds_ik`` (wall) and the CPU time of the
-   :func:`pipeline.ik.solve_ik` call (wrapped here to read ``time.process_time``).
+   :func:`pipeline.ik.solver.solve_ik` call (wrapped here to read ``time.process_time``).
 4. **Agreement** of the joint angles (degrees) with OpenSense's ``.mot`` per coordinate: RMS
    difference and Pearson r; ranges of hip flexion and knee angle; orientation residual RMS
    (OpenSense: ``*_orientationErrors.sto``; ours: ``run.residual_rms``).
@@ -219,8 +219,8 @@ def run_opensense(osim, model, sto: Path, rot, work: Path, heading_axis: str = "
 # ---- ours ----------------------------------------------------------------------------------------
 @contextlib.contextmanager
 def timed_solve_ik(record: list):
-    """Wrap pipeline.ik.solve_ik (imported by run_ik at call time) to record its CPU time."""
-    import pipeline.ik as ikmod
+    """Wrap pipeline.ik.solver.solve_ik (imported by run_ik at call time) to record its CPU time."""
+    import pipeline.ik.solver as ikmod
 
     original = ikmod.solve_ik
 
@@ -239,8 +239,8 @@ def timed_solve_ik(record: list):
 
 
 def run_ours(trial, rot, heading: str, knee: str, work: Path) -> dict:
-    from pipeline.anthropometry import Measures
-    from pipeline.opensense import mot_columns, run_ik
+    from pipeline.model.anthropometry import Measures
+    from pipeline.process import mot_columns, run_ik
 
     cpu: list[float] = []
     t0 = time.perf_counter()
@@ -410,7 +410,7 @@ def main() -> int:
         return 0
     with contextlib.suppress(Exception):
         osim.Logger.setLevelString("Error")
-    from pipeline.anthropometry import Measures
+    from pipeline.model.anthropometry import Measures
     from pipeline.model.scaling import geometry_from_measures
 
     files = [f for f in FILES if args.only in (None, f)]

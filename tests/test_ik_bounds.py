@@ -1,4 +1,4 @@
-"""Box-constrained Gauss-Newton step for joint limits (pipeline.ik_bounds).
+"""Box-constrained Gauss-Newton step for joint limits (pipeline.ik.bounds).
 
 The box QP ``argmin 1/2 d^T H d + g^T d, lo <= d <= hi`` is checked on 2-D cases solved by hand
 (interior optimum, one face, a corner, a bound the unconstrained step violates but the optimum does
@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 from scipy.optimize import lsq_linear
 
-from pipeline.ik_bounds import box_margin, box_step, joint_box
+from pipeline.ik.bounds import box_margin, box_step, joint_box
 
 H2 = np.array([[2.0, 0.5], [0.5, 1.0]])  # det 1.75, H^-1 = [[1, -0.5], [-0.5, 2]] / 1.75
 

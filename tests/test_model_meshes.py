@@ -13,7 +13,7 @@ from pipeline.model import Skeleton, build_urdf, resolve_package_uri
 
 def test_resolve_package_uri_is_reexported_and_maps_to_the_share_folder():
     from pipeline.model import builder, meshes
-    from pipeline.paths import example_robot_data_share
+    from pipeline.model.resources import example_robot_data_share
 
     assert builder.resolve_package_uri is meshes.resolve_package_uri
     uri = "package://example-robot-data/robots/human_description/meshes/foot_mesh.STL"
@@ -103,8 +103,8 @@ def test_mirrored_meshes_load_in_pinocchio_and_render_outward(mesh_urdf):
     merged meshes keep outward normals (positive signed volume, normals mirrored) on the left."""
     import trimesh
 
-    from pipeline.paths import example_robot_data_share
-    from pipeline.viz_model import segment_meshes
+    from pipeline.model.resources import example_robot_data_share
+    from pipeline.viz.model import segment_meshes
 
     path, _ = mesh_urdf
     model = pin.buildModelFromUrdf(str(path))

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.reproduce.wang2023_xsens import scaling_differences, summarise_differences
-from pipeline.xsens_mvn import LANDMARKS
+from pipeline.reproduce.wang2023.xsens import scaling_differences, summarise_differences
+from pipeline.reproduce.wang2023.xsens_mvn import LANDMARKS
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "wang2023"
 
@@ -45,7 +45,7 @@ def test_table2_differences_by_hand():
 def stage():
     if not (DATA / "xsens").is_dir() or not (DATA / "raw").is_dir():
         pytest.skip(f"dataset not found at {DATA}")
-    from pipeline.reproduce.wang2023_xsens import run_xsens_stage
+    from pipeline.reproduce.wang2023.xsens import run_xsens_stage
 
     return run_xsens_stage(DATA), None  # timing lives in the report, not in a test
 
@@ -115,7 +115,7 @@ def test_table6_errors_are_finite_and_plausible(stage):
 def test_mvn_export_and_reference_extraction_agree(stage):
     """The MVN c3d centred on MVN's own per-sample hip gives the same errors as the reference's
     rawData.mat extraction (a lab-fixed sphere-fit hip would differ by ~10 mm here)."""
-    from pipeline.xsens_mvn import compare_trial
+    from pipeline.reproduce.wang2023.xsens_mvn import compare_trial
 
     st, _ = stage
     c3d = next(t for t in st.trials if (t.subject, t.trial) == ("Subject2", "HipF1"))
@@ -128,7 +128,7 @@ def test_mvn_export_and_reference_extraction_agree(stage):
 
 @pytest.mark.dataset
 def test_report_and_tables(stage):
-    from pipeline.reproduce.wang2023_xsens import xsens_report_section, xsens_tables
+    from pipeline.reproduce.wang2023.xsens import xsens_report_section, xsens_tables
 
     st, _ = stage
     text = xsens_report_section(st)

@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pipeline.analysis.landmarks import frame_trajectories, landmark_trajectories
 from pipeline.calibration.ipopt import calibrate_ipopt
 from pipeline.calibration.joint_constraints import joint_data, project_hinge_positions
 from pipeline.errors import InputError
-from pipeline.landmarks import frame_trajectories, landmark_trajectories
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import angle_between, log3, matrix_from_quat
-from pipeline.simulate_model import (
+from pipeline.simulate.model import (
     GRAVITY,
     MOTIONS,
     SensorNoise,
@@ -220,8 +220,8 @@ def test_bad_inputs(skeleton):
 
 
 def test_motions_are_still_importable_from_simulate_model():
-    # the motion definitions moved to pipeline.simulate_motions; the old import path still works
-    from pipeline import simulate_motions
+    # the motion definitions moved to pipeline.simulate.motions; the old import path still works
+    from pipeline.simulate import motions as simulate_motions
 
     assert joint_trajectories is simulate_motions.joint_trajectories
     assert MOTIONS is simulate_motions.MOTIONS

@@ -1,4 +1,4 @@
-"""Motions of the simulator (pipeline.simulate_motions): q, v, a exact and consistent, limit-safe
+"""Motions of the simulator (pipeline.simulate.motions): q, v, a exact and consistent, limit-safe
 for every motion and seed, deterministic, and bad requests refused."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat
-from pipeline.simulate_motions import MOTIONS, joint_trajectories
+from pipeline.simulate.motions import MOTIONS, joint_trajectories
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +96,7 @@ def test_seeded_alias_and_refusals(skeleton):
 def test_gait_legs_move_in_antiphase():
     """One stride rate per trial, the left leg half a stride after the right."""
     from pipeline.model import Skeleton, SubjectGeometry
-    from pipeline.simulate_motions import joint_trajectories
+    from pipeline.simulate.motions import joint_trajectories
 
     sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="hinge", root="freeflyer")
     t = np.arange(1500) / 100.0

@@ -1,4 +1,4 @@
-"""Tests of pipeline.viz_layout: the default blueprint, saved to a file and read back."""
+"""Tests of pipeline.viz.layout: the default blueprint, saved to a file and read back."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from _helpers import blueprint_views, read_blueprint
 
 from pipeline.errors import InputError
-from pipeline.viz_layout import default_blueprint, up_axis_index
+from pipeline.viz.layout import default_blueprint, up_axis_index
 
 
 def _saved(blueprint, path: Path) -> dict[str, dict[str, list]]:

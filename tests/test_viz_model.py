@@ -1,4 +1,4 @@
-"""Tests of pipeline.viz_model: a scaled model's motion written to .rrd and read back."""
+"""Tests of pipeline.viz.model: a scaled model's motion written to .rrd and read back."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from _helpers import blueprint_views, read_blueprint
 
+from pipeline.analysis.landmarks import joint_angles
 from pipeline.errors import InputError
-from pipeline.landmarks import joint_angles
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat, rot_z
-from pipeline.viz import entity_row_counts, log_motion, read_entities
-from pipeline.viz_model import ANGLE_COLORS, segment_meshes
+from pipeline.viz.model import ANGLE_COLORS, segment_meshes
+from pipeline.viz.recording import entity_row_counts, log_motion, read_entities
 
 N = 3000
 NAN_ROW = 17  # one configuration with a NaN: not logged

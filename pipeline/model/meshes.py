@@ -23,7 +23,7 @@ import numpy as np
 import yourdfpy as ud
 
 from pipeline.model.geometry import SubjectGeometry, mirror_point
-from pipeline.paths import example_robot_data_share
+from pipeline.model.resources import example_robot_data_share
 
 __all__ = ["leg_visuals", "materials", "pelvis_visuals", "resolve_package_uri"]
 

@@ -1,7 +1,7 @@
 """From a subject's measures to a scaled model: Wang eq 14 (Table I) + the population knee AoR.
 
 ``scale_model`` is what ``pipeline scale`` runs: the regression equations give the landmark
-positions in the segment frames (:func:`pipeline.anthropometry.predict_landmarks`), the knee AoR
+positions in the segment frames (:func:`pipeline.model.anthropometry.predict_landmarks`), the knee AoR
 defaults to the sex-specific population mean computed from the Wang 2023 dataset
 (``models/wang2023_knee_aor.csv``), and :func:`pipeline.model.builder.build_urdf` writes the URDF,
 which is then the single source of truth for every dimension downstream.
@@ -16,11 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.anthropometry import LandmarkPositions, Measures, RegressionTable, predict_landmarks
 from pipeline.errors import InputError
+from pipeline.model.anthropometry import (
+    LandmarkPositions,
+    Measures,
+    RegressionTable,
+    predict_landmarks,
+)
 from pipeline.model.builder import build_urdf
 from pipeline.model.geometry import SubjectGeometry
-from pipeline.paths import models_file
+from pipeline.model.resources import models_file
 from pipeline.rotations import normalize
 
 KNEE_AOR_FILE = "wang2023_knee_aor.csv"

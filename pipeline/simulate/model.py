@@ -1,0 +1,313 @@
+"""Simulate a trial on a scaled model with Pinocchio: joint trajectories, IMU signals, landmarks.
+
+The motions - exact joint trajectories ``q``, ``v``, ``a`` on a free-flyer root, sums of
+sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'`` alias ``'rich'``,
+``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``); :data:`MOTIONS` and
+:func:`joint_trajectories` are re-exported here. World frame: z up, gravity
+``g = (0, 0, -9.81)``; segment frames ISB (x anterior, y proximal, z right).
+
+Every angle stays inside the model's joint limits (checked). Signals at each sensor, from
+``pin.forwardKinematics(model, data, q, v, a)``:
+
+* gyroscope ``gyr = omega``: the angular velocity of the sensor frame in the sensor frame
+  (``pin.getFrameVelocity``, LOCAL);
+* accelerometer ``acc = R^T (p_ddot - g)`` (specific force, reads ``+9.81`` up at rest), with
+  ``R^T p_ddot`` the classical acceleration of the sensor origin in the sensor frame
+  (``pin.getFrameClassicalAcceleration``, LOCAL).
+
+The *true* sensor is the model's IMU frame (``<segment>_imu``) rotated by a random
+sensor-to-segment misalignment and shifted by a random mounting offset: ``R_GS = R_imu M``,
+``p_GS = p_imu + d`` (segment frame) - the truth a calibration has to recover. Then white noise,
+a constant gyro bias per sensor, optional orientation noise and OMC-like landmark noise are added,
+all from ``np.random.SeedSequence(seed)``: one stream for the motion, one for the placements
+(so two motions with one seed share the sensor placements), one for the noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from pipeline.errors import InputError
+from pipeline.io.imu_csv import ImuRecording
+from pipeline.model.geometry import SubjectGeometry
+from pipeline.model.skeleton import Skeleton
+from pipeline.rotations import exp3, normalize, quat_from_matrix
+from pipeline.simulate.motions import MOTIONS, _motion_name, joint_trajectories
+
+__all__ = [
+    "GRAVITY",
+    "MOTIONS",
+    "SensorNoise",
+    "SimulatedImu",
+    "SimulatedTrial",
+    "joint_trajectories",
+    "knee_axis_in_segments",
+    "simulate_trial",
+]
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+_SEGMENT_OF_IMU = {"pelvis_imu": "pelvis"}
+_JOINT_SEGMENTS = {"hip": ("pelvis", "femur", "HJC"), "knee": ("femur", "tibia", "KJC")}
+_JOINT_SEGMENTS["ankle"] = ("tibia", "foot", "AJC")
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """White noise SDs (``gyro_sd`` rad/s, ``acc_sd`` m/s^2), constant gyro bias SD per axis
+    (``gyro_bias_sd`` rad/s), orientation noise (``orientation_sd_deg`` per axis per sample) and
+    landmark (marker) noise (``landmark_sd_m``). Defaults: consumer MEMS IMUs at 100 Hz, an OMC
+    system's sub-millimetre noise."""
+
+    gyro_sd: float = 0.01
+    acc_sd: float = 0.05
+    gyro_bias_sd: float = 0.005
+    orientation_sd_deg: float = 0.0
+    landmark_sd_m: float = 0.0005
+
+    @classmethod
+    def none(cls) -> SensorNoise:
+        return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class SimulatedImu:
+    """One simulated sensor. ``recording``: noisy ``gyr``/``acc`` and the orientation ``quat``
+    (sensor -> world, wxyz, + orientation noise). ``rotation`` (N,3,3) / ``position`` (N,3): true
+    world pose of the sensor. ``R_segment``/``p_segment``: true sensor placement in its segment
+    frame; ``misalignment`` (sensor axes in the model's IMU frame) and ``offset_m`` (segment frame)
+    are its deviation from the model's IMU frame ``frame``."""
+
+    frame: str
+    segment: str
+    recording: ImuRecording
+    rotation: np.ndarray
+    position: np.ndarray
+    R_segment: np.ndarray
+    p_segment: np.ndarray
+    misalignment: np.ndarray
+    offset_m: np.ndarray
+    gyro_bias: np.ndarray
+
+
+@dataclass(frozen=True)
+class SimulatedTrial:
+    """A simulated trial and its truth.
+
+    ``q``/``v``/``a``: model configuration, velocity, acceleration (N, nq/nv). ``imus``: IMU frame
+    name -> :class:`SimulatedImu`. ``knee_axis``: IMU frame -> unit knee axis (pointing right) in
+    that sensor's frame, for the thigh and shank sensors of each leg (hinge knee only).
+    ``joint_centres``: ``'<side>_{hip,knee,ankle}'`` -> {IMU frame -> centre in that sensor's
+    frame (sensor -> joint, m)}. ``landmarks``: landmark frame -> (N,3) world positions + noise.
+    """
+
+    time: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    motion: str
+    seed: int
+    imus: dict[str, SimulatedImu]
+    knee_axis: dict[str, np.ndarray]
+    joint_centres: dict[str, dict[str, np.ndarray]]
+    landmarks: dict[str, np.ndarray]
+    noise: SensorNoise
+    skeleton: Skeleton = field(repr=False)
+    gravity: np.ndarray = field(default_factory=lambda: GRAVITY.copy())
+
+    @property
+    def urdf_path(self) -> Path:
+        return self.skeleton.urdf_path
+
+    def hinge_truth(self, side: str = "right") -> dict[str, np.ndarray]:
+        """Knee truth for a thigh (1) / shank (2) sensor pair, in the calibration's terms:
+        ``axis_1``, ``axis_2`` (same physical direction) and ``position_1_m``, ``position_2_m``."""
+        s1, s2 = f"{side}_femur_imu", f"{side}_tibia_imu"
+        if s1 not in self.knee_axis:
+            raise InputError(f"no hinge knee truth for side {side!r}", field="side")
+        c = self.joint_centres[f"{side}_knee"]
+        return {
+            "axis_1": self.knee_axis[s1],
+            "axis_2": self.knee_axis[s2],
+            "position_1_m": c[s1],
+            "position_2_m": c[s2],
+        }
+
+
+# ------------------------------------------------------------------------------------- truth
+
+
+def knee_axis_in_segments(skeleton: Skeleton, side: str = "right") -> tuple[np.ndarray, np.ndarray]:
+    """Unit hinge-knee axis (pointing right) in the femoral and tibial frames, read from the
+    model: the LOCAL angular Jacobian column of the knee joint at the tibia frame."""
+    name = f"{side}_knee"
+    model = skeleton.model
+    if not model.existJointName(name):
+        raise InputError(f"expected a hinge knee joint {name!r} in the model", field="knee")
+    data = model.createData()
+    q = pin.neutral(model)
+    fid = skeleton.frame_id(f"{side}_tibia")
+    J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+    a_t = normalize(J[3:, model.joints[model.getJointId(name)].idx_v])
+    a_t = a_t if a_t[2] >= 0 else -a_t  # z points to the subject's right on both legs
+    pin.framesForwardKinematics(model, data, q)
+    R_f = data.oMf[skeleton.frame_id(f"{side}_femur")].rotation
+    R_t = data.oMf[fid].rotation
+    return R_f.T @ R_t @ a_t, a_t
+
+
+def _segment_of(imu: str) -> str:
+    return _SEGMENT_OF_IMU.get(imu, imu.removesuffix("_imu"))
+
+
+def _placements(skeleton: Skeleton, rng: np.random.Generator, mis_deg: float, off_m: float):
+    q0 = skeleton.neutral()
+    out = {}
+    for imu in skeleton.imu_frames:
+        T = skeleton.relative_pose(imu, _segment_of(imu), q0)
+        axis = normalize(rng.normal(size=3))
+        M = exp3(axis * np.deg2rad(mis_deg) * rng.uniform(0.5, 1.0))
+        d = normalize(rng.normal(size=3)) * off_m * rng.uniform(0.5, 1.0)
+        out[imu] = (T[:3, :3] @ M, T[:3, 3] + d, M, d)
+    return out
+
+
+def _joint_truth(skeleton: Skeleton, placements: dict) -> dict[str, dict[str, np.ndarray]]:
+    q0 = skeleton.neutral()
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for side in skeleton.legs:
+        for joint, (seg1, seg2, centre) in _JOINT_SEGMENTS.items():
+            entry = {}
+            for seg in (seg1, seg2):
+                seg_name = seg if seg == "pelvis" else f"{side}_{seg}"
+                imu = f"{seg_name}_imu"
+                c = skeleton.relative_pose(f"{side}_{centre}", seg_name, q0)[:3, 3]
+                R, p = placements[imu][:2]
+                entry[imu] = R.T @ (c - p)
+            out[f"{side}_{joint}"] = entry
+    return out
+
+
+# ---------------------------------------------------------------------------------- simulation
+
+
+def _freeflyer(skeleton: Skeleton) -> Skeleton:
+    if skeleton.root == "freeflyer":
+        return skeleton
+    return Skeleton.from_urdf(skeleton.urdf_path, root="freeflyer")
+
+
+def simulate_trial(
+    skeleton: Skeleton | None = None,
+    motion: str = "gait",
+    *,
+    duration_s: float = 15.0,
+    rate_hz: float = 100.0,
+    seed: int = 0,
+    noise: SensorNoise | None = None,
+    misalignment_deg: float = 15.0,
+    offset_m: float = 0.02,
+) -> SimulatedTrial:
+    """Simulate ``motion`` on ``skeleton`` (reloaded with a free-flyer root if needed; None:
+    a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, in a temporary folder).
+
+    Each IMU frame of the model gets a true sensor misaligned by a random rotation of
+    ``misalignment_deg * U(0.5, 1)`` about a random axis and offset by ``offset_m * U(0.5, 1)``
+    in a random direction. ``noise`` defaults to :class:`SensorNoise` ``()``.
+    """
+    motion = _motion_name(motion)
+    if not (np.isfinite(duration_s) and duration_s > 0 and np.isfinite(rate_hz) and rate_hz > 0):
+        raise InputError(f"expected positive duration and rate, got {duration_s}, {rate_hz}")
+    n = int(round(duration_s * rate_hz))
+    if n < 8:
+        raise InputError(f"expected at least 8 samples, got {n}", field="duration_s")
+    noise = SensorNoise() if noise is None else noise
+    if skeleton is None:
+        skeleton = Skeleton.build(SubjectGeometry.default(1.75, "m"), "hinge", root="freeflyer")
+    skeleton = _freeflyer(skeleton)
+    r_motion, r_place, r_noise = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
+    )
+    t = np.arange(n) / rate_hz
+    q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
+    lo, hi = skeleton.lower_limits[7:], skeleton.upper_limits[7:]
+    if np.any(q[:, 7:] < lo - 1e-12) or np.any(q[:, 7:] > hi + 1e-12):
+        raise RuntimeError(f"motion {motion!r} leaves the joint limits of {skeleton.urdf_path}")
+    placements = _placements(skeleton, r_place, misalignment_deg, offset_m)
+
+    model, data = skeleton.model, skeleton.data
+    imus = list(placements)
+    sensors = []  # (parent joint, placement in the joint frame)
+    for imu in imus:
+        seg = model.frames[skeleton.frame_id(_segment_of(imu))]
+        sensors.append((seg.parentJoint, seg.placement * pin.SE3(*placements[imu][:2])))
+    lm_names = skeleton.landmark_frames
+    lm_ids = [skeleton.frame_id(x) for x in lm_names]
+    k_imu = len(imus)
+    R = np.empty((k_imu, n, 3, 3))
+    P = np.empty((k_imu, n, 3))
+    W = np.empty((k_imu, n, 3))
+    A = np.empty((k_imu, n, 3))
+    L = np.empty((len(lm_ids), n, 3))
+    local = pin.ReferenceFrame.LOCAL
+    for k in range(n):
+        pin.forwardKinematics(model, data, q[k], v[k], a[k])
+        for i, (jid, M) in enumerate(sensors):
+            oM = data.oMi[jid] * M
+            R[i, k], P[i, k] = oM.rotation, oM.translation
+            W[i, k] = pin.getFrameVelocity(model, data, jid, M, local).angular
+            A[i, k] = pin.getFrameClassicalAcceleration(model, data, jid, M, local).linear
+        for i, fid in enumerate(lm_ids):
+            L[i, k] = pin.updateFramePlacement(model, data, fid).translation
+    F = A - np.einsum("knji,j->kni", R, GRAVITY)  # specific force, sensor frame
+
+    out_imus = {}
+    for i, imu in enumerate(imus):
+        R_gs, p_gs, M, d = placements[imu]
+        bias = r_noise.normal(0.0, noise.gyro_bias_sd, 3)
+        gyr = W[i] + bias + r_noise.normal(0.0, noise.gyro_sd, (n, 3))
+        acc = F[i] + r_noise.normal(0.0, noise.acc_sd, (n, 3))
+        R_meas = R[i]
+        if noise.orientation_sd_deg > 0:
+            R_meas = R[i] @ exp3(r_noise.normal(0.0, np.deg2rad(noise.orientation_sd_deg), (n, 3)))
+        rec = ImuRecording(time=t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_meas))
+        out_imus[imu] = SimulatedImu(
+            frame=imu,
+            segment=_segment_of(imu),
+            recording=rec,
+            rotation=R[i],
+            position=P[i],
+            R_segment=R_gs,
+            p_segment=p_gs,
+            misalignment=M,
+            offset_m=d,
+            gyro_bias=bias,
+        )
+    landmarks = {
+        name: L[i] + r_noise.normal(0.0, noise.landmark_sd_m, (n, 3))
+        for i, name in enumerate(lm_names)
+    }
+    knee_axis = {}
+    if skeleton.knee == "hinge":
+        for side in skeleton.legs:
+            a_f, a_t = knee_axis_in_segments(skeleton, side)
+            for seg, ax in (("femur", a_f), ("tibia", a_t)):
+                imu = f"{side}_{seg}_imu"
+                knee_axis[imu] = placements[imu][0].T @ ax
+    return SimulatedTrial(
+        time=t,
+        q=q,
+        v=v,
+        a=a,
+        motion=motion,
+        seed=int(seed),
+        imus=out_imus,
+        knee_axis=knee_axis,
+        joint_centres=_joint_truth(skeleton, placements),
+        landmarks=landmarks,
+        noise=noise,
+        skeleton=skeleton,
+    )

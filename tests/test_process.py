@@ -1,0 +1,186 @@
+"""IK from OpenSim .sto orientations: heading, IMU placement from the calibration pose, IK."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.analysis.landmarks import frame_trajectories
+from pipeline.cli import main
+from pipeline.errors import InputError
+from pipeline.io.opensim import OrientationTrial, read_mot, write_orientations_sto
+from pipeline.model import Skeleton
+from pipeline.model.anthropometry import Measures
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.process import anatomical_right, heading_rotation, run_ik
+from pipeline.rotations import exp3, quat_from_matrix, rot_y
+
+OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
+SENSORS = {"pelvis": "pelvis_imu", "right_femur": "femur_r_imu", "right_tibia": "tibia_r_imu",
+           "left_femur": "femur_l_imu", "left_tibia": "tibia_l_imu"}  # fmt: skip
+
+
+def test_heading_rotation_by_hand():
+    # the subject's right along world +x: Ry(90 deg) takes the model's right (z) to x
+    np.testing.assert_allclose(heading_rotation(np.array([1.0, 0, 0])), rot_y(np.pi / 2),
+                               atol=1e-15)  # fmt: skip
+    np.testing.assert_allclose(heading_rotation(np.array([0, 0, 1.0])), np.eye(3), atol=1e-15)
+
+
+def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
+    """Gait-like motion on a model, standing at t0, with random sensor mountings."""
+    geometry, _ = geometry_from_measures(Measures("m", 1.75))
+    sk = Skeleton.build(geometry, knee=knee, out_dir=tmp_path / "truth", root="spherical")
+    knee_joint = "knee_Z" if knee == "free" else "knee"
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 100.0
+    phase = 2 * np.pi * t
+    s = np.clip(t / 0.5, 0, 1)  # ramp up from the standing calibration pose
+    Q = np.tile(sk.neutral(), (n, 1))
+    H = rot_y(np.radians(heading_deg))
+    w, x, y, z = quat_from_matrix(H)
+    Q[:, :4] = [x, y, z, w]
+    for side, ph in (("right", 0.0), ("left", np.pi)):
+        hip = np.radians(10 + 20 * np.sin(phase + ph)) * s
+        knee = np.radians(30 - 30 * np.cos(phase + ph + 0.6)) * s
+        Q[:, sk.q_index(f"{side}_hip_Z")] = hip  # -10..30 deg: flexion dominates, as in gait
+        Q[:, sk.q_index(f"{side}_hip_X")] = np.radians(3) * np.sin(phase + ph) * s
+        Q[:, sk.q_index(f"{side}_{knee_joint}")] = knee  # positive q = flexion in this model
+    frames = frame_trajectories(sk, Q, list(SENSORS))
+    sensors, mountings = {}, {}
+    for seg, name in SENSORS.items():
+        mount = exp3(rng.normal(size=3))  # arbitrary sensor-to-segment rotation
+        R = frames[seg][0] @ mount
+        sensors[name] = quat_from_matrix(R)
+        mountings[seg] = mount
+    trial = OrientationTrial(time=t, rate_hz=100.0, sensors=sensors, header={}, notes=(),
+                             source=None)  # fmt: skip
+    return sk, Q, trial, H
+
+
+def test_recovers_heading_and_joint_angles_of_a_known_walk(tmp_path):
+    sk, Q, trial, H = _walk(tmp_path)
+    run = run_ik(trial, Measures("m", 1.75), tmp_path / "out.urdf", knee="free")
+    np.testing.assert_allclose(run.heading_right, H @ [0, 0, 1.0], atol=0.05)
+    from pipeline.analysis.landmarks import joint_angles
+
+    truth = joint_angles(sk, Q)
+    for key in ("right_hip_flexion", "right_knee_flexion", "left_knee_flexion"):
+        err = np.degrees(np.abs(run.joint_angles[key] - truth[key]))
+        assert err.max() < 3.0, (key, err.max())  # heading found within a few degrees
+    assert np.degrees(np.median(run.residual_rms)) < 0.5
+
+
+def test_hinge_knee_model_reproduces_a_hinge_walk(tmp_path):
+    """With a hinge about the tilted population AoR, the calibration pose is the model's own
+    neutral pose (tibia turned by the aligning rotation), so a hinge walk is reproduced."""
+    sk, Q, trial, H = _walk(tmp_path, knee="hinge")
+    run = run_ik(trial, Measures("m", 1.75), tmp_path / "out.urdf", knee="hinge")
+    from pipeline.analysis.landmarks import joint_angles
+
+    truth = joint_angles(sk, Q)
+    assert np.degrees(np.median(run.residual_rms)) < 0.5
+    for key in ("right_knee_flexion", "right_knee_adduction", "right_knee_rotation"):
+        err = np.degrees(np.abs(run.joint_angles[key] - truth[key]))
+        assert err.max() < 3.0, (key, err.max())
+
+
+def test_still_subject_has_no_anatomical_heading(tmp_path):
+    _, _, trial, _ = _walk(tmp_path, n=300)
+    still = {k: np.repeat(v[:1], 300, axis=0) for k, v in trial.sensors.items()}
+    from pipeline.io.opensim import map_sensors
+    from pipeline.rotations import matrix_from_quat
+
+    t2 = OrientationTrial(trial.time, 100.0, still, {}, (), None)
+    rotations = {s: matrix_from_quat(q) for s, q in map_sensors(t2).items()}
+    with pytest.raises(InputError, match="barely move"):
+        anatomical_right(rotations)
+
+
+def test_missing_pelvis_sensor_is_refused(tmp_path):
+    _, _, trial, _ = _walk(tmp_path, n=200)
+    sensors = {k: v for k, v in trial.sensors.items() if k != "pelvis_imu"}
+    path = tmp_path / "nopelvis.sto"
+    write_orientations_sto(path, OrientationTrial(trial.time, 100.0, sensors, {}, (), None))
+    code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
+                 "--out", str(tmp_path / "o")])  # fmt: skip
+    assert code == 2
+    assert not (tmp_path / "o" / "nopelvis_ik.mot").exists()
+
+
+@pytest.mark.dataset
+@pytest.mark.parametrize(
+    "name, rotation",
+    [("xsens_walking_orientations.sto", ["-1.5708", "0", "0"]), ("quaternions_4_ik.sto", None)],
+)
+def test_real_opensim_files(tmp_path, name, rotation):
+    sto = OPENSIM / name
+    if not sto.exists():
+        pytest.skip("../shared/data/opensim not present")
+    args = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.80",
+            "--out", str(tmp_path)]  # fmt: skip
+    if rotation:
+        args += ["--sensor-to-model", *rotation]
+    assert main(args) == 0
+    stem = sto.stem
+    for suffix in ("_ik.mot", "_landmarks.csv", ".urdf", ".rrd", "_summary.md"):
+        assert (tmp_path / f"{stem}{suffix}").exists(), suffix
+    mot = read_mot(tmp_path / f"{stem}_ik.mot")
+    assert {"hip_flexion_r", "knee_angle_r", "hip_flexion_l", "knee_angle_l"} <= set(mot.columns)
+    hip = np.degrees(mot.columns["hip_flexion_r"])
+    knee = np.degrees(mot.columns["knee_angle_r"])
+    assert -30 < hip.min() and hip.max() < 90  # physiological ranges
+    assert knee.max() > 30 and knee.min() > -1  # the knees flex, and never hyperextend here
+    if name.startswith("xsens"):  # a walking trial: textbook gait ranges
+        assert 20 < hip.max() < 40 and 55 < knee.max() < 80
+
+
+def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
+    """`pipeline ik` on a folder of Xsens MT exports (with --xsens-map) == on the .sto."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_io_xsens import _write
+
+    from pipeline.rotations import matrix_from_quat
+
+    _, _, trial, _ = _walk(tmp_path, n=400)
+    sto = tmp_path / "walk.sto"
+    write_orientations_sto(sto, trial)
+    folder = tmp_path / "xsens"
+    folder.mkdir()
+    ids = {}
+    for k, (name, q) in enumerate(trial.sensors.items()):
+        ids[name] = f"00B421{k:02d}"
+        R = matrix_from_quat(q)
+        zeros = np.zeros((len(R), 3))
+        _write(folder / f"MT_012005D6_009-001_{ids[name]}.txt", R, zeros + [0, 0, 9.81], zeros)
+    common = ["--sex", "m", "--height-m", "1.75", "--knee", "free"]
+    assert main(["ik", "--orientations", str(sto), "--out", str(tmp_path / "a"), *common]) == 0
+    pairs = [f"{n}={i}" for n, i in ids.items()]
+    args = ["ik", "--orientations", str(folder), "--xsens-map", *pairs, "--out",
+            str(tmp_path / "b"), *common]  # fmt: skip
+    assert main(args) == 0
+    a = read_mot(tmp_path / "a" / "walk_ik.mot").columns
+    b = read_mot(tmp_path / "b" / "xsens_ik.mot").columns
+    for key in ("hip_flexion_r", "knee_angle_r", "knee_angle_l"):
+        assert np.abs(a[key] - b[key]).max() < np.radians(0.05), key  # 6-decimal export
+    assert main(["ik", "--orientations", str(folder), "--out", str(tmp_path / "c"), *common]) == 2
+
+
+def test_disagreeing_heading_cues_are_reported(tmp_path):
+    """A knee cue pointing the 'wrong' way (e.g. mostly hyperextension) is flagged, not hidden."""
+    from pipeline.io.opensim import map_sensors
+    from pipeline.rotations import matrix_from_quat
+
+    _, _, trial, _ = _walk(tmp_path, n=400)
+    rotations = {s: matrix_from_quat(q) for s, q in map_sensors(trial).items()}
+    notes: list[str] = []
+    anatomical_right(rotations, notes=notes)
+    assert notes == []  # a consistent walk: all four cues agree
+    # mirror the right shank's motion relative to the thigh: its cue now points left
+    F, T = rotations["right_femur"], rotations["right_tibia"]
+    rel = np.swapaxes(F, 1, 2) @ T
+    rotations["right_tibia"] = F @ (rel[0] @ np.swapaxes(rel[0].T @ rel, 1, 2))
+    anatomical_right(rotations, notes=notes)
+    assert notes and "disagree" in notes[0]
