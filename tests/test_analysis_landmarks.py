@@ -28,12 +28,12 @@ def subject(**over) -> SubjectGeometry:
 
 @pytest.fixture(scope="module")
 def free(tmp_path_factory):
-    return Skeleton.build(subject(), knee="free", out_dir=tmp_path_factory.mktemp("free"))
+    return Skeleton.build(subject(), knee="free")
 
 
 @pytest.fixture(scope="module")
 def hinge(tmp_path_factory):
-    return Skeleton.build(subject(), knee="hinge", out_dir=tmp_path_factory.mktemp("hinge"))
+    return Skeleton.build(subject(), knee="hinge")
 
 
 def isb_configurations(sk: Skeleton, n: int, seed: int) -> tuple[np.ndarray, dict]:
@@ -116,7 +116,7 @@ def test_joint_angles_hinge(hinge, tmp_path):
             )
     # knee axes along z in both segments: the hinge is pure JCS flexion
     sk = Skeleton.build(
-        subject(knee_axis_femur=[0, 0, 1.0], knee_axis_tibia=[0, 0, 1.0]), "hinge", tmp_path
+        subject(knee_axis_femur=[0, 0, 1.0], knee_axis_tibia=[0, 0, 1.0]), "hinge"
     )
     Q, truth = isb_configurations(sk, 50, seed=5)
     ang = joint_angles(sk, Q)

@@ -199,7 +199,7 @@ def test_rotation_aligning_with_twist_by_hand():
 def calibrated(tmp_path_factory):
     geometry = SubjectGeometry.default(1.75, "m", "right")
     folder = tmp_path_factory.mktemp("placement")
-    sk = Skeleton.build(geometry, knee="hinge", out_dir=folder, root="freeflyer")
+    sk = Skeleton.build(geometry, knee="hinge", root="freeflyer")
     gait = simulate_trial(sk, "gait", seed=11)
     static = simulate_trial(sk, "static", duration_s=2.0, seed=11)  # same seed: same placements
     a, b = gait.imus["right_femur_imu"].recording, gait.imus["right_tibia_imu"].recording

@@ -9,6 +9,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from pipeline.errors import InputError
+
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.model.casadi_kinematics import (
     CasadiKinematics,
@@ -95,8 +97,13 @@ def test_named_frame_api_matches_skeleton():
     oMi = data.oMi[sk.model.getJointId("right_knee")]
     assert np.allclose(np.array(R), oMi.rotation)
     assert np.allclose(np.array(p).ravel(), oMi.translation)
-    with pytest.raises(KeyError):
+    # the package's contract for bad names is InputError (it was KeyError)
+    with pytest.raises(InputError, match="no_such_frame"):
         kin.frame_id("no_such_frame")
+    with pytest.raises(InputError, match="frame index"):
+        kin.frame_id(10_000)
+    with pytest.raises(InputError, match="no_such_joint"):
+        kin.joint_placement("no_such_joint", q)
     # symbolic in, symbolic out (SX and MX)
     for sym in (ca.SX.sym("x", kin.nq), ca.MX.sym("x", kin.nq)):
         assert isinstance(kin.frame_position("right_LM", sym), type(sym))

@@ -30,7 +30,7 @@ def test_heading_rotation_by_hand():
 def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
     """Gait-like motion on a model, standing at t0, with random sensor mountings."""
     geometry, _ = geometry_from_measures(Measures("m", 1.75))
-    sk = Skeleton.build(geometry, knee=knee, out_dir=tmp_path / "truth", root="spherical")
+    sk = Skeleton.build(geometry, knee=knee, root="spherical")
     knee_joint = "knee_Z" if knee == "free" else "knee"
     rng = np.random.default_rng(seed)
     t = np.arange(n) / 100.0

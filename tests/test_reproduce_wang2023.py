@@ -125,7 +125,7 @@ def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data(tmp_path):
     pf, pt = _positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     G = frame_from_femur(traj["KJC"], eF)
-    sk, ik = subject_motion(subject, r, eF, eT, G, limits=False, out_dir=tmp_path)
+    sk, ik = subject_motion(subject, r, eF, eT, G, limits=False)
     fk = landmark_trajectories(sk, ik.q)
     sk.forward(sk.neutral())
     hip = sk.frame_position("right_HJC")

@@ -28,7 +28,7 @@ NO_NOISE = SensorNoise.none()
 def skeleton(tmp_path_factory):
     geometry = SubjectGeometry.default(1.75, "m", "right")
     return Skeleton.build(
-        geometry, knee="hinge", out_dir=tmp_path_factory.mktemp("sim"), root="freeflyer"
+        geometry, knee="hinge", root="freeflyer"
     )
 
 
@@ -153,7 +153,7 @@ def test_misalignment_and_offset_are_the_truth(gait):
 
 def test_free_knee_has_no_hinge_truth(tmp_path):
     sk = Skeleton.build(
-        SubjectGeometry.default(1.62, "f", "right"), knee="free", out_dir=tmp_path, root="freeflyer"
+        SubjectGeometry.default(1.62, "f", "right"), knee="free", root="freeflyer"
     )
     tr = simulate_trial(sk, "gait", duration_s=1.0, seed=0)
     assert tr.knee_axis == {}
@@ -203,7 +203,7 @@ def test_deterministic_with_seed(skeleton):
 
 
 def test_fixed_root_skeleton_is_reloaded_with_a_free_flyer(tmp_path):
-    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="hinge", out_dir=tmp_path)
+    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="hinge")
     tr = simulate_trial(sk, "static", duration_s=0.5, seed=0)
     assert tr.skeleton.root == "freeflyer" and tr.q.shape[1] == sk.nq + 7
     default = simulate_trial(motion="static", duration_s=0.2)  # default 1.75 m hinge-knee subject

@@ -16,7 +16,7 @@ from pipeline.simulate.motions import MOTIONS, joint_trajectories
 def skeleton(tmp_path_factory):
     geometry = SubjectGeometry.default(1.75, "m", "right")
     return Skeleton.build(
-        geometry, knee="hinge", out_dir=tmp_path_factory.mktemp("motions"), root="freeflyer"
+        geometry, knee="hinge", root="freeflyer"
     )
 
 
@@ -30,7 +30,7 @@ def _vee(M):
 @pytest.mark.parametrize("knee", ["hinge", "free"])
 def test_joint_limits_respected(tmp_path, knee):
     sk = Skeleton.build(
-        SubjectGeometry.default(1.62, "f", "right"), knee=knee, out_dir=tmp_path, root="freeflyer"
+        SubjectGeometry.default(1.62, "f", "right"), knee=knee, root="freeflyer"
     )
     t = np.arange(3000) / 100.0
     for motion in MOTIONS:
@@ -88,7 +88,7 @@ def test_seeded_alias_and_refusals(skeleton):
     assert not np.allclose(other, gait[0])
     with pytest.raises(InputError, match="expected a motion in"):
         joint_trajectories(skeleton, "running", t)
-    fixed = Skeleton.from_urdf(skeleton.urdf_path)
+    fixed = skeleton.with_root("fixed")
     with pytest.raises(InputError, match="freeflyer"):
         joint_trajectories(fixed, "gait", t)
 

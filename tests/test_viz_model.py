@@ -44,7 +44,7 @@ def _first(rows: dict[str, list], component: str) -> np.ndarray:
 @pytest.fixture(scope="module")
 def motion(tmp_path_factory):
     folder = tmp_path_factory.mktemp("viz_model")
-    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="free", out_dir=folder)
+    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="free")
     t = np.arange(N) / 100.0
     Q = np.tile(sk.neutral(), (N, 1))
     for side, lag in (("right", 0.0), ("left", np.pi)):

@@ -60,9 +60,12 @@ from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals, resolv
 from pipeline.rotations import rotation_aligning
 
 __all__ = [
+    "DEFAULT_KNEE",
+    "KNEE_MODES",
     "LANDMARKS",
     "SEGMENTS",
     "build_urdf",
+    "urdf_text",
     "default_imu_placements",
     "imu_frame_names",
     "joint_names",
@@ -72,6 +75,8 @@ __all__ = [
 ]
 
 KNEE_MODES = ("hinge", "free")
+#: The knee model used when none is asked for, by the library and the CLI alike.
+DEFAULT_KNEE = "free"
 LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
 SEGMENTS = ("femur", "tibia", "foot")
 
@@ -270,27 +275,26 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
     return links, joints
 
 
-def build_urdf(
+def urdf_text(
     geometry: SubjectGeometry,
-    out_path: str | Path,
-    knee: str = "hinge",
+    knee: str = DEFAULT_KNEE,
     legs: Sequence[str] = ("right", "left"),
     imu_placements: Mapping[str, object] | None = None,
     other_leg: SubjectGeometry | None = None,
     check: bool = True,
-) -> Path:
-    """Write the subject's lower-limb URDF and return its path.
+) -> str:
+    """The subject's lower-limb URDF as XML text (the model is built in memory from it).
 
     Args:
         geometry: dimensions of one leg and the pelvis; the other leg is its mirror image
             (:meth:`SubjectGeometry.mirrored`) unless ``other_leg`` is given.
-        out_path: ``.urdf`` file to write (parent folders are created).
-        knee: ``'hinge'`` (1 DoF about the knee AoR) or ``'free'`` (Z-X-Y, Wang eq 15-17).
+        knee: ``'free'`` (Z-X-Y, Wang eq 15-17; the default, as ``pipeline scale``/``ik``) or
+            ``'hinge'`` (1 DoF about the knee AoR).
         legs: which legs to include, a subset of ``('right', 'left')``.
         imu_placements: IMU frame name (e.g. ``'right_tibia_imu'``) -> 4x4 transform or
             ``(R, p)`` in its segment frame; others get :func:`default_imu_placements`.
         other_leg: geometry of the opposite leg, for asymmetric subjects.
-        check: load the result with ``pinocchio.buildModelFromUrdf`` and verify its joints.
+        check: load the result with ``pinocchio.buildModelFromXML`` and verify its joints.
     """
     if knee not in KNEE_MODES:
         raise InputError(f"expected knee in {KNEE_MODES}, got {knee!r}", field="knee")
@@ -330,18 +334,43 @@ def build_urdf(
     robot = ud.Robot(name=f"lower_limb_{knee}_knee_ISB_model", links=links, joints=joints)
     robot.materials = materials()
     urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
+    text = urdf.write_xml_string()
+    if isinstance(text, bytes):
+        text = text.decode("utf-8")
+    if check:
+        _check_with_pinocchio(text, joint_names(knee, legs))
+    return text
+
+
+def build_urdf(
+    geometry: SubjectGeometry,
+    out_path: str | Path,
+    knee: str = DEFAULT_KNEE,
+    legs: Sequence[str] = ("right", "left"),
+    imu_placements: Mapping[str, object] | None = None,
+    other_leg: SubjectGeometry | None = None,
+    check: bool = True,
+) -> Path:
+    """Write :func:`urdf_text` to ``out_path`` (parent folders are created); return the path.
+
+    Only for outputs: code that needs the model builds it in memory
+    (:meth:`pipeline.model.skeleton.Skeleton.build`).
+    """
+    text = urdf_text(geometry, knee, legs, imu_placements, other_leg, check)
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    urdf.write_xml_file(str(out))
-    if check:
-        _check_with_pinocchio(out, joint_names(knee, legs))
+    out.write_text(text, encoding="utf-8")
     return out
 
 
-def _check_with_pinocchio(path: Path, expected_joints: list[str]) -> None:
+def _check_with_pinocchio(text: str, expected_joints: list[str]) -> None:
     import pinocchio as pin
 
-    model = pin.buildModelFromUrdf(str(path))
+    model = pin.buildModelFromXML(text)
     names = list(model.names)[1:]
     if sorted(names) != sorted(expected_joints):
-        raise RuntimeError(f"{path}: pinocchio joints {names} differ from {expected_joints}")
+        raise InputError(
+            f"the generated URDF loads in Pinocchio with joints {names}, expected "
+            f"{expected_joints}",
+            field="urdf",
+        )

@@ -40,6 +40,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from pipeline.errors import InputError
+from pipeline.model.skeleton import frame_ids
+
 __all__ = [
     "CasadiKinematics",
     "axis_rotation_sym",
@@ -185,13 +188,7 @@ class CasadiKinematics:
         self._frames = [
             _compose(placements[f.parentJoint], _se3(f.placement)) for f in model.frames
         ]
-        ids: dict[str, int] = {}
-        for i, f in enumerate(model.frames):
-            ids.setdefault(f.name, i)
-        for i, f in enumerate(model.frames):
-            if f.type == pin.FrameType.BODY:
-                ids[f.name] = i
-        self._frame_ids = ids
+        self._frame_ids = frame_ids(model)
         self._cache: dict[int, ca.Function] = {}
 
     # ---- names --------------------------------------------------------------------------------
@@ -204,12 +201,15 @@ class CasadiKinematics:
         """Frame index of a name (BODY frame preferred) or an index."""
         if isinstance(frame, (int, np.integer)):
             if not 0 <= int(frame) < len(self._frames):
-                raise KeyError(f"frame index {frame} out of range [0, {len(self._frames)})")
+                raise InputError(
+                    f"expected a frame index in [0, {len(self._frames)}), got {frame}",
+                    field="frame",
+                )
             return int(frame)
         try:
             return self._frame_ids[frame]
         except KeyError:
-            raise KeyError(f"no frame named {frame!r} in the model") from None
+            raise InputError(f"expected a frame of the model, got {frame!r}", field="frame") from None
 
     # ---- expressions --------------------------------------------------------------------------
     def _frame_function(self, fid: int) -> ca.Function:
@@ -236,7 +236,7 @@ class CasadiKinematics:
         """World ``(R, p)`` of a joint frame (``oMi``) at ``q``; ``joint`` is a name or an index."""
         j = self.model.getJointId(joint) if isinstance(joint, str) else int(joint)
         if not 0 <= j < self.model.njoints:
-            raise KeyError(f"no joint {joint!r} in the model")
+            raise InputError(f"expected a joint of the model, got {joint!r}", field="joint")
         R, p = self._joints[j]
         return tuple(ca.Function(f"oMi_{j}", [self.q], [R, p])(q))
 

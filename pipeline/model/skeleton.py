@@ -13,7 +13,6 @@ Pinocchio orders the legs alphabetically (left before right): always index q thr
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,60 +21,97 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
-from pipeline.model.builder import LANDMARKS, SEGMENTS, build_urdf
+from pipeline.model.builder import DEFAULT_KNEE, LANDMARKS, SEGMENTS, urdf_text
 from pipeline.model.geometry import SubjectGeometry
 
-__all__ = ["ROOTS", "Skeleton"]
+__all__ = ["ROOTS", "Skeleton", "frame_ids"]
 
 ROOTS = ("fixed", "freeflyer", "spherical")
 
 
+def frame_ids(model: pin.Model) -> dict[str, int]:
+    """Frame name -> Pinocchio frame index, a link's BODY frame preferred over the joint or fixed
+    frame of the same name (the one lookup of frames by name)."""
+    ids: dict[str, int] = {}
+    for i, f in enumerate(model.frames):
+        ids.setdefault(f.name, i)  # first frame of a name
+    for i, f in enumerate(model.frames):
+        if f.type == pin.FrameType.BODY:
+            ids[f.name] = i
+    return ids
+
+
+def _root_joint(root: str):
+    if root not in ROOTS:
+        raise InputError(f"expected root in {ROOTS}, got {root!r}", field="root")
+    return {"fixed": None, "freeflyer": pin.JointModelFreeFlyer,
+            "spherical": pin.JointModelSpherical}[root]  # fmt: skip
+
+
 @dataclass
 class Skeleton:
-    """A loaded model: ``model``, ``data``, and name lookups. Built by :meth:`from_urdf`."""
+    """A loaded model: ``model``, ``data``, and name lookups.
+
+    ``urdf`` is the URDF text the model was built from (the single source of every dimension);
+    ``source`` the file it was read from, if any (relative mesh paths resolve against it).
+    Built in memory by :meth:`build` or :meth:`from_urdf_text`; :meth:`from_urdf` reads a file.
+    """
 
     model: pin.Model
     data: pin.Data
-    urdf_path: Path
+    urdf: str
     root: str = "fixed"
+    source: Path | None = None
     _frame_ids: dict[str, int] = field(default_factory=dict, repr=False)
 
     # ---- construction -------------------------------------------------------------------------
     @classmethod
+    def from_urdf_text(
+        cls, text: str, root: str = "fixed", source: str | Path | None = None
+    ) -> Skeleton:
+        """Build the model from URDF text written by :func:`urdf_text` with the given root."""
+        joint = _root_joint(root)
+        try:
+            model = pin.buildModelFromXML(text) if joint is None else pin.buildModelFromXML(
+                text, joint()
+            )
+        except (RuntimeError, ValueError) as exc:
+            raise InputError(f"cannot build a model from the URDF: {exc}", file=source) from exc
+        src = None if source is None else Path(source)
+        return cls(model, model.createData(), text, root, src, frame_ids(model))
+
+    @classmethod
     def from_urdf(cls, path: str | Path, root: str = "fixed") -> Skeleton:
-        """Load a URDF written by :func:`build_urdf` with the given root joint."""
+        """Read a URDF file written by :func:`pipeline.model.builder.build_urdf` and build it."""
         path = Path(path)
-        if root not in ROOTS:
-            raise InputError(f"expected root in {ROOTS}, got {root!r}", field="root")
+        _root_joint(root)
         if not path.is_file():
             raise InputError("expected an existing URDF file", file=path)
-        if root == "fixed":
-            model = pin.buildModelFromUrdf(str(path))
-        elif root == "freeflyer":
-            model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
-        else:
-            model = pin.buildModelFromUrdf(str(path), pin.JointModelSpherical())
-        ids: dict[str, int] = {}
-        for i, f in enumerate(model.frames):
-            ids.setdefault(f.name, i)  # first frame of a name (a BODY frame for links)
-        for i, f in enumerate(model.frames):
-            if f.type == pin.FrameType.BODY:
-                ids[f.name] = i
-        return cls(model, model.createData(), path, root, ids)
+        return cls.from_urdf_text(path.read_text(encoding="utf-8"), root, source=path)
 
     @classmethod
     def build(
         cls,
         geometry: SubjectGeometry,
-        knee: str = "hinge",
-        out_dir: str | Path | None = None,
+        knee: str = DEFAULT_KNEE,
         root: str = "fixed",
         **kwargs: object,
     ) -> Skeleton:
-        """:func:`build_urdf` into ``out_dir`` (a fresh temporary folder if None), then load."""
-        folder = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="skel_"))
-        path = build_urdf(geometry, folder / f"lower_limb_{knee}.urdf", knee=knee, **kwargs)
-        return cls.from_urdf(path, root=root)
+        """:func:`urdf_text` of ``geometry`` built in memory (nothing is written)."""
+        return cls.from_urdf_text(urdf_text(geometry, knee=knee, **kwargs), root=root)
+
+    def with_root(self, root: str) -> Skeleton:
+        """The same URDF with another root joint (``self`` when it already has it)."""
+        if root == self.root:
+            return self
+        return Skeleton.from_urdf_text(self.urdf, root, self.source)
+
+    def write_urdf(self, path: str | Path) -> Path:
+        """Write the URDF text (an output; the model itself never needs the file)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.urdf, encoding="utf-8")
+        return path
 
     # ---- names --------------------------------------------------------------------------------
     @property

@@ -194,12 +194,6 @@ def _joint_truth(skeleton: Skeleton, placements: dict) -> dict[str, dict[str, np
 # ---------------------------------------------------------------------------------- simulation
 
 
-def _freeflyer(skeleton: Skeleton) -> Skeleton:
-    if skeleton.root == "freeflyer":
-        return skeleton
-    return Skeleton.from_urdf(skeleton.urdf_path, root="freeflyer")
-
-
 def simulate_trial(
     skeleton: Skeleton | None = None,
     motion: str = "gait",
@@ -212,7 +206,7 @@ def simulate_trial(
     offset_m: float = 0.02,
 ) -> SimulatedTrial:
     """Simulate ``motion`` on ``skeleton`` (reloaded with a free-flyer root if needed; None:
-    a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, in a temporary folder).
+    a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, built in memory).
 
     Each IMU frame of the model gets a true sensor misaligned by a random rotation of
     ``misalignment_deg * U(0.5, 1)`` about a random axis and offset by ``offset_m * U(0.5, 1)``
@@ -227,7 +221,7 @@ def simulate_trial(
     noise = SensorNoise() if noise is None else noise
     if skeleton is None:
         skeleton = Skeleton.build(SubjectGeometry.default(1.75, "m"), "hinge", root="freeflyer")
-    skeleton = _freeflyer(skeleton)
+    skeleton = skeleton.with_root("freeflyer")
     r_motion, r_place, r_noise = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
     )
@@ -235,7 +229,7 @@ def simulate_trial(
     q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
     lo, hi = skeleton.lower_limits[7:], skeleton.upper_limits[7:]
     if np.any(q[:, 7:] < lo - 1e-12) or np.any(q[:, 7:] > hi + 1e-12):
-        raise RuntimeError(f"motion {motion!r} leaves the joint limits of {skeleton.urdf_path}")
+        raise InputError(f"motion {motion!r} leaves the joint limits of the model", field="motion")
     placements = _placements(skeleton, r_place, misalignment_deg, offset_m)
 
     model, data = skeleton.model, skeleton.data

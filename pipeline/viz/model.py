@@ -92,12 +92,14 @@ def _floats(text: str | None, default: Sequence[float]) -> np.ndarray:
     return np.array([float(v) for v in text.split()] if text else default, dtype=float)
 
 
-def _link_visuals(urdf_path: Path) -> dict[str, list[tuple[str, np.ndarray, np.ndarray]]]:
+def _link_visuals(
+    urdf: str, source: Path | None
+) -> dict[str, list[tuple[str, np.ndarray, np.ndarray]]]:
     """Link name -> [(mesh filename, scale (3,), 4x4 visual origin in the link frame)]."""
     try:
-        root = ET.parse(urdf_path).getroot()
-    except (ET.ParseError, OSError) as exc:
-        raise InputError(f"cannot read the URDF: {exc}", file=urdf_path) from exc
+        root = ET.fromstring(urdf)
+    except ET.ParseError as exc:
+        raise InputError(f"cannot read the URDF: {exc}", file=source) from exc
     out: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}
     for link in root.findall("link"):
         for visual in link.findall("visual"):
@@ -115,14 +117,14 @@ def _link_visuals(urdf_path: Path) -> dict[str, list[tuple[str, np.ndarray, np.n
     return out
 
 
-def _mesh_file(uri: str, urdf_path: Path) -> Path:
+def _mesh_file(uri: str, source: Path | None) -> Path:
     path = resolve_package_uri(uri)
     if uri.startswith("file://"):
         path = Path(uri[len("file://") :])
-    if not path.is_absolute():
-        path = urdf_path.parent / path
+    if not path.is_absolute() and source is not None:
+        path = source.parent / path
     if not path.is_file():
-        raise InputError(f"cannot find the mesh {uri!r}", file=urdf_path)
+        raise InputError(f"cannot find the mesh {uri!r}", file=source)
     return path
 
 
@@ -135,12 +137,12 @@ def segment_meshes(skeleton: Skeleton) -> dict[str, SegmentMesh]:
     """
     import trimesh
 
-    visuals = _link_visuals(skeleton.urdf_path)
+    visuals = _link_visuals(skeleton.urdf, skeleton.source)
     out = {}
     for segment, link in skeleton.segment_frames.items():
         parts_v, parts_f, count = [], [], 0
         for uri, scale, T in visuals.get(link, []):
-            v, f = _load_mesh(str(_mesh_file(uri, skeleton.urdf_path)))
+            v, f = _load_mesh(str(_mesh_file(uri, skeleton.source)))
             parts_v.append((v * scale) @ T[:3, :3].T + T[:3, 3])
             parts_f.append((f[:, ::-1] if np.prod(scale) < 0 else f) + count)
             count += len(v)

@@ -92,8 +92,6 @@ def hinge_ik_orientations(
     landmark positions do not enter orientation IK, so the returned frames serve eq 15-17 with any
     positions.
     """
-    import tempfile
-
     from pipeline.analysis.landmarks import frame_trajectories
     from pipeline.ik.solver import solve_ik
     from pipeline.model.geometry import SubjectGeometry
@@ -101,8 +99,7 @@ def hinge_ik_orientations(
 
     geometry = SubjectGeometry(knee_axis_femur=sex_aor.femur_axis,
                                knee_axis_tibia=sex_aor.tibia_axis, **geometry_kw)  # fmt: skip
-    with tempfile.TemporaryDirectory(prefix="hinge_ik_") as folder:
-        sk = Skeleton.build(geometry, knee="hinge", out_dir=folder, legs=("right",))
+    sk = Skeleton.build(geometry, knee="hinge", legs=("right",))
     ik = solve_ik(sk.model, {"right_femur": F, "right_tibia": T}, limits=False)
     frames = frame_trajectories(sk, ik.q, ["right_femur", "right_tibia"])
     return frames["right_femur"][0], frames["right_tibia"][0]
@@ -224,7 +221,6 @@ def subject_motion(
     *,
     positions: str = "regression",
     limits: bool = True,
-    out_dir: Path,
 ) -> tuple[Skeleton, IKResult]:
     """The subject's free-knee model and its configurations reproducing the IMC trajectories.
 
@@ -232,7 +228,7 @@ def subject_motion(
     targets are the IMC orientations expressed in the initial frame of eq 18 (``G_imc^T e``), in
     which the femur points up at the first paired frame. With ``limits=False`` the model's
     landmark frames reproduce eq 15-17 exactly (tested); with limits the knee cannot hyperextend.
-    The URDF is written into ``out_dir``. Returns ``(skeleton, ik_result)``.
+    The model is built in memory. Returns ``(skeleton, ik_result)``.
     """  # fmt: skip
     from pipeline.ik.solver import solve_ik
     from pipeline.model.geometry import SubjectGeometry
@@ -243,7 +239,7 @@ def subject_motion(
         sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf, tibia_landmarks=pt,
         knee_axis_femur=r.knee_aor.femur_axis, knee_axis_tibia=r.knee_aor.tibia_axis,
     )  # fmt: skip
-    sk = Skeleton.build(geometry, knee="free", out_dir=out_dir, legs=("right",))
+    sk = Skeleton.build(geometry, knee="free", legs=("right",))
     targets = {"right_femur": G_imc.T @ eF, "right_tibia": G_imc.T @ eT}
     return sk, solve_ik(sk.model, targets, limits=limits)
 
@@ -263,23 +259,20 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
     omc_F, _ = align(r.femur_R, F, lag)
     G_omc = frame_from_femur(omc_paired["KJC"], omc_F)
     G_imc = frame_from_femur(traj["KJC"], eF)
-    import tempfile
-
-    with tempfile.TemporaryDirectory(prefix="wang2023_subject_") as folder:
-        sk, ik = subject_motion(subject, r, eF, eT, G_imc, out_dir=Path(folder))
-        sk.forward(sk.neutral())
-        hip = sk.frame_position("right_HJC")
-        reference = {f"right_{n}": omc_paired[n] @ G_omc + hip for n in LANDMARKS}
-        n = len(eF)
-        rerun_dir.mkdir(parents=True, exist_ok=True)
-        return log_motion(
-            rerun_dir / f"subject{subject.omc.subject_id:02d}.rrd",
-            np.arange(n) / subject.omc.rate_hz,
-            sk,
-            ik.q,
-            reference_landmarks=reference,
-            recording_name=f"wang2023 subject {subject.omc.subject_id}",
-        )
+    sk, ik = subject_motion(subject, r, eF, eT, G_imc)
+    sk.forward(sk.neutral())
+    hip = sk.frame_position("right_HJC")
+    reference = {f"right_{n}": omc_paired[n] @ G_omc + hip for n in LANDMARKS}
+    n = len(eF)
+    rerun_dir.mkdir(parents=True, exist_ok=True)
+    return log_motion(
+        rerun_dir / f"subject{subject.omc.subject_id:02d}.rrd",
+        np.arange(n) / subject.omc.rate_hz,
+        sk,
+        ik.q,
+        reference_landmarks=reference,
+        recording_name=f"wang2023 subject {subject.omc.subject_id}",
+    )
 
 
 def imc_tables(stage: ImcStage) -> dict[str, str]:
