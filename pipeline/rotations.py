@@ -4,8 +4,9 @@ Conventions (DESIGN.md §2):
 
 * A rotation matrix ``R`` of a segment has the segment axes as its columns, expressed in the
   world: ``p_world = R @ p_segment + t``.
-* Quaternions are scalar-first ``[w, x, y, z]`` everywhere in this package (SciPy uses
-  scalar-last internally; the conversion happens here and nowhere else).
+* Quaternions are scalar-first ``[w, x, y, z]`` everywhere in this package. SciPy, Pinocchio's
+  configuration vectors (root joints) and rerun are scalar-last: :func:`quat_xyzw_from_matrix`
+  and the conversions inside this module are the only places the order changes.
 * Every function accepts a single item (``(3,)``, ``(3, 3)``, ``(4,)``) or a stack
   (``(N, 3)``, ``(N, 3, 3)``, ``(N, 4)``) and returns the same leading shape.
 * Angles are radians.
@@ -27,11 +28,13 @@ __all__ = [
     "normalize",
     "project_to_so3",
     "quat_from_matrix",
+    "quat_xyzw_from_matrix",
     "rot_x",
     "rot_y",
     "rot_z",
     "rotation_aligning",
     "skew",
+    "tangent_basis",
 ]
 
 
@@ -70,6 +73,16 @@ def _elementary(axis: str, angle: np.ndarray | float) -> np.ndarray:
     out[..., i, i], out[..., j, j] = c, c
     out[..., i, j], out[..., j, i] = -s, s
     return out
+
+
+def tangent_basis(v: np.ndarray) -> np.ndarray:
+    """(3, 2) orthonormal basis ``[t1, t2]`` of the plane orthogonal to ``v`` (normalised here),
+    with ``t1 = v x e`` (``e`` the world axis least aligned with ``v``) and ``t2 = v x t1``: the
+    two-parameter tangent space of a unit axis around ``v``."""
+    v = normalize(np.asarray(v, float))
+    e = np.eye(3)[int(np.argmin(np.abs(v)))]
+    t1 = normalize(np.cross(v, e))
+    return np.stack([t1, np.cross(v, t1)], axis=1)
 
 
 def rot_x(angle: np.ndarray | float) -> np.ndarray:
@@ -129,6 +142,13 @@ def quat_from_matrix(R: np.ndarray) -> np.ndarray:
     q = Rotation.from_matrix(m).as_quat()[:, [3, 0, 1, 2]]
     q[q[:, 0] < 0] *= -1
     return q[0] if single else q
+
+
+def quat_xyzw_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion(s) **scalar-last** ``[x, y, z, w]`` of rotation matrices, the order of
+    Pinocchio's spherical/free-flyer configuration and of rerun (``w >= 0``, as
+    :func:`quat_from_matrix`)."""
+    return quat_from_matrix(R)[..., [1, 2, 3, 0]]
 
 
 def matrix_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
@@ -193,16 +213,26 @@ def matrix_from_euler_zxy(euler: np.ndarray) -> np.ndarray:
     return rot_z(e[..., 0]) @ rot_x(e[..., 1]) @ rot_y(e[..., 2])
 
 
-def euler_zxy_from_matrix(R: np.ndarray) -> np.ndarray:
+def euler_zxy_from_matrix(R: np.ndarray, *, gimbal_tol: float = 1e-9) -> np.ndarray:
     """Inverse of :func:`matrix_from_euler_zxy`: ``[z, x, y]`` angles, ``x`` in [-pi/2, pi/2].
 
-    From ``R[2, 1] = sin(x)``, ``(-R[0, 1], R[1, 1]) ~ (sin z, cos z)`` and
-    ``(-R[2, 0], R[2, 2]) ~ (sin y, cos y)``; singular (gimbal lock) at ``x = +-pi/2``.
+    Hu et al. 2021 eq 40-42 (1-based ``r_ij``): ``x = atan2(r32, sqrt(r12^2 + r22^2))``,
+    ``z = atan2(-r12, r22)``, ``y = atan2(-r31, r33)``. At gimbal lock (``cos x < gimbal_tol``)
+    only ``z + y`` (``x = +pi/2``) or ``y - z`` (``x = -pi/2``) is defined: ``z = 0`` and
+    ``y = atan2(r13, -r23)`` or ``atan2(r13, r23)`` (eq 41-42).
     """
     R = np.asarray(R, dtype=float)
-    x = np.arcsin(np.clip(R[..., 2, 1], -1.0, 1.0))
-    z = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
-    y = np.arctan2(-R[..., 2, 0], R[..., 2, 2])
+    r = lambda i, j: R[..., i - 1, j - 1]  # noqa: E731  (1-based like the paper)
+    cx = np.sqrt(r(1, 2) ** 2 + r(2, 2) ** 2)
+    x = np.arctan2(r(3, 2), cx)  # eq 40
+    z = np.arctan2(-r(1, 2), r(2, 2))
+    y = np.arctan2(-r(3, 1), r(3, 3))
+    lock = cx < gimbal_tol
+    if np.any(lock):
+        up = r(3, 2) > 0
+        z = np.where(lock, 0.0, z)  # eq 41-42
+        y = np.where(lock & up, np.arctan2(r(1, 3), -r(2, 3)), y)
+        y = np.where(lock & ~up, np.arctan2(r(1, 3), r(2, 3)), y)
     return np.stack([z, x, y], axis=-1)
 
 

@@ -9,9 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.calibration.aor_ipopt import aor_correction_ipopt, hinge_axes, hinge_fit
+from pipeline.calibration.aor_ipopt import aor_correction_ipopt, hinge_fit
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry, mirror_axis
+from pipeline.model.skeleton import knee_axis
 from pipeline.rotations import angle_between, exp3, log3, normalize, rotation_aligning
 
 DEG = np.pi / 180
@@ -84,15 +85,15 @@ def _twist(C, a) -> float:
 
 
 def test_hinge_axes_read_from_the_model(skeleton):
-    a_F, a_T = hinge_axes(skeleton.model, "right")
+    a_F, a_T = knee_axis(skeleton.model, "right")
     assert np.allclose(a_F, A_F, atol=1e-12) and np.allclose(a_T, A_T, atol=1e-12)
     g = replace(SubjectGeometry.default(1.75, "m", "right"), knee_axis_femur=A_F)
     both = Skeleton.build(g, knee="hinge")
-    a_F, a_T = hinge_axes(both.model, "left")  # left leg: mirrored frames, axis still right
+    a_F, a_T = knee_axis(both.model, "left")  # left leg: mirrored frames, axis still right
     assert np.allclose(a_F, mirror_axis(A_F), atol=1e-12) and a_F[2] > 0
     assert np.allclose(a_T, [0, 0, 1], atol=1e-12)
     with pytest.raises(InputError, match="hinge"):
-        hinge_axes(Skeleton.build(g, knee="free", legs=("right",)).model, "right")
+        knee_axis(Skeleton.build(g, knee="free", legs=("right",)).model, "right")
 
 
 def test_noise_free_misalignment_removed_exactly(skeleton):

@@ -16,7 +16,7 @@ from pipeline.commands.workflows import CALIBRATION_KEYS, imu_placements_from_ca
 from pipeline.io.imu_csv import ImuRecording, read_imu_csv, write_imu_csv
 from pipeline.model import Skeleton, SubjectGeometry, build_urdf
 from pipeline.rotations import angle_between, exp3, log3, rotation_aligning_with_twist
-from pipeline.simulate.model import knee_axis_in_segments, simulate_trial
+from pipeline.simulate.model import simulate_trial
 
 HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,quat_w,quat_x,quat_y,quat_z"
 
@@ -215,7 +215,7 @@ def calibrated(tmp_path_factory):
 def _placement_errors(est, gait, seg):
     s = gait.imus[f"right_{seg}_imu"]
     T = est.placements[f"right_{seg}_imu"]
-    a_f, a_t = knee_axis_in_segments(gait.skeleton, "right")
+    a_f, a_t = gait.skeleton.knee_axis("right")
     axis = a_f if seg == "femur" else a_t
     rot_err = log3(T[:3, :3] @ s.R_segment.T)  # segment frame
     dp = T[:3, 3] - s.p_segment

@@ -10,7 +10,6 @@ import pinocchio as pin
 import pytest
 
 from pipeline.errors import InputError
-
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.model.casadi_kinematics import (
     CasadiKinematics,

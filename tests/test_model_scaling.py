@@ -78,12 +78,12 @@ def test_shipped_population_aor_matches_the_dataset():
 
 
 def test_scale_cli_hinge_about_a_given_knee_axis(tmp_path):
-    from pipeline.calibration.aor_ipopt import hinge_axes
+    from pipeline.model.skeleton import knee_axis
 
     out = tmp_path / "h.urdf"
     args = ["scale", "--sex", "m", "--height-m", "1.80", "--knee", "hinge", "--out", str(out)]
     args += ["--knee-axis-femur", "-0.1", "-0.1", "1", "--knee-axis-tibia", "0", "0.05", "1"]
     assert main(args) == 0
-    a_F, a_T = hinge_axes(pin.buildModelFromUrdf(str(out)), "right")
+    a_F, a_T = knee_axis(pin.buildModelFromUrdf(str(out)), "right")
     np.testing.assert_allclose(a_F, np.array([-0.1, -0.1, 1]) / np.sqrt(1.02), atol=1e-9)
     np.testing.assert_allclose(a_T, np.array([0, 0.05, 1]) / np.sqrt(1.0025), atol=1e-9)

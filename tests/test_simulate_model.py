@@ -17,7 +17,6 @@ from pipeline.simulate.model import (
     MOTIONS,
     SensorNoise,
     joint_trajectories,
-    knee_axis_in_segments,
     simulate_trial,
 )
 
@@ -136,7 +135,7 @@ def test_knee_axis_and_joint_centres_consistent(gait):
 
 def test_knee_axis_from_model_matches_geometry(skeleton):
     g = SubjectGeometry.default(1.75, "m", "right")
-    a_f, a_t = knee_axis_in_segments(skeleton, "right")
+    a_f, a_t = skeleton.knee_axis("right")
     np.testing.assert_allclose(a_f, g.knee_axis_femur, atol=1e-12)
     np.testing.assert_allclose(a_t, g.knee_axis_tibia, atol=1e-12)
 
@@ -246,7 +245,7 @@ def test_hinge_calibration_recovers_simulated_knee_axis(gait):
     e1, e2 = _axis_errors_deg(res, truth)
     assert e1 < 0.5 and e2 < 0.5
     # the knee axis in the sensor frames differs from the model's IMU-frame axis (misalignment)
-    a_f, _ = knee_axis_in_segments(gait.skeleton, "right")
+    a_f, _ = gait.skeleton.knee_axis("right")
     assert np.degrees(angle_between(truth["axis_1"], a_f)) > 5.0
     o1, o2 = project_hinge_positions(
         truth["position_1_m"], truth["position_2_m"], truth["axis_1"], truth["axis_2"]

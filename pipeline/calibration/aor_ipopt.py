@@ -66,7 +66,6 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-import pinocchio as pin
 
 from pipeline.calibration.aor import KneeAoR, correction_rotations, knee_aor
 from pipeline.calibration.hinge_fit import (
@@ -76,21 +75,19 @@ from pipeline.calibration.hinge_fit import (
     hinge_fit,
     motion_weights,
 )
+from pipeline.calibration.losses import check_loss, robust_loss
 from pipeline.errors import InputError
 from pipeline.model.casadi_kinematics import exp3_sym
-from pipeline.rotations import angle_between, normalize
+from pipeline.rotations import angle_between, normalize, tangent_basis
 
 __all__ = [
-    "LOSSES",
     "AorCorrection",
     "HingeFit",
     "aor_correction_ipopt",
-    "hinge_axes",
     "hinge_fit",
     "motion_weights",
 ]
 
-LOSSES = ("l2", "huber", "cauchy")
 
 
 @dataclass(frozen=True)
@@ -128,49 +125,6 @@ class AorCorrection:
 
 # --------------------------------------------------------------------------------------------
 # inputs
-
-
-def hinge_axes(model: pin.Model, side: str = "right") -> tuple[np.ndarray, np.ndarray]:
-    """Knee axis ``(a_F, a_T)`` of a hinge-knee model in its femoral and tibial frames.
-
-    Read from the ``pin.Model`` (the URDF is the source of truth): world axis of joint
-    ``<side>_knee`` at the neutral configuration, expressed in the frames ``<side>_femur`` and
-    ``<side>_tibia``, signed to point right (z > 0).
-    """
-    name = f"{side}_knee"
-    if not model.existJointName(name):
-        raise InputError(f"expected a hinge-knee model with joint {name!r}", field="model")
-    jm = model.joints[model.getJointId(name)]
-    if jm.nv != 1:
-        raise InputError(f"expected a 1-DoF joint {name!r}, found {jm.shortname()}")
-    data = model.createData()
-    q = pin.neutral(model)
-    pin.computeJointJacobians(model, data, q)
-    pin.updateFramePlacements(model, data)
-    axis_w = pin.getJointJacobian(model, data, model.getJointId(name), pin.LOCAL_WORLD_ALIGNED)[
-        3:, jm.idx_v
-    ]
-    out = []
-    for seg in ("femur", "tibia"):
-        R = data.oMf[model.getFrameId(f"{side}_{seg}", pin.FrameType.BODY)].rotation
-        a = normalize(R.T @ axis_w)
-        out.append(a if a[2] >= 0 else -a)
-    return out[0], out[1]
-
-
-def _tangent_basis(a: np.ndarray) -> np.ndarray:
-    """3x2 orthonormal basis of the plane ⟂ ``a``."""
-    e = np.eye(3)[int(np.argmin(np.abs(a)))]
-    t1 = normalize(np.cross(a, e))
-    return np.stack([t1, np.cross(a, t1)], axis=1)
-
-
-def _loss(e, kind: str, s2: float):
-    if kind == "l2":
-        return e
-    if kind == "huber":
-        return 2 * s2 * (ca.sqrt(1 + e / s2) - 1)
-    return s2 * ca.log(1 + e / s2)
 
 
 # --------------------------------------------------------------------------------------------
@@ -215,7 +169,7 @@ def _sample_cost(kind: str, scale: float) -> ca.Function:
     """``w ρ(|M u - v|²)`` of one sample, ``M`` given by its 9 column-major entries."""
     u, v, m, w = ca.SX.sym("u", 3), ca.SX.sym("v", 3), ca.SX.sym("m", 9), ca.SX.sym("w")
     r = ca.mtimes(ca.reshape(m, 3, 3), u) - v
-    return ca.Function("sample", [u, v, m, w], [w * _loss(ca.sumsqr(r), kind, scale**2)])
+    return ca.Function("sample", [u, v, m, w], [w * robust_loss(ca.sumsqr(r), kind, scale)])
 
 
 @lru_cache(maxsize=4)
@@ -261,7 +215,7 @@ def aor_correction_ipopt(
     Args:
         femur_R, tibia_R: IMC segment orientations ``(N, 3, 3)``; NaN rows are skipped.
         reference_femur_axis, reference_tibia_axis: reference knee AoR (population or
-            individual, e.g. :func:`hinge_axes` of the subject's model); pointing right.
+            individual, e.g. :func:`pipeline.model.skeleton.knee_axis` of the subject's model); pointing right.
         prior_weight: ``λ_p`` (``np.inf`` fixes ``b = a``); correction_weight: ``λ_c``.
         loss: ``'l2'``, ``'huber'`` or ``'cauchy'``; loss_scale: ``s`` (rad of hinge miss).
         weights: ``'motion'`` (default), ``'uniform'`` or an array ``(N,)``.
@@ -271,8 +225,7 @@ def aor_correction_ipopt(
     The math, and what it can and cannot observe, is in the module docstring.
     """
     t0 = time.perf_counter()
-    if loss not in LOSSES:
-        raise InputError(f"expected loss in {LOSSES}, got {loss!r}", field="loss")
+    check_loss(loss)
     if not (prior_weight >= 0 and correction_weight >= 0):
         raise InputError(
             f"expected weights >= 0, got prior {prior_weight}, correction {correction_weight}"
@@ -291,7 +244,7 @@ def aor_correction_ipopt(
             start = _axes_only(fit.femur_axis, fit.tibia_axis)
     R0F, R0T = correction_rotations(start, aF, aT)
 
-    TF, TT = _tangent_basis(aF), _tangent_basis(aT)
+    TF, TT = tangent_basis(aF), tangent_basis(aT)
     geom = np.concatenate([R0F.ravel("F"), R0T.ravel("F"), aF, aT, TF.ravel("F"), TT.ravel("F")])
     fixed_prior = np.isinf(prior_weight)
     lam = np.array([0.0 if fixed_prior else prior_weight, correction_weight])

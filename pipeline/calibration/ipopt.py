@@ -31,6 +31,7 @@ from pipeline.calibration.joint_constraints import (
     consistent_axis_signs,
     project_hinge_positions,
 )
+from pipeline.calibration.losses import robust_loss
 from pipeline.calibration.solvers import CalibrationResult, _solve, diagnose
 from pipeline.errors import InputError
 from pipeline.rotations import normalize
@@ -38,16 +39,6 @@ from pipeline.rotations import normalize
 __all__ = ["calibrate_ipopt"]
 
 _EPS = 1e-12
-
-
-def _rho(e: ca.MX, loss: str, d: float) -> ca.MX:
-    if loss == "l2":
-        return e**2
-    if loss == "huber":
-        return 2 * d**2 * (ca.sqrt(1 + (e / d) ** 2) - 1)
-    if loss == "cauchy":
-        return d**2 * ca.log(1 + (e / d) ** 2)
-    raise InputError(f"expected loss 'l2', 'huber' or 'cauchy', got {loss!r}", field="loss")
 
 
 def _decimate(d: JointData, step: int) -> JointData:
@@ -109,7 +100,7 @@ def calibrate_ipopt(
     K2 = _gamma_matrix(data.gyr_2, data.gyr_dot_2)
     o = ca.MX.sym("o", 6)
     e_s = _position_norm(data.acc_1, K1, o[:3]) - _position_norm(data.acc_2, K2, o[3:])
-    f = ca.sum1(_rho(e_s, loss, scale_position)) / (n * scale_position**2)
+    f = ca.sum1(robust_loss(e_s**2, loss, scale_position)) / (n * scale_position**2)
     g = []
     x = o
     x0 = np.concatenate([o1, o2])
@@ -130,7 +121,7 @@ def calibrate_ipopt(
         o1, o2 = project_hinge_positions(o1, o2, j1, j2)
         j = ca.MX.sym("j", 6)
         e_h = _axis_norm(data.gyr_1, j[:3]) - _axis_norm(data.gyr_2, j[3:])
-        f = f + ca.sum1(_rho(e_h, loss, scale_hinge)) / (n * scale_hinge**2)
+        f = f + ca.sum1(robust_loss(e_h**2, loss, scale_hinge)) / (n * scale_hinge**2)
         for p, jj in ((p1, j[:3]), (p2, j[3:])):
             if p is not None:
                 f = f + prior_weight * ca.sumsqr(jj - ca.DM(p))

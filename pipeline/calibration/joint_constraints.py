@@ -47,7 +47,6 @@ __all__ = [
     "spherical_from_axis",
     "spherical_jacobian",
     "spherical_residual",
-    "tangent_basis",
 ]
 
 
@@ -219,14 +218,6 @@ def consistent_axis_signs(
     if np.dot(j1, ref) < 0:
         j1, j2 = -j1, -j2
     return j1, j2
-
-
-def tangent_basis(j: np.ndarray) -> np.ndarray:
-    """Two unit vectors (3,2) spanning the plane orthogonal to the unit vector ``j``."""
-    j = normalize(np.asarray(j, float))
-    a = np.eye(3)[np.argmin(np.abs(j))]
-    b1 = normalize(np.cross(j, a))
-    return np.stack([b1, np.cross(j, b1)], axis=1)
 
 
 def observability(

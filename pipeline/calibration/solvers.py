@@ -38,9 +38,9 @@ from pipeline.calibration.joint_constraints import (
     project_hinge_positions,
     spherical_jacobian,
     spherical_residual,
-    tangent_basis,
 )
 from pipeline.errors import InputError
+from pipeline.rotations import tangent_basis
 
 __all__ = [
     "CalibrationResult",

@@ -329,7 +329,7 @@ def imu_placements_from_calibration(
 
     Inputs: the knee axis ``axis_S`` and the eq-16 joint point ``position_S_m`` (sensor -> point)
     in the thigh (1) and shank (2) sensor frames. The model gives the knee axis ``a_G`` pointing
-    right and the knee centre ``c_G`` in each segment (:func:`knee_axis_in_segments`, KJC frames).
+    right and the knee centre ``c_G`` in each segment (:meth:`Skeleton.knee_axis`, KJC frames).
 
     Rotation ``R_GS`` (sensor axes in the segment): ``R_GS j_S = a_G`` fixes two of its three
     DoF. The twist about the axis is not determined by a hinge calibration. It is fixed
@@ -348,11 +348,9 @@ def imu_placements_from_calibration(
     is not (any point of a hinge axis satisfies the constraint). It is chosen so that the mean
     axial coordinate of the two sensors stays that of the current IMU frames (least squares).
     """
-    from pipeline.simulate.model import knee_axis_in_segments
-
     if static_acc is not None and len(static_acc) != 2:
         raise InputError("expected static_acc as (thigh, shank) 3-vectors", field="static_acc")
-    a_f, a_t = knee_axis_in_segments(skeleton, side)
+    a_f, a_t = skeleton.knee_axis(side)
     names = (f"{side}_femur", f"{side}_tibia")
     q0 = skeleton.neutral()
     centres = [skeleton.relative_pose(f"{side}_KJC", seg, q0)[:3, 3] for seg in names]

@@ -24,7 +24,7 @@ from pipeline.errors import InputError
 from pipeline.model.builder import DEFAULT_KNEE, LANDMARKS, SEGMENTS, urdf_text
 from pipeline.model.geometry import SubjectGeometry
 
-__all__ = ["ROOTS", "Skeleton", "frame_ids"]
+__all__ = ["ROOTS", "Skeleton", "frame_ids", "knee_axis"]
 
 ROOTS = ("fixed", "freeflyer", "spherical")
 
@@ -39,6 +39,35 @@ def frame_ids(model: pin.Model) -> dict[str, int]:
         if f.type == pin.FrameType.BODY:
             ids[f.name] = i
     return ids
+
+
+def knee_axis(model: pin.Model, side: str = "right") -> tuple[np.ndarray, np.ndarray]:
+    """Knee axis ``(a_F, a_T)`` of a hinge-knee model in its femoral and tibial frames.
+
+    Read from the ``pin.Model`` (the URDF is the source of truth): world axis of joint
+    ``<side>_knee`` at the neutral configuration, expressed in the frames ``<side>_femur`` and
+    ``<side>_tibia``, signed to point right (z > 0).
+    """
+    name = f"{side}_knee"
+    if not model.existJointName(name):
+        raise InputError(f"expected a hinge-knee model with joint {name!r}", field="model")
+    jm = model.joints[model.getJointId(name)]
+    if jm.nv != 1:
+        raise InputError(f"expected a 1-DoF joint {name!r}, found {jm.shortname()}")
+    data = model.createData()
+    q = pin.neutral(model)
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    axis_w = pin.getJointJacobian(model, data, model.getJointId(name), pin.LOCAL_WORLD_ALIGNED)[
+        3:, jm.idx_v
+    ]
+    out = []
+    for seg in ("femur", "tibia"):
+        R = data.oMf[model.getFrameId(f"{side}_{seg}", pin.FrameType.BODY)].rotation
+        a = R.T @ axis_w
+        a = a / np.linalg.norm(a)
+        out.append(a if a[2] >= 0 else -a)
+    return out[0], out[1]
 
 
 def _root_joint(root: str):
@@ -112,6 +141,10 @@ class Skeleton:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(self.urdf, encoding="utf-8")
         return path
+
+    def knee_axis(self, side: str = "right") -> tuple[np.ndarray, np.ndarray]:
+        """Hinge-knee axis in the femoral and tibial frames (:func:`knee_axis`)."""
+        return knee_axis(self.model, side)
 
     # ---- names --------------------------------------------------------------------------------
     @property

@@ -45,7 +45,6 @@ __all__ = [
     "SimulatedImu",
     "SimulatedTrial",
     "joint_trajectories",
-    "knee_axis_in_segments",
     "simulate_trial",
 ]
 
@@ -138,25 +137,6 @@ class SimulatedTrial:
 
 
 # ------------------------------------------------------------------------------------- truth
-
-
-def knee_axis_in_segments(skeleton: Skeleton, side: str = "right") -> tuple[np.ndarray, np.ndarray]:
-    """Unit hinge-knee axis (pointing right) in the femoral and tibial frames, read from the
-    model: the LOCAL angular Jacobian column of the knee joint at the tibia frame."""
-    name = f"{side}_knee"
-    model = skeleton.model
-    if not model.existJointName(name):
-        raise InputError(f"expected a hinge knee joint {name!r} in the model", field="knee")
-    data = model.createData()
-    q = pin.neutral(model)
-    fid = skeleton.frame_id(f"{side}_tibia")
-    J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
-    a_t = normalize(J[3:, model.joints[model.getJointId(name)].idx_v])
-    a_t = a_t if a_t[2] >= 0 else -a_t  # z points to the subject's right on both legs
-    pin.framesForwardKinematics(model, data, q)
-    R_f = data.oMf[skeleton.frame_id(f"{side}_femur")].rotation
-    R_t = data.oMf[fid].rotation
-    return R_f.T @ R_t @ a_t, a_t
 
 
 def _segment_of(imu: str) -> str:
@@ -287,7 +267,7 @@ def simulate_trial(
     knee_axis = {}
     if skeleton.knee == "hinge":
         for side in skeleton.legs:
-            a_f, a_t = knee_axis_in_segments(skeleton, side)
+            a_f, a_t = skeleton.knee_axis(side)
             for seg, ax in (("femur", a_f), ("tibia", a_t)):
                 imu = f"{side}_{seg}_imu"
                 knee_axis[imu] = placements[imu][0].T @ ax

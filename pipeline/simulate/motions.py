@@ -29,7 +29,7 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import quat_from_matrix, rot_x
+from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 
 __all__ = ["MOTIONS", "joint_trajectories"]
@@ -190,7 +190,7 @@ def joint_trajectories(
     phase = rng.uniform(0, 2 * np.pi)
     R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton), base)
     vl = np.einsum("nji,nj->ni", R, dp)
-    q[:, :3], q[:, 3:7] = p, quat_from_matrix(R)[:, [1, 2, 3, 0]]
+    q[:, :3], q[:, 3:7] = p, quat_xyzw_from_matrix(R)
     v[:, :3], v[:, 3:6] = vl, w
     a[:, :3], a[:, 3:6] = np.einsum("nji,nj->ni", R, ddp) - np.cross(w, vl), dw
     for side in skeleton.legs:

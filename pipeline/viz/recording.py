@@ -44,7 +44,7 @@ from urllib.parse import quote
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.rotations import quat_from_matrix, rot_x
+from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.viz.layout import default_blueprint as _blueprint
 from pipeline.viz.layout import up_axis_index as _check_up_axis
 
@@ -243,7 +243,7 @@ def _log_poses(
         if axis_length is not None:
             rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
         if ok.any():
-            xyzw = quat_from_matrix(R[ok])[:, [1, 2, 3, 0]]  # rerun: scalar-last
+            xyzw = quat_xyzw_from_matrix(R[ok])  # rerun: scalar-last
             _send(rec, entity, t, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
 
 

@@ -1,32 +1,38 @@
-"""Hu 2021 eq 30-42: segment frames from a calibration and ZXY joint angles."""
+"""Hu 2021 eq 30-42: segment frames from a calibration; the ZXY joint angles of eq 39-42 (their
+one home is pipeline.rotations) on the joint rotations those frames give."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from pipeline.analysis.segment_angles import (
+from pipeline.calibration.segment_frames import (
     joint_rotation,
-    matrix_from_zxy,
     parallel_frame,
     segment_orientation,
     shank_frame,
     thigh_frame,
-    zxy_angles,
 )
 from pipeline.errors import InputError
-from pipeline.rotations import exp3, rot_x, rot_y, rot_z
+from pipeline.rotations import (
+    euler_zxy_from_matrix,
+    exp3,
+    matrix_from_euler_zxy,
+    rot_x,
+    rot_y,
+    rot_z,
+)
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 
 
 def test_zxy_by_hand_and_round_trip():
-    np.testing.assert_allclose(zxy_angles(rot_z(0.5)), [0.5, 0, 0], atol=1e-15)
-    np.testing.assert_allclose(zxy_angles(rot_x(-0.2)), [0, -0.2, 0], atol=1e-15)
-    np.testing.assert_allclose(zxy_angles(rot_y(1.0)), [0, 0, 1.0], atol=1e-15)
+    np.testing.assert_allclose(euler_zxy_from_matrix(rot_z(0.5)), [0.5, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(euler_zxy_from_matrix(rot_x(-0.2)), [0, -0.2, 0], atol=1e-15)
+    np.testing.assert_allclose(euler_zxy_from_matrix(rot_y(1.0)), [0, 0, 1.0], atol=1e-15)
     rng = np.random.default_rng(0)
     ang = rng.uniform([-3, -1.4, -3], [3, 1.4, 3], (200, 3))
-    R = matrix_from_zxy(ang)
-    np.testing.assert_allclose(zxy_angles(R), ang, atol=1e-12)
+    R = matrix_from_euler_zxy(ang)
+    np.testing.assert_allclose(euler_zxy_from_matrix(R), ang, atol=1e-12)
     # eq 39 entries: r32 = sin(b), r12 = -sin(a) cos(b), r31 = -cos(b) sin(c)
     a, b, c = ang[0]
     assert R[0, 2, 1] == pytest.approx(np.sin(b))
@@ -36,10 +42,10 @@ def test_zxy_by_hand_and_round_trip():
 
 @pytest.mark.parametrize("b", [np.pi / 2, -np.pi / 2])
 def test_gimbal_lock_eq41_42(b):
-    R = matrix_from_zxy([0.7, b, -0.4])
-    out = zxy_angles(R, gimbal_tol=1e-6)
+    R = matrix_from_euler_zxy([0.7, b, -0.4])
+    out = euler_zxy_from_matrix(R, gimbal_tol=1e-6)
     assert out[0] == 0.0 and out[1] == pytest.approx(b)
-    np.testing.assert_allclose(matrix_from_zxy(out), R, atol=1e-9)
+    np.testing.assert_allclose(matrix_from_euler_zxy(out), R, atol=1e-9)
 
 
 def test_thigh_and_shank_frames_by_hand():
@@ -72,7 +78,7 @@ def test_frames_from_sensor_truth_give_the_knee_angle():
     R1 = segment_orientation(R_thigh @ Ri1, F_thigh)
     R2 = segment_orientation(R_shank @ Ri2, F_shank)
     np.testing.assert_allclose(R1, R_thigh, atol=1e-12)
-    ang = zxy_angles(joint_rotation(R1, R2))
+    ang = euler_zxy_from_matrix(joint_rotation(R1, R2))
     np.testing.assert_allclose(ang[:, 0], flex(t)[0], atol=1e-12)
     np.testing.assert_allclose(ang[:, 1:], 0, atol=1e-12)
 

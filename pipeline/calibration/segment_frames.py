@@ -1,4 +1,4 @@
-"""Segment frames from a joint calibration and ZXY joint angles (Hu et al. 2021 §4, eq 30-42).
+"""Segment frames from a joint calibration (Hu et al. 2021 §4, eq 30-38).
 
 Convention: a frame "in sensor S" is the 3x3 matrix whose columns are the segment axes
 expressed in the sensor frame, so the segment orientation in the world is ``R_S(t) @ F``. Hu's
@@ -16,11 +16,8 @@ Positions are joint centres seen from the sensor (sensor -> joint), as in
 * eq 30/38: joint rotation = proximal segment -> distal segment, ``R_prox(t)^T R_dist(t)`` with
   ``R_seg(t) = R_S(t) F``; eq 38's ``R_C^B(0)`` terms re-express the same product through the
   static pose, which is not needed when both sensor orientations share a world frame.
-* eq 39-42: ZXY Cardan angles ``R = Rz(a) Rx(b) Ry(c)``: flexion/extension ``a`` about z,
-  ab/adduction ``b`` about x, internal/external rotation ``c`` about y (the paper's eq 39-40 swap
-  the symbols beta/delta/phi relative to its own text; the formulas are the same):
-  ``b = atan2(r32, sqrt(r12^2 + r22^2))``, ``a = atan2(-r12, r22)``, ``c = atan2(-r31, r33)``;
-  at ``b = +-90 deg`` (eq 41-42) ``a = 0`` and ``c = atan2(r13, -+r23)``.
+* eq 39-42 (ZXY Cardan angles of the joint rotation): :func:`pipeline.rotations.euler_zxy_from_matrix`
+  and :func:`pipeline.rotations.matrix_from_euler_zxy`.
 """
 
 from __future__ import annotations
@@ -28,16 +25,14 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.rotations import matrix_from_quat, normalize, rot_x, rot_y, rot_z
+from pipeline.rotations import matrix_from_quat, normalize
 
 __all__ = [
     "joint_rotation",
-    "matrix_from_zxy",
     "parallel_frame",
     "segment_orientation",
     "shank_frame",
     "thigh_frame",
-    "zxy_angles",
 ]
 
 
@@ -86,26 +81,3 @@ def segment_orientation(sensor: np.ndarray, frame_in_sensor: np.ndarray) -> np.n
 def joint_rotation(R_proximal: np.ndarray, R_distal: np.ndarray) -> np.ndarray:
     """Eq 38: the distal segment in the proximal segment's frame, ``R_prox^T R_dist``."""
     return np.swapaxes(np.asarray(R_proximal, float), -1, -2) @ np.asarray(R_distal, float)
-
-
-def matrix_from_zxy(angles: np.ndarray) -> np.ndarray:
-    """Eq 39: ``Rz(a) Rx(b) Ry(c)`` from ``[a, b, c]`` (..., 3), radians."""
-    a = np.asarray(angles, float)
-    return rot_z(a[..., 0]) @ rot_x(a[..., 1]) @ rot_y(a[..., 2])
-
-
-def zxy_angles(R: np.ndarray, *, gimbal_tol: float = 1e-9) -> np.ndarray:
-    """Eq 40-42: ``[a (z, flexion), b (x, adduction), c (y, rotation)]`` (..., 3), radians."""
-    R = np.asarray(R, float)
-    r = lambda i, j: R[..., i - 1, j - 1]  # noqa: E731  (1-based like the paper)
-    cb = np.sqrt(r(1, 2) ** 2 + r(2, 2) ** 2)
-    b = np.arctan2(r(3, 2), cb)  # eq 40
-    a = np.arctan2(-r(1, 2), r(2, 2))
-    c = np.arctan2(-r(3, 1), r(3, 3))
-    lock = cb < gimbal_tol
-    if np.any(lock):
-        up = r(3, 2) > 0
-        a = np.where(lock, 0.0, a)  # eq 41-42
-        c = np.where(lock & up, np.arctan2(r(1, 3), -r(2, 3)), c)
-        c = np.where(lock & ~up, np.arctan2(r(1, 3), r(2, 3)), c)
-    return np.stack([a, b, c], axis=-1)
