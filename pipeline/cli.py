@@ -10,7 +10,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from pipeline.calibration.calibrate import DEFAULT_METHOD, METHODS
 from pipeline.errors import InputError
+from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 
 EXAMPLES = {
     "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out subject.urdf",
@@ -55,7 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _sub(sub, "scale", "build a subject-scaled URDF from the regression equations")
     _add_anthropometrics(p)
-    p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
+    p.add_argument("--knee", choices=KNEE_MODES, default=DEFAULT_KNEE,
+                   help=f"knee model (default {DEFAULT_KNEE})")  # fmt: skip
     for seg in ("femur", "tibia"):
         p.add_argument(
             f"--knee-axis-{seg}",
@@ -99,7 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
         "'anatomical' (from hip and knee flexion, independent of sensor mounting; default) or "
         "OpenSense's 'pelvis_imu:-z' style (an axis of the pelvis sensor)",
     )
-    p.add_argument("--knee", choices=["hinge", "free"], default="free", help="knee model")
+    p.add_argument("--knee", choices=KNEE_MODES, default=DEFAULT_KNEE,
+                   help=f"knee model (default {DEFAULT_KNEE})")  # fmt: skip
     p.add_argument("--out", type=Path, required=True, help="output directory")
     p.set_defaults(func=_cmd_ik)
 
@@ -107,7 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("joint", choices=["hinge", "spherical"], help="joint model")
     p.add_argument("--imu1", type=Path, required=True, help="proximal IMU CSV")
     p.add_argument("--imu2", type=Path, required=True, help="distal IMU CSV")
-    p.add_argument("--method", choices=["gn", "dwpso", "gwo", "ipopt"], default="ipopt")
+    p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
+                   help=f"optimiser (default {DEFAULT_METHOD})")  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="seed for the swarm optimizers")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=_cmd_calibrate)
@@ -166,23 +171,17 @@ def _pairs(items: list[str] | None, option: str) -> dict[str, str] | None:
 
 
 def _cmd_scale(args) -> int:
-    from pipeline.model.scaling import scale_model
+    from pipeline.commands.scale import run_scale
 
-    out = scale_model(
-        _measures(args),
-        args.out,
-        knee=args.knee,
-        knee_axis_femur=args.knee_axis_femur,
-        knee_axis_tibia=args.knee_axis_tibia,
-    )
-    print(f"wrote {out}")
+    print(run_scale(_measures(args), args.out, knee=args.knee,
+                    knee_axis_femur=args.knee_axis_femur, knee_axis_tibia=args.knee_axis_tibia))  # fmt: skip
     return 0
 
 
 def _cmd_ik(args) -> int:
-    from pipeline.process import run_ik_from_sto
+    from pipeline.commands.ik import run_ik
 
-    summary = run_ik_from_sto(
+    summary = run_ik(
         args.orientations,
         _measures(args),
         args.out,
@@ -196,23 +195,23 @@ def _cmd_ik(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
-    from pipeline.commands.workflows import run_calibration
+    from pipeline.commands.calibrate import run_calibration
 
     print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json))
     return 0
 
 
 def _cmd_simulate(args) -> int:
-    from pipeline.commands.workflows import run_simulation
+    from pipeline.commands.simulate import run_simulation
 
     print(run_simulation(args.out, args.motion, args.duration_s, args.seed))
     return 0
 
 
 def _cmd_reproduce(args) -> int:
-    from pipeline.reproduce import reproduce_wang2023
+    from pipeline.commands.reproduce import run_reproduce
 
-    print(reproduce_wang2023(args.data, args.out, rerun_dir=args.rerun))
+    print(run_reproduce(args.paper, args.data, args.out, rerun_dir=args.rerun))
     return 0
 
 
@@ -224,11 +223,9 @@ def _cmd_demo(args) -> int:
 
 
 def _cmd_view(args) -> int:
-    from pipeline.viz.recording import view
+    from pipeline.commands.view import run_view
 
-    if not args.rrd.exists():
-        raise InputError("no such recording", file=args.rrd)
-    return int(view(args.rrd, web=args.web) or 0)
+    return run_view(args.rrd, web=args.web)
 
 
 def main(argv: list[str] | None = None) -> int:

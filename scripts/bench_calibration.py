@@ -19,12 +19,12 @@ from functools import partial  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from pipeline.calibration.calibrate import calibrate  # noqa: E402
 from pipeline.calibration.ipopt import calibrate_ipopt  # noqa: E402
 from pipeline.calibration.joint_constraints import (  # noqa: E402
     joint_data,
     project_hinge_positions,
 )
-from pipeline.calibration.solvers import calibrate  # noqa: E402
 from pipeline.rotations import angle_between, exp3, normalize  # noqa: E402
 from pipeline.simulate.chain import hinge_trial, spherical_trial  # noqa: E402
 

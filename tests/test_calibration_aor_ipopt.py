@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.calibration.aor_ipopt import aor_correction_ipopt, hinge_fit
+from pipeline.calibration.aor_ipopt import aor_correction_ipopt
+from pipeline.calibration.hinge_fit import hinge_fit
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry, mirror_axis
 from pipeline.model.skeleton import knee_axis

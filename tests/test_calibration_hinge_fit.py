@@ -5,20 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.calibration.hinge_fit import HingeFit, hinge_fit, motion_weights
+from pipeline.calibration.hinge_fit import hinge_fit, motion_weights
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, exp3, normalize, rot_z
 
 DEG = np.pi / 180
-
-
-def test_reexported_from_aor_ipopt():
-    from pipeline.calibration import aor_ipopt
-
-    assert aor_ipopt.hinge_fit is hinge_fit
-    assert aor_ipopt.HingeFit is HingeFit
-    assert aor_ipopt.motion_weights is motion_weights
-    assert {"HingeFit", "hinge_fit", "motion_weights"} <= set(aor_ipopt.__all__)
 
 
 def test_l2_identity_and_excitation_by_hand():

@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.ipopt import calibrate_ipopt
 from pipeline.calibration.joint_constraints import joint_data, project_hinge_positions
-from pipeline.calibration.solvers import calibrate, dwpso, gauss_newton, gwo
+from pipeline.calibration.solvers import dwpso, gauss_newton, gwo
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, exp3
 from pipeline.simulate.chain import hinge_trial, spherical_trial

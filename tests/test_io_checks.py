@@ -8,7 +8,7 @@ from _helpers import rotation_about_axis, times
 
 from pipeline.errors import InputError
 from pipeline.io import checks
-from pipeline.io.checks import Notes
+from pipeline.io.notes import Notes
 from pipeline.rotations import matrix_from_quat
 
 # ---------------------------------------------------------------- time stamps
@@ -175,11 +175,3 @@ def test_notes_prefix_like_errors():
     n.add("did x", file="a.sto", field="pelvis_imu")
     n.add("did y")
     assert n.as_tuple() == ("a.sto: field pelvis_imu: did x", "did y")
-
-
-def test_moved_names_still_importable_from_checks():
-    from pipeline.io import gaps, notes
-
-    assert checks.fill_gaps is gaps.fill_gaps
-    assert checks.DEFAULT_MAX_GAP_S == gaps.DEFAULT_MAX_GAP_S == 0.1
-    assert checks.Notes is notes.Notes

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.errors import InputError
-from pipeline.io import checks, text
+from pipeline.io import text
 
 
 def test_parse_table_empty_cells_are_nan_and_bad_cells_named():
@@ -34,15 +34,8 @@ def test_read_text_lines_refuses_missing_empty_binary(tmp_path):
 
 
 def test_where_gives_row_and_file_line():
-    assert text._where(3, None) == "row 3"
-    assert text._where(3, 10) == "row 3 (line 13)"  # data start at line 10: row 0 is line 10
-
-
-def test_text_helpers_still_importable_from_checks():
-    from pipeline.io.checks import parse_table, read_text_lines
-
-    assert parse_table is text.parse_table and read_text_lines is text.read_text_lines
-    assert checks.FileLike is text.FileLike
+    assert text.where(3, None) == "row 3"
+    assert text.where(3, 10) == "row 3 (line 13)"  # data start at line 10: row 0 is line 10
 
 
 def test_read_text_lines_drops_bom_and_line_ends_refuses_folder(tmp_path):

@@ -8,14 +8,13 @@ import pytest
 import yourdfpy
 from _helpers import MIRROR, asymmetric_subject
 
-from pipeline.model import Skeleton, build_urdf, resolve_package_uri
+from pipeline.model import Skeleton, build_urdf
+from pipeline.model.meshes import resolve_package_uri
 
 
-def test_resolve_package_uri_is_reexported_and_maps_to_the_share_folder():
-    from pipeline.model import builder, meshes
+def test_resolve_package_uri_maps_to_the_share_folder():
     from pipeline.model.resources import example_robot_data_share
 
-    assert builder.resolve_package_uri is meshes.resolve_package_uri
     uri = "package://example-robot-data/robots/human_description/meshes/foot_mesh.STL"
     expected = example_robot_data_share().parent / uri[len("package://") :]
     assert resolve_package_uri(uri) == expected

@@ -1,4 +1,5 @@
-"""IK from OpenSim .sto orientations: heading, IMU placement from the calibration pose, IK."""
+"""pipeline.process: IK from OpenSim .sto orientations (heading, IMU placement from the
+calibration pose, IK), and ``pipeline ik`` on the real OpenSim files."""
 
 from pathlib import Path
 
@@ -6,25 +7,19 @@ import numpy as np
 import pytest
 
 from pipeline.analysis.landmarks import frame_trajectories
+from pipeline.calibration.heading import anatomical_right
 from pipeline.cli import main
 from pipeline.errors import InputError
 from pipeline.io.opensim import OrientationTrial, read_mot, write_orientations_sto
 from pipeline.model import Skeleton
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures
-from pipeline.process import anatomical_right, heading_rotation, run_ik
+from pipeline.process import process_recording
 from pipeline.rotations import exp3, quat_from_matrix, rot_y
 
 OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
 SENSORS = {"pelvis": "pelvis_imu", "right_femur": "femur_r_imu", "right_tibia": "tibia_r_imu",
            "left_femur": "femur_l_imu", "left_tibia": "tibia_l_imu"}  # fmt: skip
-
-
-def test_heading_rotation_by_hand():
-    # the subject's right along world +x: Ry(90 deg) takes the model's right (z) to x
-    np.testing.assert_allclose(heading_rotation(np.array([1.0, 0, 0])), rot_y(np.pi / 2),
-                               atol=1e-15)  # fmt: skip
-    np.testing.assert_allclose(heading_rotation(np.array([0, 0, 1.0])), np.eye(3), atol=1e-15)
 
 
 def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
@@ -60,7 +55,7 @@ def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
 
 def test_recovers_heading_and_joint_angles_of_a_known_walk(tmp_path):
     sk, Q, trial, H = _walk(tmp_path)
-    run = run_ik(trial, Measures("m", 1.75), tmp_path / "out.urdf", knee="free")
+    run = process_recording(trial, Measures("m", 1.75), knee="free")
     np.testing.assert_allclose(run.heading_right, H @ [0, 0, 1.0], atol=0.05)
     from pipeline.analysis.landmarks import joint_angles
 
@@ -75,7 +70,7 @@ def test_hinge_knee_model_reproduces_a_hinge_walk(tmp_path):
     """With a hinge about the tilted population AoR, the calibration pose is the model's own
     neutral pose (tibia turned by the aligning rotation), so a hinge walk is reproduced."""
     sk, Q, trial, H = _walk(tmp_path, knee="hinge")
-    run = run_ik(trial, Measures("m", 1.75), tmp_path / "out.urdf", knee="hinge")
+    run = process_recording(trial, Measures("m", 1.75), knee="hinge")
     from pipeline.analysis.landmarks import joint_angles
 
     truth = joint_angles(sk, Q)

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from pipeline import rotations as rot
+from pipeline.rotations import exp3, rotation_aligning_with_twist
 
 
 def test_elementary_rotations_by_hand():
@@ -80,3 +81,19 @@ def test_rotation_aligning_wang_eq_10_12_by_hand():
 def test_angle_between_is_accurate_for_tiny_angles():
     assert rot.angle_between([1, 0, 0], [1, 1e-9, 0]) == pytest.approx(1e-9, rel=1e-6)
     assert rot.angle_between([1, 0, 0], [-1, 0, 0]) == pytest.approx(np.pi)
+
+
+def test_rotation_aligning_with_twist_by_hand():
+    x, y, z = np.eye(3)
+    R = rotation_aligning_with_twist(x, y, z, x)  # x -> y exactly, then z -> x: a cyclic shift
+    np.testing.assert_allclose(R, [[0, 0, 1], [1, 0, 0], [0, 1, 0]], atol=1e-12)
+    rng = np.random.default_rng(0)
+    R_true = exp3(rng.normal(size=3))
+    a, c = rng.normal(size=3), rng.normal(size=3)
+    np.testing.assert_allclose(rotation_aligning_with_twist(a, R_true @ a, c, R_true @ c), R_true)
+    ref = exp3(np.array([0.1, -0.2, 0.05])) @ R_true  # nearest rotation with R a = R_true a
+    R = rotation_aligning_with_twist(a, R_true @ a, np.eye(3), ref.T)
+    np.testing.assert_allclose(R @ a, R_true @ a, atol=1e-12)
+    for phi in (-0.01, 0.01):  # a local optimum of |R - ref| among rotations about the axis
+        Rp = exp3(phi * (R_true @ a) / np.linalg.norm(a)) @ R
+        assert np.linalg.norm(Rp - ref) > np.linalg.norm(R - ref)

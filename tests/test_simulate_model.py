@@ -12,13 +12,7 @@ from pipeline.calibration.joint_constraints import joint_data, project_hinge_pos
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import angle_between, log3, matrix_from_quat
-from pipeline.simulate.model import (
-    GRAVITY,
-    MOTIONS,
-    SensorNoise,
-    joint_trajectories,
-    simulate_trial,
-)
+from pipeline.simulate.model import GRAVITY, SensorNoise, simulate_trial
 
 NO_NOISE = SensorNoise.none()
 
@@ -216,14 +210,6 @@ def test_bad_inputs(skeleton):
         simulate_trial(skeleton, "gait", duration_s=-1.0)
     with pytest.raises(InputError, match="at least 8 samples"):
         simulate_trial(skeleton, "gait", duration_s=0.05)
-
-
-def test_motions_are_still_importable_from_simulate_model():
-    # the motion definitions moved to pipeline.simulate.motions; the old import path still works
-    from pipeline.simulate import motions as simulate_motions
-
-    assert joint_trajectories is simulate_motions.joint_trajectories
-    assert MOTIONS is simulate_motions.MOTIONS
 
 
 def _axis_errors_deg(res, truth):

@@ -13,8 +13,8 @@ from pipeline.analysis.landmarks import joint_angles
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat, rot_z
-from pipeline.viz.model import ANGLE_COLORS, segment_meshes
-from pipeline.viz.recording import entity_row_counts, log_motion, read_entities
+from pipeline.viz.model import ANGLE_COLORS, log_motion, segment_meshes
+from pipeline.viz.recording import entity_row_counts, read_entities
 
 N = 3000
 NAN_ROW = 17  # one configuration with a NaN: not logged

@@ -15,9 +15,6 @@ from pipeline.viz.recording import (
     entity_row_counts,
     log_trial,
     read_entities,
-    view,
-    viewer_command,
-    web_viewer_url,
 )
 
 N = 3000
@@ -168,35 +165,6 @@ def test_urdf_is_logged_with_meshes(tmp_path):
     # Default root pose Rx(+90 deg): the model's y (up) becomes the world's z.
     col_major = np.array(root.column("Transform3D:mat3x3").to_pylist()[0][0]).reshape(3, 3).T
     np.testing.assert_allclose(col_major @ [0, 1.0, 0], [0, 0, 1.0], atol=1e-6)
-
-
-def test_viewer_commands(tmp_path):
-    rrd = tmp_path / "x.rrd"
-    native = viewer_command(rrd)
-    assert native[-1] == str(rrd) and "--serve-web" not in native
-    assert Path(native[0]).name.startswith("rerun") or native[1:3] == ["-m", "rerun"]
-    web = viewer_command(rrd, web=True, web_port=9191, grpc_port=9877)
-    assert web[-1] == str(rrd)
-    i = web.index("--bind")
-    assert web[i + 1] == "127.0.0.1"
-    assert web[web.index("--web-viewer-port") + 1] == "9191"
-    assert web[web.index("--port") + 1] == "9877"
-    assert "--serve-web" in web
-    assert web_viewer_url(9191, 9877) == (
-        "http://127.0.0.1:9191/?url=rerun%2Bhttp%3A%2F%2F127.0.0.1%3A9877%2Fproxy"
-    )
-    with pytest.raises(InputError):
-        view(tmp_path / "missing.rrd")
-
-
-def test_log_motion_is_reexported():
-    import pipeline.viz.model as viz_model
-    import pipeline.viz.recording as viz
-
-    assert viz.log_motion is viz_model.log_motion
-    assert "log_motion" in viz.__all__
-    with pytest.raises(AttributeError):
-        viz.no_such_function  # noqa: B018
 
 
 def test_default_layout_and_hidden_labels(recording):

@@ -69,11 +69,9 @@ import numpy as np
 
 from pipeline.calibration.aor import KneeAoR, correction_rotations, knee_aor
 from pipeline.calibration.hinge_fit import (
-    HingeFit,
-    _relative,
-    _weights,
     hinge_fit,
-    motion_weights,
+    relative_rotations,
+    sample_weights,
 )
 from pipeline.calibration.losses import check_loss, robust_loss
 from pipeline.errors import InputError
@@ -82,10 +80,7 @@ from pipeline.rotations import angle_between, normalize, tangent_basis
 
 __all__ = [
     "AorCorrection",
-    "HingeFit",
     "aor_correction_ipopt",
-    "hinge_fit",
-    "motion_weights",
 ]
 
 
@@ -230,10 +225,10 @@ def aor_correction_ipopt(
         raise InputError(
             f"expected weights >= 0, got prior {prior_weight}, correction {correction_weight}"
         )
-    M, valid = _relative(femur_R, tibia_R)
+    M, valid = relative_rotations(femur_R, tibia_R)
     aF = normalize(np.asarray(reference_femur_axis, float))
     aT = normalize(np.asarray(reference_tibia_axis, float))
-    w = _weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed)
+    w = sample_weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed)
     fit = hinge_fit(femur_R, tibia_R, w, rate_hz, motion_window, static_speed)
     S, excitation = fit.mean_relative_rotation, fit.excitation
 

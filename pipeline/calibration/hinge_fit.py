@@ -24,10 +24,10 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.rotations import log3
 
-__all__ = ["HingeFit", "hinge_fit", "motion_weights"]
+__all__ = ["HingeFit", "hinge_fit", "motion_weights", "relative_rotations", "sample_weights"]
 
 
-def _relative(femur_R: np.ndarray, tibia_R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def relative_rotations(femur_R: np.ndarray, tibia_R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``M_k = F_kᵀ T_k`` (eq 1), identity where a sample is missing, and the validity mask."""
     F = np.asarray(femur_R, dtype=float)
     T = np.asarray(tibia_R, dtype=float)
@@ -52,7 +52,7 @@ def motion_weights(
     ``h = round(motion_window * rate_hz / 2)`` samples (clipped at the ends), ``φ_0 =
     static_speed * motion_window`` rad. Zero where a sample is missing.
     """
-    M, valid = _relative(femur_R, tibia_R)
+    M, valid = relative_rotations(femur_R, tibia_R)
     n = len(M)
     h = max(1, int(round(motion_window * rate_hz / 2)))
     k = np.arange(n)
@@ -73,7 +73,7 @@ class HingeFit:
     mean_relative_rotation: np.ndarray
 
 
-def _weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed):
+def sample_weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed):
     """Sample weights from ``'motion'``, ``'uniform'`` or an array; zero where not ``valid``."""
     n = len(valid)
     if isinstance(weights, str):
@@ -104,8 +104,8 @@ def hinge_fit(
     does not move. A whole-trial alternative to Wang eq 1-8 (use the same estimator for a
     reference AoR and for the IMC data).
     """
-    M, valid = _relative(femur_R, tibia_R)
-    w = _weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed)
+    M, valid = relative_rotations(femur_R, tibia_R)
+    w = sample_weights(femur_R, tibia_R, weights, valid, rate_hz, motion_window, static_speed)
     if w.sum() <= 0:
         raise InputError("no valid sample with a positive weight (knee never moves?)")
     S = np.einsum("n,nij->ij", w, M) / w.sum()

@@ -32,7 +32,7 @@ from pipeline.calibration.joint_constraints import (
     project_hinge_positions,
 )
 from pipeline.calibration.losses import robust_loss
-from pipeline.calibration.solvers import CalibrationResult, _solve, diagnose
+from pipeline.calibration.solvers import CalibrationResult, diagnose, solve_subproblem
 from pipeline.errors import InputError
 from pipeline.rotations import normalize
 
@@ -94,7 +94,7 @@ def calibrate_ipopt(
     n = data.gyr_1.shape[0]
     coarse = _decimate(data, max(1, n // 400))
     opts = {"restarts": 2, "max_iter": 15}
-    xo, _, it0 = _solve(coarse, "positions", "gn", seed, {"restarts": 1, "max_iter": 15})
+    xo, _, it0 = solve_subproblem(coarse, "positions", "gn", seed, {"restarts": 1, "max_iter": 15})
     o1, o2 = xo[:3], xo[3:]
     K1 = _gamma_matrix(data.gyr_1, data.gyr_dot_1)
     K2 = _gamma_matrix(data.gyr_2, data.gyr_dot_2)
@@ -105,7 +105,7 @@ def calibrate_ipopt(
     x = o
     x0 = np.concatenate([o1, o2])
     if joint == "hinge":
-        xa, _, it1 = _solve(coarse, "axes", "gn", seed + 1, opts)
+        xa, _, it1 = solve_subproblem(coarse, "axes", "gn", seed + 1, opts)
         it0 += it1
         j1, j2 = axis_from_spherical(xa[0], xa[1]), axis_from_spherical(xa[2], xa[3])
         p1 = None if prior_axis_1 is None else normalize(np.asarray(prior_axis_1, float))

@@ -44,11 +44,14 @@ from pipeline.rotations import tangent_basis
 
 __all__ = [
     "CalibrationResult",
-    "calibrate",
+    "Subproblem",
+    "calibrate_classic",
     "diagnose",
     "dwpso",
     "gauss_newton",
     "gwo",
+    "solve_subproblem",
+    "subproblem",
 ]
 
 BOX = 0.2  # m, Hu eq 7
@@ -115,10 +118,26 @@ def _position_costs(X: np.ndarray, Q: tuple) -> np.ndarray:
     return np.mean((norms[0] - norms[1]) ** 2, axis=0)
 
 
-def _problem(d: JointData, which: str):
-    """(population cost, residual, jacobian, lo, hi, wrap mask) of 'axes' or 'positions'."""
+@dataclass(frozen=True)
+class Subproblem:
+    """One of the two least-squares problems of a calibration, in the optimisers' terms.
+
+    ``population_cost(X (P, n)) -> (P,)`` for the swarms; ``residual(x)`` and ``jacobian(x)``
+    for Gauss-Newton; the box ``lo``, ``hi`` (n,) and the ``wrap`` mask of periodic coordinates
+    (the azimuths of the spherical axis coordinates)."""
+
+    population_cost: Callable[[np.ndarray], np.ndarray]
+    residual: Callable[[np.ndarray], np.ndarray]
+    jacobian: Callable[[np.ndarray], np.ndarray]
+    lo: np.ndarray
+    hi: np.ndarray
+    wrap: np.ndarray
+
+
+def subproblem(d: JointData, which: str) -> Subproblem:
+    """The ``'axes'`` (eq 4-6, spherical coordinates) or ``'positions'`` (eq 1-3) problem."""
     if which == "axes":
-        return (
+        return Subproblem(
             lambda X: _axis_costs(X, d),
             lambda x: hinge_residual(
                 axis_from_spherical(x[0], x[1]), axis_from_spherical(x[2], x[3]), d.gyr_1, d.gyr_2
@@ -129,7 +148,7 @@ def _problem(d: JointData, which: str):
             np.array([False, True, False, True]),
         )
     Q = _quadratic_norms(d)
-    return (
+    return Subproblem(
         lambda X: _position_costs(X, Q),
         lambda x: spherical_residual(x[:3], x[3:], d),
         lambda x: spherical_jacobian(x[:3], x[3:], d),
@@ -250,8 +269,13 @@ def _bound(X: np.ndarray, lo: np.ndarray, hi: np.ndarray, wrap: np.ndarray) -> n
 # ----------------------------------------------------------------------------------- calibration
 
 
-def _solve(d: JointData, which: str, method: str, seed: int, opts: dict):
-    pop_cost, res, jac, lo, hi, wrap = _problem(d, which)
+def solve_subproblem(
+    d: JointData, which: str, method: str, seed: int, opts: dict
+) -> tuple[np.ndarray, float, int]:
+    """``(x, cost, iterations)`` of :func:`subproblem` ``which`` by ``method`` (gn/dwpso/gwo)."""
+    p = subproblem(d, which)
+    pop_cost, res, jac, lo, hi, wrap = (p.population_cost, p.residual, p.jacobian, p.lo, p.hi,
+                                        p.wrap)  # fmt: skip
     if method == "gn":
         rng = np.random.default_rng(seed)
         best = None
@@ -325,7 +349,7 @@ def diagnose(
     return out
 
 
-def calibrate(
+def calibrate_classic(
     data: JointData,
     joint: str = "hinge",
     method: str = "gn",
@@ -346,12 +370,12 @@ def calibrate(
     if joint not in ("hinge", "spherical"):
         raise InputError(f"expected joint 'hinge' or 'spherical', got {joint!r}", field="joint")
     t0 = _time.perf_counter()
-    xo, co, it = _solve(data, "positions", method, seed, options)
+    xo, co, it = solve_subproblem(data, "positions", method, seed, options)
     o1, o2 = xo[:3], xo[3:]
     j1 = j2 = None
     cost = co
     if joint == "hinge":
-        xa, ca, ita = _solve(data, "axes", method, seed + 1, options)
+        xa, ca, ita = solve_subproblem(data, "axes", method, seed + 1, options)
         j1, j2 = axis_from_spherical(xa[0], xa[1]), axis_from_spherical(xa[2], xa[3])
         j1, j2 = consistent_axis_signs(
             j1, j2, quat_1=quat_1, quat_2=quat_2, data=data, o1=o1, o2=o2, reference_1=reference_1

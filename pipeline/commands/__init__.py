@@ -1,1 +1,19 @@
-"""TODO"""
+"""One module per CLI command, shared by the CLI (:mod:`pipeline.cli`) and the Python API: each
+``run_<command>`` reads the inputs, calls the domain code and writes the outputs all or nothing.
+
+The public names below load their module on first use (:mod:`pipeline._lazy`).
+"""
+
+from pipeline._lazy import lazy_exports
+
+_EXPORTS = {
+    "run_calibration": "calibrate",
+    "run_demo": "demo",
+    "run_ik": "ik",
+    "run_reproduce": "reproduce",
+    "run_scale": "scale",
+    "run_simulation": "simulate",
+    "run_view": "view",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -21,8 +21,26 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.analysis.landmarks import jcs_angles, joint_angles
+from pipeline.calibration.calibrate import calibrate
+from pipeline.calibration.joint_constraints import joint_data
+from pipeline.io.atomic import output_set
+from pipeline.io.opensim import (
+    SENSOR_TO_SEGMENT,
+    OrientationTrial,
+    sensor_to_opensim_matrix,
+    write_mot,
+)
+from pipeline.io.tables import csv_text, markdown_table
 from pipeline.model.anthropometry import Measures
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.model.skeleton import Skeleton
+from pipeline.process import mot_columns, process_recording
 from pipeline.rotations import angle_between
+from pipeline.simulate.model import simulate_trial
+from pipeline.viz.model import log_motion
+
+__all__ = ["SUBJECT", "DemoResult", "demo", "run_demo"]
 
 SUBJECT = Measures("f", 1.62, knee_width_m=0.095, ankle_width_m=0.066)
 #: The simulator's world is z-up (like Xsens); OpenSense's rotation to a y-up world.
@@ -54,19 +72,6 @@ def run_demo(out_dir: str | Path = "out/demo", seed: int = 0) -> str:
 
 def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
     """Run the demo; every output is written all-or-nothing into ``out_dir``."""
-    from pipeline.analysis.landmarks import joint_angles
-    from pipeline.calibration.ipopt import calibrate_ipopt
-    from pipeline.calibration.joint_constraints import joint_data
-    from pipeline.io.atomic import output_set
-    from pipeline.io.opensim import OrientationTrial, write_mot
-    from pipeline.io.tables import csv_text, markdown_table
-    from pipeline.model.builder import build_urdf
-    from pipeline.model.scaling import geometry_from_measures
-    from pipeline.model.skeleton import Skeleton
-    from pipeline.process import mot_columns, run_ik
-    from pipeline.simulate.model import simulate_trial
-    from pipeline.viz.recording import log_motion
-
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -75,8 +80,8 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         # 1. scale
         t0 = time.perf_counter()
         geometry, predicted = geometry_from_measures(SUBJECT)
-        urdf = build_urdf(geometry, out.path(out_dir / "subject.urdf"), knee="hinge")
-        truth_model = Skeleton.from_urdf(urdf)
+        truth_model = Skeleton.build(geometry, knee="hinge")
+        truth_model.write_urdf(out.path(out_dir / "subject.urdf"))
         timings["scale"] = time.perf_counter() - t0
 
         # 2. simulate: a 2 s standing calibration pose, then 15 s of gait (same seed: the same
@@ -92,8 +97,8 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         thigh, shank = trial.imus["right_femur_imu"], trial.imus["right_tibia_imu"]
         data = joint_data(trial.time, thigh.recording.gyr, thigh.recording.acc,
                           shank.recording.gyr, shank.recording.acc)  # fmt: skip
-        cal = calibrate_ipopt(data, "hinge", quat_1=thigh.recording.quat,
-                              quat_2=shank.recording.quat, seed=seed)  # fmt: skip
+        cal = calibrate(data, "hinge", "ipopt", quat_1=thigh.recording.quat,
+                        quat_2=shank.recording.quat, seed=seed)  # fmt: skip
         timings["calibrate"] = time.perf_counter() - t0
         true_1, true_2 = trial.knee_axis["right_femur_imu"], trial.knee_axis["right_tibia_imu"]
         axis_err = [
@@ -103,8 +108,6 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
 
         # 4. IK from the sensors' orientations (the OpenSim .sto route)
         t0 = time.perf_counter()
-        from pipeline.io.opensim import SENSOR_TO_SEGMENT
-
         names = {f"{seg}_imu": s for s, seg in SENSOR_TO_SEGMENT.items()}
         sensors = {
             names[f]: np.concatenate([standing.imus[f].recording.quat, imu.recording.quat])
@@ -113,8 +116,8 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         }
         n = n0 + len(trial.time)
         orient = OrientationTrial(np.arange(n) / 100.0, 100.0, sensors, {}, (), None)
-        run = run_ik(orient, SUBJECT, out.path(out_dir / "demo_ik_model.urdf"), knee="free",
-                     sensor_to_model=Z_UP_TO_Y_UP)  # fmt: skip
+        run = process_recording(orient, SUBJECT, knee="free", sensor_to_model=Z_UP_TO_Y_UP)
+        run.skeleton.write_urdf(out.path(out_dir / "demo_ik_model.urdf"))
         timings["ik"] = time.perf_counter() - t0
         truth_angles = joint_angles(trial.skeleton, trial.q)
         angle_rows, angle_rms, landmark_rms = [], {}, {}
@@ -125,8 +128,6 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
             angle_rms[key] = float(np.sqrt(np.mean(e**2)))
             angle_rows.append([key, f"{angle_rms[key]:.2f}", f"{np.abs(e).max():.2f}"])
         # landmarks relative to the mid-hip point, truth rotated into the IK's y-up world
-        from pipeline.io.opensim import sensor_to_opensim_matrix
-
         W = sensor_to_opensim_matrix(Z_UP_TO_Y_UP)
         lm_rows, reference = [], {}
         hip_mid = 0.5 * (trial.landmarks["right_HJC"] + trial.landmarks["left_HJC"])
@@ -151,14 +152,13 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         ]  # fmt: skip
         with out.open(out_dir / "demo_landmarks.csv") as fh:
             fh.write(csv_text(rows, cols))
-        ik_model = Skeleton.from_urdf(run.urdf, root="spherical")
-        log_motion(out.path(out_dir / "demo.rrd"), run.time, ik_model, run.q,
+        log_motion(out.path(out_dir / "demo.rrd"), run.time, run.skeleton, run.q,
                    reference_landmarks=reference, recording_name="pipeline demo")  # fmt: skip
         timings["write"] = time.perf_counter() - t0
         total = time.perf_counter() - t_start
         offset = _knee_neutral_offset(trial.skeleton)
         report = _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
-                         timings, total, markdown_table, offset)  # fmt: skip
+                         timings, total, offset)  # fmt: skip
         with out.open(out_dir / "demo_report.md") as fh:
             fh.write(report)
         names = ("demo_report.md", "demo_ik.mot", "demo_landmarks.csv", "subject.urdf",
@@ -170,8 +170,6 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
 
 def _knee_neutral_offset(sk) -> np.ndarray:
     """ISB knee angles (flexion, adduction, rotation; deg) of a model at its neutral pose."""
-    from pipeline.analysis.landmarks import jcs_angles
-
     q = sk.neutral()
     R_F = sk.relative_pose("right_femur", "pelvis", q)[:3, :3]
     R_T = sk.relative_pose("right_tibia", "pelvis", q)[:3, :3]
@@ -179,7 +177,7 @@ def _knee_neutral_offset(sk) -> np.ndarray:
 
 
 def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows, timings, total,
-            markdown_table, knee_offset) -> str:  # fmt: skip
+            knee_offset) -> str:  # fmt: skip
     fps = len(run.time) / max(timings["ik"], 1e-9)
     lines = [
         "# pipeline demo",

@@ -1,1 +1,21 @@
-"""TODO"""
+"""Inverse kinematics (stage 4): a model and world orientations of some of its frames in, joint
+configurations ``q(t)`` out (:func:`solve_ik`: exact log-map Jacobians, box limits, warm start).
+
+The public names below load their module on first use (:mod:`pipeline._lazy`).
+"""
+
+from pipeline._lazy import lazy_exports
+
+_EXPORTS = {
+    "box_margin": "bounds",
+    "box_step": "bounds",
+    "frame_rotations": "solver",
+    "IKResult": "solver",
+    "joint_box": "bounds",
+    "orientation_residuals": "solver",
+    "OrientationTask": "solver",
+    "solve_ik": "solver",
+    "UNBOUNDED": "bounds",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

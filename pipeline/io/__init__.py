@@ -1,0 +1,65 @@
+"""Formats (stage 1 of the data flow): users' files in, typed arrays in SI units out, and the
+writers of every output. Takes: OpenSim ``.sto``/``.mot``, IMU CSV, Xsens MT ``.txt``, C3D.
+Gives: recordings (:class:`OrientationTrial`, :class:`ImuRecording`, ...) whose readers checked
+time stamps, rates, units and quaternions and filled short gaps (noted); the one CSV writer
+(:mod:`pipeline.io.tables`), atomic all-or-nothing output sets (:mod:`pipeline.io.atomic`).
+
+The public names below load their module on first use (:mod:`pipeline._lazy`).
+"""
+
+from pipeline._lazy import lazy_exports
+
+_EXPORTS = {
+    "ACC_COLUMNS": "imu_csv",
+    "atomic_write": "atomic",
+    "C3dMarkers": "c3d",
+    "check_acc_units": "checks",
+    "check_gyro_units": "checks",
+    "check_position_units": "checks",
+    "check_quaternions": "checks",
+    "check_rate": "checks",
+    "check_same_length": "checks",
+    "check_same_rate": "checks",
+    "check_time": "checks",
+    "csv_text": "tables",
+    "DEFAULT_MAX_GAP_S": "gaps",
+    "estimate_rate": "checks",
+    "FileLike": "text",
+    "fill_gaps": "gaps",
+    "GYR_COLUMNS": "imu_csv",
+    "ImuRecording": "imu_csv",
+    "jsonable": "jsonio",
+    "make_quaternions_continuous": "checks",
+    "map_sensors": "opensim",
+    "markdown_table": "tables",
+    "mean_sd": "tables",
+    "MotTable": "opensim",
+    "Notes": "notes",
+    "OrientationTrial": "opensim",
+    "output_set": "atomic",
+    "OutputSet": "atomic",
+    "parse_table": "text",
+    "QUAT_COLUMNS": "imu_csv",
+    "RateInfo": "checks",
+    "read_c3d": "c3d",
+    "read_imu_csv": "imu_csv",
+    "read_mot": "opensim",
+    "read_orientations_sto": "opensim",
+    "read_text_lines": "text",
+    "read_xsens_trial": "xsens",
+    "read_xsens_txt": "xsens",
+    "rotate_world": "opensim",
+    "sensor_to_opensim_matrix": "opensim",
+    "SENSOR_TO_SEGMENT": "opensim",
+    "UNIT_TO_METRES": "c3d",
+    "where": "text",
+    "write_array_csv": "tables",
+    "write_bytes_atomic": "atomic",
+    "write_imu_csv": "imu_csv",
+    "write_mot": "opensim",
+    "write_orientations_sto": "opensim",
+    "write_text_atomic": "atomic",
+    "XsensRecording": "xsens",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.io.checks import Notes, check_position_units
+from pipeline.io.checks import check_position_units
+from pipeline.io.notes import Notes
 
 __all__ = ["UNIT_TO_METRES", "C3dMarkers", "read_c3d"]
 

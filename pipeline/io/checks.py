@@ -8,9 +8,8 @@ CLI prints the notes.
 
 Conventions: rows are counted from 0 over the data rows; readers that know where the data start in
 the file pass ``first_line`` so messages also give the 1-based file line. Reading and parsing text
-tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text` and are
-re-exported here, as are :class:`Notes` (:mod:`pipeline.io.notes`) and the gap filling
-:func:`fill_gaps` (:mod:`pipeline.io.gaps`).
+tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text`, :class:`Notes` in
+:mod:`pipeline.io.notes` and the gap filling :func:`fill_gaps` in :mod:`pipeline.io.gaps`.
 """
 
 from __future__ import annotations
@@ -20,13 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
-from pipeline.io.text import FileLike, _where, parse_table, read_text_lines
+from pipeline.io.text import FileLike, where
 
 __all__ = [
-    "DEFAULT_MAX_GAP_S",
-    "Notes",
     "RateInfo",
     "check_acc_units",
     "check_gyro_units",
@@ -37,10 +33,7 @@ __all__ = [
     "check_same_rate",
     "check_time",
     "estimate_rate",
-    "fill_gaps",
     "make_quaternions_continuous",
-    "parse_table",
-    "read_text_lines",
 ]
 
 # --------------------------------------------------------------------------------------------
@@ -87,7 +80,7 @@ def check_time(
     if bad.size:
         r = int(bad[0])
         raise InputError(
-            f"time stamp is not a finite number at {_where(r, first_line)}", file=file, field=field
+            f"time stamp is not a finite number at {where(r, first_line)}", file=file, field=field
         )
     dt = np.diff(t)
     rep = np.flatnonzero(dt == 0)
@@ -95,7 +88,7 @@ def check_time(
     if rep.size and (not back.size or rep[0] < back[0]):
         r = int(rep[0]) + 1
         raise InputError(
-            f"repeated time stamp {t[r]:.6g} s at {_where(r, first_line)} (same as the row before);"
+            f"repeated time stamp {t[r]:.6g} s at {where(r, first_line)} (same as the row before);"
             " expected strictly increasing time",
             file=file,
             field=field,
@@ -103,7 +96,7 @@ def check_time(
     if back.size:
         r = int(back[0]) + 1
         raise InputError(
-            f"time stamps not sorted: {t[r]:.6g} s at {_where(r, first_line)} comes after "
+            f"time stamps not sorted: {t[r]:.6g} s at {where(r, first_line)} comes after "
             f"{t[r - 1]:.6g} s; expected strictly increasing time",
             file=file,
             field=field,
@@ -238,13 +231,13 @@ def check_quaternions(
     bad = np.flatnonzero(~np.all(np.isfinite(q), axis=1))
     if bad.size:
         raise InputError(
-            f"non-finite quaternion at {_where(int(bad[0]), first_line)}", file=file, field=field
+            f"non-finite quaternion at {where(int(bad[0]), first_line)}", file=file, field=field
         )
     n = np.linalg.norm(q, axis=1)
     zero = np.flatnonzero(n < 1e-9)
     if zero.size:
         raise InputError(
-            f"zero quaternion at {_where(int(zero[0]), first_line)} (no rotation defined)",
+            f"zero quaternion at {where(int(zero[0]), first_line)} (no rotation defined)",
             file=file,
             field=field,
         )
@@ -253,7 +246,7 @@ def check_quaternions(
     if out.size:
         r = int(out[0])
         raise InputError(
-            f"not unit quaternions (norm {n[r]:.4g} at {_where(r, first_line)}; "
+            f"not unit quaternions (norm {n[r]:.4g} at {where(r, first_line)}; "
             f"expected within [{lo:g}, {hi:g}])",
             file=file,
             field=field,

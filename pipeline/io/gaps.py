@@ -4,8 +4,7 @@ Readers turn empty or ``NaN`` cells into NaN (:mod:`pipeline.io.text`); :func:`f
 what to do with them. A short gap is filled (linear interpolation of vectors, slerp of
 quaternions, holding the nearest sample at either end) and written to the reader's
 :class:`~pipeline.io.notes.Notes`; a gap longer than ``max_gap_s`` is refused with an
-:class:`~pipeline.errors.InputError` giving its time range. Re-exported by
-:mod:`pipeline.io.checks`.
+:class:`~pipeline.errors.InputError` giving its time range.
 """
 
 from __future__ import annotations

@@ -20,17 +20,16 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.io.atomic import atomic_write
 from pipeline.io.checks import (
-    DEFAULT_MAX_GAP_S,
-    Notes,
     check_acc_units,
     check_gyro_units,
     check_quaternions,
     check_rate,
     check_time,
-    fill_gaps,
-    parse_table,
-    read_text_lines,
 )
+from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
+from pipeline.io.notes import Notes
+from pipeline.io.tables import write_array_csv
+from pipeline.io.text import parse_table, read_text_lines
 
 __all__ = [
     "ACC_COLUMNS",
@@ -153,7 +152,5 @@ def write_imu_csv(path: str | Path, rec: ImuRecording) -> Path:
             raise ValueError(f"array with {p.shape[0]} rows, time has {n}")
     data = np.hstack(parts)
     with atomic_write(path, newline="\n") as f:
-        f.write(",".join(header) + "\n")
-        for row in data:
-            f.write(",".join("" if not np.isfinite(v) else f"{v:.17g}" for v in row) + "\n")
+        write_array_csv(f, header, data, digits=17, nan="")
     return path

@@ -1,8 +1,7 @@
 """What a reader changed or noticed: the :class:`Notes` list every reader returns.
 
 Every repair a reader makes (gap interpolation, quaternion normalisation, ...) is written to a
-:class:`Notes` list so that nothing is changed silently; the CLI prints the notes. Re-exported by
-:mod:`pipeline.io.checks`.
+:class:`Notes` list so that nothing is changed silently; the CLI prints the notes.
 """
 
 from __future__ import annotations

@@ -34,16 +34,14 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.io.atomic import atomic_write
 from pipeline.io.checks import (
-    DEFAULT_MAX_GAP_S,
-    Notes,
     check_quaternions,
     check_rate,
     check_time,
-    fill_gaps,
     make_quaternions_continuous,
-    parse_table,
-    read_text_lines,
 )
+from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
+from pipeline.io.notes import Notes
+from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_quat, quat_from_matrix, rot_x, rot_y, rot_z
 
 __all__ = [

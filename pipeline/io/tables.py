@@ -1,25 +1,53 @@
-"""Small CSV/Markdown helpers for reports (mm and degrees appear only here and in io)."""
+"""The one CSV writer, and the Markdown helpers of reports.
+
+* :func:`csv_text`: rows of named values (reports, summaries);
+* :func:`write_array_csv`: a numeric array with a header (signals, trajectories, configurations),
+  streamed to an open text file row by row.
+
+Both format floats with ``digits`` significant digits (``%.{digits}g``).
+"""
 
 from __future__ import annotations
 
 import csv
 import io
 from collections.abc import Iterable, Mapping, Sequence
+from typing import TextIO
+
+import numpy as np
+
+__all__ = ["csv_text", "markdown_table", "mean_sd", "write_array_csv"]
 
 
-def csv_text(rows: Iterable[Mapping[str, object]], columns: Sequence[str]) -> str:
-    """CSV text with exactly ``columns``; floats with 6 significant digits."""
+def csv_text(
+    rows: Iterable[Mapping[str, object]], columns: Sequence[str], digits: int = 6
+) -> str:
+    """CSV text with exactly ``columns``; floats with ``digits`` significant digits."""
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({c: _fmt(row[c]) for c in columns})
+        writer.writerow({c: _fmt(row[c], digits) for c in columns})
     return buf.getvalue()
 
 
-def _fmt(v: object) -> object:
+def write_array_csv(
+    f: TextIO, columns: Sequence[str], data: np.ndarray, digits: int = 10, nan: str = "nan"
+) -> None:
+    """Write ``columns`` and the rows of ``data`` (N, len(columns)) to the open file ``f``;
+    non-finite values are written as ``nan`` (e.g. ``""`` for an empty field)."""
+    data = np.asarray(data, dtype=float)
+    if data.ndim != 2 or data.shape[1] != len(columns):
+        raise ValueError(f"expected an (N, {len(columns)}) array, got shape {data.shape}")
+    f.write(",".join(columns) + "\n")
+    spec = f"{{:.{digits}g}}"
+    for row in data:
+        f.write(",".join(spec.format(v) if np.isfinite(v) else nan for v in row) + "\n")
+
+
+def _fmt(v: object, digits: int) -> object:
     if isinstance(v, float):
-        return f"{v:.6g}"
+        return f"{v:.{digits}g}"
     return v
 
 
@@ -33,8 +61,6 @@ def markdown_table(header: Sequence[str], rows: Iterable[Sequence[object]]) -> s
 
 def mean_sd(values: Sequence[float], digits: int = 1) -> str:
     """``mean±SD`` (sample SD) as the papers print it."""
-    import numpy as np
-
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:

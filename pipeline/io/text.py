@@ -3,7 +3,7 @@
 The first step of every text reader (.sto/.mot, Xsens .txt, IMU CSV). Refusals are
 :class:`~pipeline.errors.InputError` naming the file, the row (counted from 0 over the data rows,
 with the 1-based file line when the reader passes ``first_line``) and the column. Missing cells
-become NaN; :func:`pipeline.io.checks.fill_gaps` decides what to do with them.
+become NaN; :func:`pipeline.io.gaps.fill_gaps` decides what to do with them.
 """
 
 from __future__ import annotations
@@ -14,13 +14,13 @@ import numpy as np
 
 from pipeline.errors import InputError
 
-__all__ = ["FileLike", "parse_table", "read_text_lines"]
+__all__ = ["FileLike", "parse_table", "read_text_lines", "where"]
 
 FileLike = str | Path | None
 """A file named in messages (path or name), or None when there is no file."""
 
 
-def _where(row: int, first_line: int | None) -> str:
+def where(row: int, first_line: int | None) -> str:
     """``row r`` or, when the data start at file line ``first_line``, ``row r (line L)``."""
     return f"row {row}" if first_line is None else f"row {row} (line {first_line + row})"
 
@@ -45,7 +45,7 @@ def parse_table(
         if len(cells) != n:
             hint = " (file truncated?)" if r == len(rows) - 1 and len(cells) < n else ""
             raise InputError(
-                f"{_where(r, first_line)} has {len(cells)} fields, expected {n}{hint}", file=file
+                f"{where(r, first_line)} has {len(cells)} fields, expected {n}{hint}", file=file
             )
     if not rows:
         return np.zeros((0, n))
@@ -64,7 +64,7 @@ def parse_table(
                 out[r, c] = float(s)
             except ValueError:
                 raise InputError(
-                    f"{s!r} at {_where(r, first_line)} is not a number", file=file, field=labels[c]
+                    f"{s!r} at {where(r, first_line)} is not a number", file=file, field=labels[c]
                 ) from None
     return out
 

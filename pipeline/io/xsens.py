@@ -36,8 +36,6 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.io.checks import (
-    DEFAULT_MAX_GAP_S,
-    Notes,
     check_acc_units,
     check_gyro_units,
     check_quaternions,
@@ -45,11 +43,11 @@ from pipeline.io.checks import (
     check_same_length,
     check_same_rate,
     check_time,
-    fill_gaps,
-    parse_table,
-    read_text_lines,
 )
+from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
+from pipeline.io.notes import Notes
 from pipeline.io.opensim import OrientationTrial
+from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_euler_zyx, project_to_so3, quat_from_matrix
 
 __all__ = ["XsensRecording", "read_xsens_trial", "read_xsens_txt"]

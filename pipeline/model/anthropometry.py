@@ -18,9 +18,10 @@ Inside this module everything public is in metres; coefficients and fit reports 
 paper's millimetres (b1, b2 are dimensionless, so p[m] = b0/1000 + b1 d1[m] + b2 d2[m]).
 
 Prediction (:func:`predict_landmarks`) takes, per coordinate, the usable equation with the smallest
-cross-validated test-error SD (Wang §III.C). Fitting (:func:`pipeline.reproduce.wang2023.regression.fit_table`) redoes
-Wang §III.A on any set of subjects: OLS per sex group, R², overall F-test, K-fold cross-validation;
-its names (:class:`SubjectSample`, :class:`FitResult`, :func:`fit_table`, ...) are re-exported here.
+cross-validated test-error SD (Wang §III.C). Fitting the equations (Wang §III.A: OLS per sex
+group, R², overall F-test, K-fold cross-validation) is paper-only code:
+:mod:`pipeline.reproduce.wang2023.regression`, whose fitted equations are this module's
+:class:`RegressionEquation`.
 """
 
 from __future__ import annotations
@@ -36,6 +37,26 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.model.resources import models_file
+
+__all__ = [
+    "AXES",
+    "CSV_COLUMNS",
+    "EQUATION_INPUTS",
+    "EQUATION_TARGETS",
+    "FEMUR_LANDMARKS",
+    "GROUPS",
+    "PLAUSIBLE_M",
+    "TIBIA_LANDMARKS",
+    "LandmarkPositions",
+    "Measures",
+    "RegressionEquation",
+    "RegressionTable",
+    "check_length_m",
+    "load_table1",
+    "normalize_sex",
+    "predict_landmarks",
+    "select_equation",
+]
 
 TABLE1_FILE = "wang2023_table1.csv"
 GROUPS = ("m", "f", "all")

@@ -55,30 +55,21 @@ import numpy as np
 import yourdfpy as ud
 
 from pipeline.errors import InputError
+from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES, LANDMARKS, SEGMENTS
 from pipeline.model.geometry import TEMPLATE_HEIGHT_M, SubjectGeometry, mirror_point
-from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals, resolve_package_uri
+from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals
 from pipeline.rotations import rotation_aligning
 
 __all__ = [
-    "DEFAULT_KNEE",
-    "KNEE_MODES",
-    "LANDMARKS",
-    "SEGMENTS",
     "build_urdf",
     "urdf_text",
     "default_imu_placements",
     "imu_frame_names",
     "joint_names",
     "landmark_frame_names",
-    "resolve_package_uri",
     "segment_frame_names",
 ]
 
-KNEE_MODES = ("hinge", "free")
-#: The knee model used when none is asked for, by the library and the CLI alike.
-DEFAULT_KNEE = "free"
-LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
-SEGMENTS = ("femur", "tibia", "foot")
 
 # Template (human.urdf, right leg, H = 1.80 m) lengths used as scaling references (m).
 _T_THIGH, _T_SHANK = 0.439, 0.44

@@ -8,6 +8,8 @@ import importlib.resources
 from functools import lru_cache
 from pathlib import Path
 
+__all__ = ["example_robot_data_share", "human_urdf", "models_file"]
+
 
 def models_file(name: str) -> Path:
     """Path of a shipped file of ``pipeline.models``; raises ``FileNotFoundError`` naming it."""

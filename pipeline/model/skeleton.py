@@ -21,7 +21,8 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
-from pipeline.model.builder import DEFAULT_KNEE, LANDMARKS, SEGMENTS, urdf_text
+from pipeline.model.builder import urdf_text
+from pipeline.model.conventions import DEFAULT_KNEE, LANDMARKS, SEGMENTS
 from pipeline.model.geometry import SubjectGeometry
 
 __all__ = ["ROOTS", "Skeleton", "frame_ids", "knee_axis"]

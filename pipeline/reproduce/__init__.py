@@ -1,5 +1,6 @@
-"""Reproductions of the papers' results on their published data (``pipeline reproduce``)."""
+"""Reproductions of the papers' results on their published data (``pipeline reproduce``).
 
-from pipeline.reproduce.wang2023.run import reproduce_wang2023
+Nothing outside this package (and :mod:`pipeline.commands.reproduce`) imports it.
+"""
 
-__all__ = ["reproduce_wang2023"]
+__all__ = ["wang2023"]

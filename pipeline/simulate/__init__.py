@@ -1,1 +1,31 @@
-"""TODO"""
+"""Simulation (ground truth for every estimator): a model in, a trial with known truth out. Motions
+with exact ``q, v, a`` (:mod:`~pipeline.simulate.motions`), IMU signals of misplaced noisy sensors
+on the model (:func:`simulate_trial`), and a model-free two-segment chain (:mod:`~pipeline.simulate.chain`).
+
+The public names below load their module on first use (:mod:`pipeline._lazy`).
+"""
+
+from pipeline._lazy import lazy_exports
+
+_EXPORTS = {
+    "chain_kinematics": "chain",
+    "GRAVITY": "model",
+    "gravity_vector": "chain",
+    "hinge_trial": "chain",
+    "imu_signals": "chain",
+    "ImuSignals": "chain",
+    "joint_trajectories": "motions",
+    "JointTrial": "chain",
+    "motion_name": "motions",
+    "MOTIONS": "motions",
+    "point_acceleration": "chain",
+    "pose_derivatives": "chain",
+    "SensorNoise": "model",
+    "simulate_trial": "model",
+    "SimulatedImu": "model",
+    "SimulatedTrial": "model",
+    "Sinusoids": "chain",
+    "spherical_trial": "chain",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

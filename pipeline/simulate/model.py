@@ -2,8 +2,7 @@
 
 The motions - exact joint trajectories ``q``, ``v``, ``a`` on a free-flyer root, sums of
 sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'`` alias ``'rich'``,
-``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``); :data:`MOTIONS` and
-:func:`joint_trajectories` are re-exported here. World frame: z up, gravity
+``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``). World frame: z up, gravity
 ``g = (0, 0, -9.81)``; segment frames ISB (x anterior, y proximal, z right).
 
 Every angle stays inside the model's joint limits (checked). Signals at each sensor, from
@@ -36,15 +35,13 @@ from pipeline.io.imu_csv import ImuRecording
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import exp3, normalize, quat_from_matrix
-from pipeline.simulate.motions import MOTIONS, _motion_name, joint_trajectories
+from pipeline.simulate.motions import joint_trajectories, motion_name
 
 __all__ = [
     "GRAVITY",
-    "MOTIONS",
     "SensorNoise",
     "SimulatedImu",
     "SimulatedTrial",
-    "joint_trajectories",
     "simulate_trial",
 ]
 
@@ -192,7 +189,7 @@ def simulate_trial(
     ``misalignment_deg * U(0.5, 1)`` about a random axis and offset by ``offset_m * U(0.5, 1)``
     in a random direction. ``noise`` defaults to :class:`SensorNoise` ``()``.
     """
-    motion = _motion_name(motion)
+    motion = motion_name(motion)
     if not (np.isfinite(duration_s) and duration_s > 0 and np.isfinite(rate_hz) and rate_hz > 0):
         raise InputError(f"expected positive duration and rate, got {duration_s}, {rate_hz}")
     n = int(round(duration_s * rate_hz))

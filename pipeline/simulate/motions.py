@@ -32,7 +32,7 @@ from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 
-__all__ = ["MOTIONS", "joint_trajectories"]
+__all__ = ["MOTIONS", "joint_trajectories", "motion_name"]
 
 MOTIONS = ("gait", "supine_hip_flexion", "still_thigh", "static")
 _ALIASES = {"rich": "gait"}
@@ -78,7 +78,7 @@ _SUPINE_LEFT = {"knee": 5.0}
 _BASE_HZ = {"gait": (0.85, 1.0), "supine_hip_flexion": (0.22, 0.28), "still_thigh": (0.45, 0.55)}
 
 
-def _motion_name(motion: str) -> str:
+def motion_name(motion: str) -> str:
     m = _ALIASES.get(motion, motion)
     if m not in MOTIONS:
         raise InputError(f"expected a motion in {MOTIONS}, got {motion!r}", field="motion")
@@ -179,7 +179,7 @@ def joint_trajectories(
     """
     if skeleton.root != "freeflyer":
         raise InputError("expected a skeleton with root='freeflyer'", field="root")
-    motion = _motion_name(motion)
+    motion = motion_name(motion)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     t = np.asarray(time, dtype=float)
     model = skeleton.model

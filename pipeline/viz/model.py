@@ -40,20 +40,20 @@ import numpy as np
 from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.landmarks import joint_angles as isb_joint_angles
 from pipeline.errors import InputError
-from pipeline.model.builder import resolve_package_uri
+from pipeline.model.meshes import resolve_package_uri
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import matrix_from_euler_zyx
 from pipeline.viz.layout import default_blueprint as _blueprint
 from pipeline.viz.layout import up_axis_index as _check_up_axis
 from pipeline.viz.recording import (
-    _check_series,
-    _check_time,
-    _log_landmarks,
-    _log_poses,
-    _log_scalars,
-    _recording,
-    _rr,
-    _send,
+    check_series,
+    check_time,
+    import_rerun,
+    log_landmarks,
+    log_poses,
+    log_scalars,
+    open_recording,
+    send_columns,
 )
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_meshes"]
@@ -247,10 +247,10 @@ def log_motion(
     logged. Returns ``path``; layout in the module docstring.
     """
     path = Path(path)
-    t = _check_time(time)
+    t = check_time(time)
     n = len(t)
     vertical = _check_up_axis(up_axis)
-    Q = _check_series(Q, n, (skeleton.nq,), "Q")
+    Q = check_series(Q, n, (skeleton.nq,), "Q")
     lm_names = _names(landmarks, skeleton.landmark_frames, "landmarks")
     imu_names = _names(imu_frames, skeleton.imu_frames, "imu_frames")
     bone_legs = list(skeleton.legs) if bones else []
@@ -259,7 +259,7 @@ def log_motion(
     mesh_data = segment_meshes(skeleton) if meshes else {}
     scalars = {}
     for name, y in (extra_scalars or {}).items():
-        scalars[f"plots/{name}"] = _check_series(y, n, (), name)
+        scalars[f"plots/{name}"] = check_series(y, n, (), name)
 
     ok = np.all(np.isfinite(Q), axis=1)
     Q_fk = np.where(ok[:, None], Q, skeleton.neutral())  # FK on finite rows only
@@ -287,10 +287,10 @@ def log_motion(
         plots.append(("other", [f"/{entity}" for entity in scalars]))
     blueprint = _blueprint(plots, up_axis, camera=camera, ground=ground)
 
-    rr = _rr()
-    with _recording(path, app_id, recording_name, up_axis, blueprint) as rec:
+    rr = import_rerun()
+    with open_recording(path, app_id, recording_name, up_axis, blueprint) as rec:
         poses = {seg: traj[frame] for seg, frame in segments.items()}
-        _log_poses(rec, t, "world/model", poses, None)
+        log_poses(rec, t, "world/model", poses, None)
         for seg, mesh in mesh_data.items():
             rec.log(
                 f"world/model/{seg}/mesh",
@@ -302,8 +302,8 @@ def log_motion(
                 ),
                 static=True,
             )
-        _log_landmarks(rec, t, points, reference_landmarks, error_arrows, point_radius)
-        _log_poses(rec, t, "world/imus", {m: traj[m] for m in imu_names}, imu_axis_length)
+        log_landmarks(rec, t, points, reference_landmarks, error_arrows, point_radius)
+        log_poses(rec, t, "world/imus", {m: traj[m] for m in imu_names}, imu_axis_length)
         for side in bone_legs:
             strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
             entity = f"world/bones/{side}"
@@ -313,11 +313,11 @@ def log_motion(
                 static=True,
             )
             if ok.any():
-                _send(rec, entity, t, ok, rr.LineStrips3D.columns(strips=strip[ok]))
+                send_columns(rec, entity, t, ok, rr.LineStrips3D.columns(strips=strip[ok]))
         for entity in angles:
             angle = entity.rsplit("/", 1)[1]
             style = rr.SeriesLines(colors=[ANGLE_COLORS[angle]], names=[angle])
             rec.log(entity, style, static=True)
-        _log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
-        _log_scalars(rec, t, scalars)
+        log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
+        log_scalars(rec, t, scalars)
     return path

@@ -22,24 +22,21 @@ The file carries a default blueprint (the viewer's layout,
 ``plots`` as time-series views on the right.
 
 Samples with NaN are not logged (the viewer shows the last valid one until the next).
-``log_motion`` (in :mod:`pipeline.viz.model`, re-exported here) draws a model's motion from its
-configurations: moving segment meshes, landmarks, IMU axes, bones and joint-angle plots.
-``read_entities`` and ``entity_row_counts`` read a recording back by iterating its chunks
-(``rerun.chunk.RrdReader``; no datafusion extra needed). ``view`` opens the native or web viewer.
+:func:`pipeline.viz.model.log_motion` draws a model's motion from its configurations (moving
+segment meshes, landmarks, IMU axes, bones and joint-angle plots) with the logging helpers of this
+module. ``read_entities`` and ``entity_row_counts`` read a recording back by iterating its chunks
+(``rerun.chunk.RrdReader``; no datafusion extra needed). :mod:`pipeline.viz.viewer` opens the
+native or web viewer.
 """
 
 from __future__ import annotations
 
 import importlib.metadata
 import os
-import shutil
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from urllib.parse import quote
 
 import numpy as np
 
@@ -49,13 +46,17 @@ from pipeline.viz.layout import default_blueprint as _blueprint
 from pipeline.viz.layout import up_axis_index as _check_up_axis
 
 __all__ = [
+    "check_series",
+    "check_time",
+    "import_rerun",
+    "log_landmarks",
+    "log_poses",
+    "log_scalars",
+    "open_recording",
+    "send_columns",
     "entity_row_counts",
-    "log_motion",  # noqa: F822 (lazy, see __getattr__)
     "log_trial",
     "read_entities",
-    "view",
-    "viewer_command",
-    "web_viewer_url",
 ]
 
 IMC_COLOR = (230, 90, 40)
@@ -63,22 +64,13 @@ REFERENCE_COLOR = (40, 120, 230)
 ERROR_COLOR = (200, 40, 160)
 
 
-def __getattr__(name: str):
-    # ``log_motion`` lives in pipeline.viz.model, which imports this module: resolved lazily.
-    if name == "log_motion":
-        from pipeline.viz.model import log_motion
-
-        return log_motion
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def _rr():
+def import_rerun():
     import rerun as rr  # deferred: importing rerun costs ~0.3 s
 
     return rr
 
 
-def _check_series(x: np.ndarray, n: int, tail: tuple[int, ...], what: str) -> np.ndarray:
+def check_series(x: np.ndarray, n: int, tail: tuple[int, ...], what: str) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     if x.shape != (n, *tail):
         want = ", ".join(str(d) for d in (n, *tail))
@@ -133,7 +125,7 @@ def _env(name: str, value: str):
             os.environ[name] = old
 
 
-def _check_time(time: np.ndarray) -> np.ndarray:
+def check_time(time: np.ndarray) -> np.ndarray:
     t = np.asarray(time, dtype=float)
     if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
         raise InputError(f"time must be a finite (N,) array, got shape {t.shape}", field="time")
@@ -141,10 +133,10 @@ def _check_time(time: np.ndarray) -> np.ndarray:
 
 
 @contextmanager
-def _recording(path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None):
+def open_recording(path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None):
     """An offline recording to ``path`` with view coordinates on ``world`` and ``blueprint`` as its
     default layout; deleted on failure."""
-    rr = _rr()
+    rr = import_rerun()
     _check_up_axis(up_axis)
     path.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream(app_id)
@@ -167,9 +159,9 @@ def _recording(path: Path, app_id: str, recording_name: str | None, up_axis: str
     rec.disconnect()
 
 
-def _send(rec, entity: str, t: np.ndarray, mask: np.ndarray, columns) -> None:
+def send_columns(rec, entity: str, t: np.ndarray, mask: np.ndarray, columns) -> None:
     """One ``send_columns`` call: the rows of ``t`` selected by ``mask`` on timeline ``time``."""
-    rr = _rr()
+    rr = import_rerun()
     rec.send_columns(entity, indexes=[rr.TimeColumn("time", duration=t[mask])], columns=columns)
 
 
@@ -177,10 +169,10 @@ def _log_points(
     rec, t: np.ndarray, group: str, data: Mapping[str, np.ndarray], color, radius: float
 ) -> dict[str, np.ndarray]:
     """``world/<group>/<name>``: one labelled point per time row (NaN rows skipped)."""
-    rr = _rr()
+    rr = import_rerun()
     out = {}
     for name, xyz in data.items():
-        xyz = _check_series(xyz, len(t), (3,), name)
+        xyz = check_series(xyz, len(t), (3,), name)
         ok = _finite(xyz)
         entity = f"world/{group}/{name}"
         rec.log(
@@ -191,7 +183,7 @@ def _log_points(
             static=True,
         )
         if ok.any():
-            _send(rec, entity, t, ok, rr.Points3D.columns(positions=xyz[ok]))
+            send_columns(rec, entity, t, ok, rr.Points3D.columns(positions=xyz[ok]))
         out[name] = xyz
     return out
 
@@ -200,17 +192,17 @@ def _log_error_arrows(
     rec, t: np.ndarray, est: Mapping[str, np.ndarray], ref: Mapping[str, np.ndarray]
 ) -> None:
     """``world/errors/<name>``: arrow reference -> estimate for the names in both."""
-    rr = _rr()
+    rr = import_rerun()
     for name in est.keys() & ref.keys():
         ok = _finite(est[name]) & _finite(ref[name])
         entity = f"world/errors/{name}"
         rec.log(entity, rr.Arrows3D.from_fields(colors=[ERROR_COLOR]), static=True)
         if ok.any():
             cols = rr.Arrows3D.columns(origins=ref[name][ok], vectors=est[name][ok] - ref[name][ok])
-            _send(rec, entity, t, ok, cols)
+            send_columns(rec, entity, t, ok, cols)
 
 
-def _log_landmarks(
+def log_landmarks(
     rec,
     t: np.ndarray,
     landmarks: Mapping[str, np.ndarray],
@@ -226,7 +218,7 @@ def _log_landmarks(
             _log_error_arrows(rec, t, est, ref)
 
 
-def _log_poses(
+def log_poses(
     rec,
     t: np.ndarray,
     group: str,
@@ -234,27 +226,27 @@ def _log_poses(
     axis_length: float | None,
 ) -> None:
     """``<group>/<name>``: ``Transform3D`` columns (translation, xyzw quaternion), static axes."""
-    rr = _rr()
+    rr = import_rerun()
     for name, (R, p) in poses.items():
-        R = _check_series(R, len(t), (3, 3), f"{name} R")
-        p = _check_series(p, len(t), (3,), f"{name} p")
+        R = check_series(R, len(t), (3, 3), f"{name} R")
+        p = check_series(p, len(t), (3,), f"{name} p")
         ok = _finite(R) & _finite(p)
         entity = f"{group}/{name}"
         if axis_length is not None:
             rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
         if ok.any():
             xyzw = quat_xyzw_from_matrix(R[ok])  # rerun: scalar-last
-            _send(rec, entity, t, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
+            send_columns(rec, entity, t, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
 
 
-def _log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:
+def log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:
     """Entity path -> ``(N,)`` series times ``scale``, as ``Scalars`` (NaN rows skipped)."""
-    rr = _rr()
+    rr = import_rerun()
     for entity, y in series.items():
-        y = _check_series(y, len(t), (), entity)
+        y = check_series(y, len(t), (), entity)
         ok = np.isfinite(y)
         if ok.any():
-            _send(rec, entity, t, ok, rr.Scalars.columns(scalars=scale * y[ok]))
+            send_columns(rec, entity, t, ok, rr.Scalars.columns(scalars=scale * y[ok]))
 
 
 def log_trial(
@@ -286,22 +278,22 @@ def log_trial(
     and the URDF's parent folders). :func:`pipeline.viz.model.log_motion` draws a model's motion.
     """
     path = Path(path)
-    t = _check_time(time)
+    t = check_time(time)
     _check_up_axis(up_axis)
     plots = [("joint angles (deg)", "/plots")] if joint_angles else []
     blueprint = _blueprint(plots, up_axis)
-    with _recording(path, app_id, recording_name, up_axis, blueprint) as rec:
-        _log_landmarks(rec, t, landmarks, reference_landmarks, error_arrows, point_radius)
-        _log_poses(rec, t, "world/segments", segment_poses or {}, axis_length)
+    with open_recording(path, app_id, recording_name, up_axis, blueprint) as rec:
+        log_landmarks(rec, t, landmarks, reference_landmarks, error_arrows, point_radius)
+        log_poses(rec, t, "world/segments", segment_poses or {}, axis_length)
         angles = {f"plots/{name}": q for name, q in (joint_angles or {}).items()}
-        _log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
+        log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
         if urdf_path is not None:
             _log_urdf(rec, Path(urdf_path), urdf_root, package_paths)
     return path
 
 
 def _log_urdf(rec, urdf_path: Path, urdf_root, package_paths) -> None:
-    rr = _rr()
+    rr = import_rerun()
     if not urdf_path.is_file():
         raise InputError("no such URDF file", file=urdf_path)
     root_link = _urdf_root_link(urdf_path)
@@ -350,49 +342,3 @@ def entity_row_counts(path: str | Path) -> dict[str, int]:
             continue
         counts[c.entity_path] = counts.get(c.entity_path, 0) + (0 if c.is_static else c.num_rows)
     return counts
-
-
-# --------------------------------------------------------------------------- viewer
-
-
-def _rerun_executable() -> list[str]:
-    exe = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
-    return [exe] if Path(exe).exists() else [sys.executable, "-m", "rerun"]
-
-
-def viewer_command(
-    path: str | Path, web: bool = False, web_port: int = 9090, grpc_port: int = 9876
-) -> list[str]:
-    """Command line that opens ``path``: native viewer, or the web viewer served on 127.0.0.1."""
-    cmd = _rerun_executable()
-    if web:
-        cmd += [
-            "--serve-web",
-            "--bind",
-            "127.0.0.1",
-            "--web-viewer-port",
-            str(web_port),
-            "--port",
-            str(grpc_port),
-        ]
-    return [*cmd, str(Path(path))]
-
-
-def web_viewer_url(web_port: int = 9090, grpc_port: int = 9876) -> str:
-    """Address of the served web viewer, connected to the local gRPC proxy holding the data."""
-    proxy = quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
-    return f"http://127.0.0.1:{web_port}/?url={proxy}"
-
-
-def view(path: str | Path, web: bool = False, web_port: int = 9090, grpc_port: int = 9876) -> int:
-    """Open a recording in the rerun viewer (blocks until it closes); returns its exit code."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("no such recording", file=path)
-    cmd = viewer_command(path, web=web, web_port=web_port, grpc_port=grpc_port)
-    if web:
-        print(f"web viewer: {web_viewer_url(web_port, grpc_port)} (Ctrl-C to stop)", flush=True)
-    try:
-        return subprocess.call(cmd)
-    except KeyboardInterrupt:
-        return 0

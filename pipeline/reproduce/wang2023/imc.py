@@ -248,7 +248,7 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
     """One .rrd per subject: the moving model (regression geometry, average AoR correction,
     uncorrected tibia), its landmarks beside the optical ones, error arrows and joint angles, all
     in the initial frame of eq 18 (femur up at the first frame)."""
-    from pipeline.viz.recording import log_motion
+    from pipeline.viz.model import log_motion
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     C_F, C_T = correction_rotations(knee_aor(F, T), sex_aor.femur_axis, sex_aor.tibia_axis)

@@ -100,26 +100,17 @@ class SubjectSample:
 
 
 @dataclass(frozen=True)
-class FitResult:
-    """One fitted equation. b0..b2: mean over the K folds' coefficients (mm, mm/mm; b2 = 0 for
-    one input); r2, p: OLS on the whole group and its overall F-test; cv_*: held-out test error
-    (measured - predicted, pooled over folds), mean and SD (ddof 1)."""
+class FitResult(RegressionEquation):
+    """One fitted equation: a :class:`RegressionEquation` (``source='fit'``) whose b0..b2 are the
+    mean over the K folds' coefficients (mm, mm/mm; b2 = 0 for one input); r2, p: OLS on the whole
+    group and its overall F-test; cv_*: held-out test error (measured - predicted, pooled over
+    folds), mean and SD (ddof 1). Adds the group size ``n``, ``k_folds``, the whole-group OLS
+    coefficients ``coef_full_mm`` and the per-fold ones ``coef_folds_mm`` (K, 3)."""
 
-    sex: str
-    equation: str
-    landmark: str
-    axis: str
-    b0: float
-    b1: float
-    b2: float
-    r2: float
-    p: float
-    cv_mean_mm: float
-    cv_sd_mm: float
-    n: int
-    k_folds: int
-    coef_full_mm: tuple[float, float, float]
-    coef_folds_mm: np.ndarray  # (K, 3)
+    n: int = 0
+    k_folds: int = 0
+    coef_full_mm: tuple[float, float, float] = (math.nan, math.nan, math.nan)
+    coef_folds_mm: np.ndarray | None = None
 
     def to_equation(self) -> RegressionEquation:
         values = {c: getattr(self, c) for c in CSV_COLUMNS}
@@ -214,7 +205,7 @@ def fit_table(
                 y = np.array([s.coordinate_mm(landmark, axis) for s in members])
                 fit = _fit_one(x, y, folds)
                 results.append(
-                    FitResult(group, equation, landmark, axis, n=n, k_folds=k_folds, **fit)
+                    FitResult(group, equation, landmark, axis, **fit, source="fit", n=n, k_folds=k_folds)
                 )
     return results
 

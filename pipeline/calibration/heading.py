@@ -1,0 +1,123 @@
+"""The subject's heading at the calibration pose: which horizontal direction is its right.
+
+Orientation IK in a world whose y axis points up needs the heading ``H`` (a rotation about the
+vertical) of the subject at the calibration pose. Two ways:
+
+* ``'anatomical'`` (default): from the motion itself, independent of how the sensors were mounted.
+  The hip flexes about +right and the knee about -right, so the dominant axis of the thigh's
+  rotation relative to the pelvis, and minus that of the shank relative to the thigh (both
+  expressed at t0, weighted by angle, over the frames of largest excursion), give the right
+  direction; projected on the horizontal plane it fixes ``H`` (forward = up x right).
+* ``'pelvis_imu:<axis>'``: OpenSense's convention, an axis of the pelvis sensor points forward.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.errors import InputError
+from pipeline.rotations import angle_between, axis_angle, normalize, rot_y
+
+__all__ = [
+    "HEADINGS",
+    "UP",
+    "anatomical_right",
+    "dominant_axis",
+    "heading_rotation",
+    "pelvis_axis_right",
+    "subject_right",
+]
+
+UP = np.array([0.0, 1.0, 0.0])
+HEADINGS = ("anatomical",) + tuple(f"pelvis_imu:{s}{a}" for s in ("", "-") for a in "xyz")
+
+
+def dominant_axis(
+    R_ref: np.ndarray, R_moving: np.ndarray, top: float = 0.2
+) -> tuple[np.ndarray | None, float]:
+    """Angle-weighted mean axis (world, at t0) of the moving sensor's rotation relative to the
+    reference sensor since t0, over the ``top`` fraction of frames with the largest angle."""
+    rel = np.swapaxes(R_ref, 1, 2) @ R_moving
+    change = rel @ rel[0].T  # rotation in the reference sensor's coordinates
+    axis, angle = axis_angle(change)
+    ok = np.isfinite(angle) & (angle > 0)
+    if ok.sum() < 10:
+        return None, 0.0
+    thresh = np.quantile(angle[ok], 1.0 - top)
+    sel = ok & (angle >= thresh)
+    v = np.sum(axis[sel] * angle[sel, None], axis=0)
+    if np.linalg.norm(v) == 0:
+        return None, 0.0
+    return R_ref[0] @ normalize(v), float(np.max(angle[ok]))
+
+
+def anatomical_right(
+    rotations: dict[str, np.ndarray], min_excursion: float = 0.35, notes: list[str] | None = None
+) -> np.ndarray:
+    """The subject's right at t0 from hip (+right) and knee (-right) flexion (module doc, step 3).
+
+    Raises :class:`InputError` when the motion is too small to define an axis (less than
+    ``min_excursion`` rad of hip or knee rotation). When a cue points more than 45 deg away from
+    the others' mean (horizontal directions), a note says so: the heading may then be unreliable.
+    """
+    cues = []
+    for side in ("right", "left"):
+        pairs = (("pelvis", f"{side}_femur", 1.0), (f"{side}_femur", f"{side}_tibia", -1.0))
+        for ref, mov, sign in pairs:
+            if ref in rotations and mov in rotations:
+                axis, excursion = dominant_axis(rotations[ref], rotations[mov])
+                if axis is not None and excursion >= min_excursion:
+                    cues.append(sign * axis)
+    if not cues:
+        raise InputError(
+            "the hips and knees barely move: the subject's right cannot be found from the motion; "
+            "give the heading explicitly (e.g. --heading pelvis_imu:-z)",
+            field="heading",
+        )
+    right = np.mean(cues, axis=0)
+    if notes is not None and len(cues) > 1:
+        flat = [c - UP * (c @ UP) for c in cues]
+        spread = max(np.degrees(angle_between(c, right - UP * (right @ UP))) for c in flat)
+        if spread > 45.0:
+            notes.append(
+                f"the hip and knee flexion axes disagree by up to {spread:.0f} deg: the anatomical "
+                "heading may be unreliable; check the result or give --heading"
+            )
+    horizontal = right - UP * (right @ UP)
+    if np.linalg.norm(horizontal) < 0.3 * np.linalg.norm(right):
+        raise InputError(
+            "the flexion axes point vertically: is the world's up axis y? Set --sensor-to-model "
+            "(e.g. -1.5708 0 0 for an Xsens z-up world)",
+            field="sensor_to_model",
+        )
+    return normalize(horizontal)
+
+
+def heading_rotation(right: np.ndarray) -> np.ndarray:
+    """Rotation about the vertical (y) taking the model's right (z) to the horizontal ``right``."""
+    # Ry(psi) @ z = (sin psi, 0, cos psi) must equal (r_x, 0, r_z): psi = atan2(r_x, r_z)
+    psi = np.arctan2(right[0], right[2])
+    return rot_y(psi)
+
+
+def pelvis_axis_right(rotations: dict[str, np.ndarray], spec: str) -> np.ndarray:
+    """The subject's right from an axis of the pelvis sensor (OpenSense's ``base_heading_axis``):
+    ``spec`` is ``'pelvis_imu:-z'`` style; forward is that axis at t0, made horizontal, and
+    right = forward x up."""
+    axis = spec.split(":")[1]
+    sign = -1.0 if axis.startswith("-") else 1.0
+    forward = sign * rotations["pelvis"][0][:, "xyz".index(axis[-1])]
+    forward = forward - UP * (forward @ UP)
+    if np.linalg.norm(forward) < 1e-3:
+        raise InputError(f"pelvis sensor axis {axis} is vertical at t0", field="heading")
+    return normalize(np.cross(normalize(forward), UP))  # right = forward x up
+
+
+def subject_right(rotations: dict[str, np.ndarray], heading: str = "anatomical",
+                  notes: list[str] | None = None) -> np.ndarray:  # fmt: skip
+    """The subject's horizontal right at t0 by the ``heading`` method (one of :data:`HEADINGS`)."""
+    if heading not in HEADINGS:
+        raise InputError(f"expected one of {HEADINGS}, got {heading!r}", field="heading")
+    if heading == "anatomical":
+        return anatomical_right(rotations, notes=notes)
+    return pelvis_axis_right(rotations, heading)

@@ -1,0 +1,18 @@
+"""``pipeline view``: open a recording in the rerun viewer."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pipeline.errors import InputError
+from pipeline.viz.viewer import view
+
+__all__ = ["run_view"]
+
+
+def run_view(rrd: str | Path, web: bool = False) -> int:
+    """Open ``rrd`` (native viewer, or the web viewer on 127.0.0.1); returns the exit code."""
+    rrd = Path(rrd)
+    if not rrd.exists():
+        raise InputError("no such recording", file=rrd)
+    return int(view(rrd, web=web) or 0)

@@ -1,0 +1,17 @@
+"""Names and modes of the subject model, importable at no cost (the CLI's choices come from here).
+
+Segments per leg ``femur``, ``tibia``, ``foot`` (ISB frames, Wu 2002); anatomical landmarks per
+leg ``HJC``, ``KJC``, ``AJC`` (joint centres) and ``EFM``, ``EFL``, ``MM``, ``LM`` (epicondyles,
+malleoli; Wang 2023); knee models ``free`` (Z-X-Y, Wang eq 15-17) and ``hinge`` (one rotation
+about the knee AoR).
+"""
+
+from __future__ import annotations
+
+__all__ = ["DEFAULT_KNEE", "KNEE_MODES", "LANDMARKS", "SEGMENTS"]
+
+KNEE_MODES = ("hinge", "free")
+#: The knee model used when none is asked for, by the library and the CLI alike.
+DEFAULT_KNEE = "free"
+LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
+SEGMENTS = ("femur", "tibia", "foot")
