@@ -216,15 +216,16 @@ def matrix_from_euler_zxy(euler: np.ndarray) -> np.ndarray:
 def euler_zxy_from_matrix(R: np.ndarray, *, gimbal_tol: float = 1e-9) -> np.ndarray:
     """Inverse of :func:`matrix_from_euler_zxy`: ``[z, x, y]`` angles, ``x`` in [-pi/2, pi/2].
 
-    Hu et al. 2021 eq 40-42 (1-based ``r_ij``): ``x = atan2(r32, sqrt(r12^2 + r22^2))``,
-    ``z = atan2(-r12, r22)``, ``y = atan2(-r31, r33)``. At gimbal lock (``cos x < gimbal_tol``)
+    Hu et al. 2021 eq 40-42 (1-based ``r_ij``): ``x = atan2(r32, sqrt(r12^2 + r22^2))``, computed
+    as ``arcsin(r32)`` (the same angle for a rotation matrix), ``z = atan2(-r12, r22)``,
+    ``y = atan2(-r31, r33)``. At gimbal lock (``cos x < gimbal_tol``)
     only ``z + y`` (``x = +pi/2``) or ``y - z`` (``x = -pi/2``) is defined: ``z = 0`` and
     ``y = atan2(r13, -r23)`` or ``atan2(r13, r23)`` (eq 41-42).
     """
     R = np.asarray(R, dtype=float)
     r = lambda i, j: R[..., i - 1, j - 1]  # noqa: E731  (1-based like the paper)
     cx = np.sqrt(r(1, 2) ** 2 + r(2, 2) ** 2)
-    x = np.arctan2(r(3, 2), cx)  # eq 40
+    x = np.arcsin(np.clip(r(3, 2), -1.0, 1.0))  # eq 40
     z = np.arctan2(-r(1, 2), r(2, 2))
     y = np.arctan2(-r(3, 1), r(3, 3))
     lock = cx < gimbal_tol

@@ -53,6 +53,7 @@ from pathlib import Path
 
 import numpy as np
 import yourdfpy as ud
+from lxml import etree
 
 from pipeline.errors import InputError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES, LANDMARKS, SEGMENTS
@@ -325,9 +326,8 @@ def urdf_text(
     robot = ud.Robot(name=f"lower_limb_{knee}_knee_ISB_model", links=links, joints=joints)
     robot.materials = materials()
     urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
-    text = urdf.write_xml_string()
-    if isinstance(text, bytes):
-        text = text.decode("utf-8")
+    # the bytes yourdfpy's write_xml_file writes (lxml: ASCII declaration, pretty-printed)
+    text = etree.tostring(urdf.write_xml(), xml_declaration=True, pretty_print=True).decode("ascii")
     if check:
         _check_with_pinocchio(text, joint_names(knee, legs))
     return text
