@@ -67,7 +67,7 @@ def test_scale_cli_writes_model(tmp_path, capsys):
 def test_shipped_population_aor_matches_the_dataset():
     if not DATA.exists():
         pytest.skip("../shared/data/wang2023 not present")
-    from pipeline.reproduce.wang2023.run import run_omc_stage
+    from pipeline.reproduce.wang2023.optical import run_omc_stage
 
     stage = run_omc_stage(DATA, progress=False)
     for sex in ("m", "f", "all"):

@@ -116,13 +116,13 @@ def test_ik_on_the_subject_model_reproduces_eq_15_17_on_real_data(tmp_path):
     from pipeline.analysis.landmarks import landmark_trajectories, wang_trajectories
     from pipeline.reproduce.wang2023.dataset import load_subject
     from pipeline.reproduce.wang2023.evaluation import frame_from_femur
-    from pipeline.reproduce.wang2023.imc import _positions, subject_motion
+    from pipeline.reproduce.wang2023.imc import landmark_positions, subject_motion
     from pipeline.reproduce.wang2023.omc import process_subject
 
     subject = load_subject(DATA / "raw" / "rawData07.mat", require_imc=True)
     r = process_subject(subject.omc)
     eF, eT = subject.imc.femur_R[:600], subject.imc.tibia_R_uncorrected[:600]
-    pf, pt = _positions("regression", subject, r)
+    pf, pt = landmark_positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     G = frame_from_femur(traj["KJC"], eF)
     sk, ik = subject_motion(subject, r, eF, eT, G, limits=False)

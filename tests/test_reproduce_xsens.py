@@ -128,7 +128,8 @@ def test_mvn_export_and_reference_extraction_agree(stage):
 
 @pytest.mark.dataset
 def test_report_and_tables(stage):
-    from pipeline.reproduce.wang2023.xsens import xsens_report_section, xsens_tables
+    from pipeline.reproduce.wang2023.xsens import xsens_tables
+    from pipeline.reproduce.wang2023.xsens_report import xsens_report_section
 
     st, _ = stage
     text = xsens_report_section(st)

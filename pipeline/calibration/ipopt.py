@@ -26,9 +26,9 @@ import numpy as np
 
 from pipeline.calibration.joint_constraints import (
     JointData,
-    _gamma_matrix,
     axis_from_spherical,
     consistent_axis_signs,
+    gamma_matrix,
     project_hinge_positions,
 )
 from pipeline.calibration.losses import robust_loss
@@ -96,8 +96,8 @@ def calibrate_ipopt(
     opts = {"restarts": 2, "max_iter": 15}
     xo, _, it0 = solve_subproblem(coarse, "positions", "gn", seed, {"restarts": 1, "max_iter": 15})
     o1, o2 = xo[:3], xo[3:]
-    K1 = _gamma_matrix(data.gyr_1, data.gyr_dot_1)
-    K2 = _gamma_matrix(data.gyr_2, data.gyr_dot_2)
+    K1 = gamma_matrix(data.gyr_1, data.gyr_dot_1)
+    K2 = gamma_matrix(data.gyr_2, data.gyr_dot_2)
     o = ca.MX.sym("o", 6)
     e_s = _position_norm(data.acc_1, K1, o[:3]) - _position_norm(data.acc_2, K2, o[3:])
     f = ca.sum1(robust_loss(e_s**2, loss, scale_position)) / (n * scale_position**2)

@@ -110,7 +110,7 @@ def spherical_residual(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.nd
     return np.linalg.norm(f1, axis=1) - np.linalg.norm(f2, axis=1)
 
 
-def _gamma_matrix(w: np.ndarray, dw: np.ndarray) -> np.ndarray:
+def gamma_matrix(w: np.ndarray, dw: np.ndarray) -> np.ndarray:
     """``K`` with ``Gamma(o) = K o``: ``[w]x [w]x + [dw]x`` (eq 10), (N,3,3)."""
     W = skew(w)
     return W @ W + skew(dw)
@@ -121,8 +121,8 @@ def spherical_jacobian(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.nd
     f1, f2 = _joint_force(data, o1, o2)
     u1 = f1 / np.linalg.norm(f1, axis=1, keepdims=True)
     u2 = f2 / np.linalg.norm(f2, axis=1, keepdims=True)
-    J1 = np.einsum("ni,nij->nj", u1, _gamma_matrix(data.gyr_1, data.gyr_dot_1))
-    J2 = np.einsum("ni,nij->nj", u2, _gamma_matrix(data.gyr_2, data.gyr_dot_2))
+    J1 = np.einsum("ni,nij->nj", u1, gamma_matrix(data.gyr_1, data.gyr_dot_1))
+    J2 = np.einsum("ni,nij->nj", u2, gamma_matrix(data.gyr_2, data.gyr_dot_2))
     return np.hstack([J1, -J2])
 
 

@@ -28,9 +28,9 @@ import numpy as np
 
 from pipeline.calibration.joint_constraints import (
     JointData,
-    _gamma_matrix,
     axis_from_spherical,
     consistent_axis_signs,
+    gamma_matrix,
     hinge_jacobian,
     hinge_jacobian_spherical,
     hinge_residual,
@@ -95,8 +95,8 @@ def _quadratic_norms(d: JointData) -> tuple[tuple, tuple]:
     """``|a + K o|^2 = |a|^2 + 2 (K^T a).o + (o o^T) : K^T K`` per sample, for both sensors."""
     out = []
     for a, K in (
-        (d.acc_1, _gamma_matrix(d.gyr_1, d.gyr_dot_1)),
-        (d.acc_2, _gamma_matrix(d.gyr_2, d.gyr_dot_2)),
+        (d.acc_1, gamma_matrix(d.gyr_1, d.gyr_dot_1)),
+        (d.acc_2, gamma_matrix(d.gyr_2, d.gyr_dot_2)),
     ):
         Kt = np.swapaxes(K, 1, 2)
         out.append(

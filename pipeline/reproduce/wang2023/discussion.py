@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from pipeline.reproduce.wang2023.imc import ImcStage
+from pipeline.reproduce.wang2023.imc import ImcStage
+
+__all__ = ["imc_discussion"]
 
 
 def _group_mean(rows: list[dict], **kw: object) -> float:

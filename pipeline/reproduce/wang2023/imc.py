@@ -30,10 +30,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from tqdm import tqdm
 
-from pipeline.analysis.landmarks import wang_trajectories
+from pipeline.analysis.landmarks import frame_trajectories, wang_trajectories
 from pipeline.calibration.aor import apply_correction, correction_rotations, knee_aor
 from pipeline.errors import InputError
+from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.model.anthropometry import Measures, predict_landmarks
+from pipeline.model.geometry import SubjectGeometry
+from pipeline.model.skeleton import Skeleton
 from pipeline.reproduce.wang2023.dataset import IMC_OMC_INDEX_OFFSET
 from pipeline.reproduce.wang2023.evaluation import (
     align,
@@ -45,15 +48,14 @@ from pipeline.reproduce.wang2023.evaluation import (
     rotations_to_omc,
     unify_frames,
 )
+from pipeline.reproduce.wang2023.optical import OmcStage
 
 if TYPE_CHECKING:
     from pipeline.calibration.aor import PopulationAoR
     from pipeline.ik.solver import IKResult
-    from pipeline.model.skeleton import Skeleton
     from pipeline.reproduce.wang2023.dataset import Subject
     from pipeline.reproduce.wang2023.omc import OmcResult
-    from pipeline.reproduce.wang2023.run import OmcStage
-from pipeline.io.tables import csv_text, markdown_table, mean_sd
+from pipeline.io.tables import csv_text
 
 LANDMARKS = ("EFM", "EFL", "MM", "LM")
 TIBIA_INPUTS = ("stored", "uncorrected")
@@ -92,10 +94,6 @@ def hinge_ik_orientations(
     landmark positions do not enter orientation IK, so the returned frames serve eq 15-17 with any
     positions.
     """
-    from pipeline.analysis.landmarks import frame_trajectories
-    from pipeline.ik.solver import solve_ik
-    from pipeline.model.geometry import SubjectGeometry
-    from pipeline.model.skeleton import Skeleton
 
     geometry = SubjectGeometry(knee_axis_femur=sex_aor.femur_axis,
                                knee_axis_tibia=sex_aor.tibia_axis, **geometry_kw)  # fmt: skip
@@ -109,7 +107,7 @@ def _correction(name: str, F, T, measured, sex_aor, own_aor, female_aor):
     if name == "none":
         return np.eye(3), np.eye(3)
     if name == "ipopt":
-        from pipeline.calibration.aor_ipopt import aor_correction_ipopt
+        from pipeline.calibration.aor_ipopt import aor_correction_ipopt  # CasADi: only here
 
         res = aor_correction_ipopt(F, T, sex_aor.femur_axis, sex_aor.tibia_axis)
         return res.R_co_femur, res.R_co_tibia
@@ -117,7 +115,7 @@ def _correction(name: str, F, T, measured, sex_aor, own_aor, female_aor):
     return correction_rotations(measured, ref.femur_axis, ref.tibia_axis)
 
 
-def _positions(kind: str, subject, result):
+def landmark_positions(kind: str, subject, result):
     if kind == "omc":
         return result.landmarks_femur, result.landmarks_tibia
     d = result.dims
@@ -161,7 +159,7 @@ def run_imc_stage(
                 continue
             for correction in corrections:
                 if correction == "hinge_ik":
-                    pf, pt = _positions("regression", subject, r)
+                    pf, pt = landmark_positions("regression", subject, r)
                     kw = dict(sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf,
                               tibia_landmarks=pt)  # fmt: skip
                     eF, eT = hinge_ik_orientations(F, T, pop[r.sex], kw)
@@ -174,7 +172,7 @@ def run_imc_stage(
                 _, eT_p = align(r.femur_R, eT, lag)
                 R_unify = None
                 for positions in POSITIONS:
-                    pf, pt = _positions(positions, subject, r)
+                    pf, pt = landmark_positions(positions, subject, r)
                     imc_traj = wang_trajectories(eF_p, eT_p, pf, pt)
                     G_imc = frame_from_femur(imc_traj["KJC"], eF_p)
                     G_omc = frame_from_femur(omc_paired["KJC"], omc_F)
@@ -230,11 +228,8 @@ def subject_motion(
     landmark frames reproduce eq 15-17 exactly (tested); with limits the knee cannot hyperextend.
     The model is built in memory. Returns ``(skeleton, ik_result)``.
     """  # fmt: skip
-    from pipeline.ik.solver import solve_ik
-    from pipeline.model.geometry import SubjectGeometry
-    from pipeline.model.skeleton import Skeleton
 
-    pf, pt = _positions(positions, subject, r)
+    pf, pt = landmark_positions(positions, subject, r)
     geometry = SubjectGeometry(
         sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf, tibia_landmarks=pt,
         knee_axis_femur=r.knee_aor.femur_axis, knee_axis_tibia=r.knee_aor.tibia_axis,
@@ -248,13 +243,13 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
     """One .rrd per subject: the moving model (regression geometry, average AoR correction,
     uncorrected tibia), its landmarks beside the optical ones, error arrows and joint angles, all
     in the initial frame of eq 18 (femur up at the first frame)."""
-    from pipeline.viz.model import log_motion
+    from pipeline.viz.model import log_motion  # rerun: only with --rerun
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     C_F, C_T = correction_rotations(knee_aor(F, T), sex_aor.femur_axis, sex_aor.tibia_axis)
     _, eF = align(r.femur_R, apply_correction(F, C_F), lag)
     _, eT = align(r.femur_R, apply_correction(T, C_T), lag)
-    pf, pt = _positions("regression", subject, r)
+    pf, pt = landmark_positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     omc_F, _ = align(r.femur_R, F, lag)
     G_omc = frame_from_femur(omc_paired["KJC"], omc_F)
@@ -280,121 +275,3 @@ def imc_tables(stage: ImcStage) -> dict[str, str]:
         "trajectory_errors.csv": csv_text(stage.trajectory_rows, TRAJECTORY_COLUMNS),
         "orientation_errors.csv": csv_text(stage.orientation_rows, ORIENTATION_COLUMNS),
     }
-
-
-# Paper's Table IV (RMS mm, mean±SD; EFM, EFL, MM, LM) and Table V (deg; femur Z Y X, tibia Z Y X)
-PAPER_TABLE_IV = {
-    ("regression", "none", "m"): ("26.5±6.8", "25.8±7.1", "115.1±66.7", "117.8±67.0"),
-    ("regression", "none", "f"): ("34.4±8.6", "33.4±10.0", "82.1±47.8", "81.4±48.1"),
-    ("regression", "average", "m"): ("26.5±6.3", "23.4±7.4", "53.3±10.5", "55.1±13.0"),
-    ("regression", "average", "f"): ("32.6±9.1", "31.9±9.6", "57.3±27.5", "56.0±27.4"),
-    ("regression", "individual", "m"): ("29.4±12.1", "28.0±9.8", "49.6±14.6", "47.6±13.7"),
-    ("regression", "individual", "f"): ("29.8±12.3", "29.6±12.1", "48.5±24.2", "50.0±21.6"),
-    ("omc", "none", "m"): ("21.8±9.0", "21.4±7.2", "113.6±67.1", "114.2±68.7"),
-    ("omc", "none", "f"): ("31.0±9.9", "30.2±10.8", "80.2±42.7", "79.9±45.7"),
-    ("omc", "average", "m"): ("22.8±4.9", "18.6±7.1", "50.5±12.2", "52.3±13.3"),
-    ("omc", "average", "f"): ("29.1±9.8", "28.4±10.6", "54.6±24.2", "54.1±24.9"),
-    ("omc", "individual", "m"): ("26.1±11.6", "24.4±8.6", "42.2±15.2", "43.1±14.1"),
-    ("omc", "individual", "f"): ("26.1±12.3", "25.7±13.0", "45.0±17.5", "47.0±18.2"),
-}
-PAPER_TABLE_V = {
-    "none": ("3.7±2.7", "3.5±2.6", "9.2±7.6", "18.8±9.9", "4.0±1.9", "8.9±5.7"),
-    "average": ("4.2±2.5", "3.4±0.8", "8.1±3.4", "6.8±3.1", "3.3±0.7", "7.6±2.7"),
-}
-
-
-def _select(rows, **kw):
-    return [r for r in rows if all(r[k] == v for k, v in kw.items())]
-
-
-def table4_section(stage: ImcStage) -> str:
-    rows = []
-    for tibia_input in TIBIA_INPUTS:
-        for positions in POSITIONS:
-            for correction in stage.corrections:
-                for sex in ("m", "f"):
-                    sel = _select(stage.trajectory_rows, tibia_input=tibia_input,
-                                  positions=positions, correction=correction, sex=sex)  # fmt: skip
-                    ours = [mean_sd([r["rms_mm"] for r in sel if r["landmark"] == n])
-                            for n in LANDMARKS]  # fmt: skip
-                    paper = PAPER_TABLE_IV.get((positions, correction, sex), ("",) * 4)
-                    rows.append(
-                        [tibia_input, positions, correction, sex]
-                        + [f"{o} ({p})" if p else o for o, p in zip(ours, paper, strict=True)]
-                    )
-    return "\n".join(
-        [
-            "## Table IV: RMS errors of landmark trajectories (mm, mean±SD over subjects)",
-            "",
-            "Ours, with the paper's value in parentheses where the paper has that configuration "
-            "(the paper's numbers come from the stored tibia input).",
-            "",
-            markdown_table(
-                ["tibia input", "positions", "correction", "sex", "EFM", "EFL", "MM", "LM"], rows
-            ),  # fmt: skip
-        ]
-    )
-
-
-def table5_section(stage: ImcStage) -> str:
-    rows = []
-    for error_frame in ("world", "body"):
-        for tibia_input in TIBIA_INPUTS:
-            for correction in stage.corrections:
-                vals = []
-                for segment in ("femur", "tibia"):
-                    sel = _select(stage.orientation_rows, tibia_input=tibia_input,
-                                  correction=correction, segment=segment,
-                                  error_frame=error_frame)  # fmt: skip
-                    vals += [mean_sd([r[k] for r in sel]) for k in ("z_deg", "y_deg", "x_deg")]
-                paper = None
-                if tibia_input == "stored" and error_frame == "world":
-                    paper = PAPER_TABLE_V.get(correction)
-                cells = [f"{o} ({p})" for o, p in zip(vals, paper, strict=True)] if paper else vals
-                rows.append([error_frame, tibia_input, correction] + cells)
-    header = ["error frame", "tibia input", "correction", "femur Z", "femur Y", "femur X",
-              "tibia Z", "tibia Y", "tibia X"]  # fmt: skip
-    return "\n".join(
-        [
-            "## Table V: RMS orientation errors (deg, ZYX Euler angles, mean±SD over subjects)",
-            "",
-            "`world`: angles of R_imc R_omcᵀ (error about the unified world axes); `body`: angles "
-            "of R_imcᵀ R_omc (error about the segment's own axes, the definition in our design "
-            "notes). The paper's Table V (in parentheses) matches the `world` pattern on this "
-            "data (large femur X and tibia Z errors without correction, the tibia Z error "
-            "reduced by the AoR correction) and not the `body` one, whose large components are "
-            "about the segments' long (y) axes; we therefore read the paper's 'dividing the "
-            "rotation matrices' as R_imc R_omcᵀ and report both.",
-            "",
-            markdown_table(header, rows),
-        ]
-    )
-
-
-def lag_section(stage: ImcStage) -> str:
-    rows = [[s["subject_id"], s["sex"], s["lag"], s["reference_lag"], s["lag"] - s["reference_lag"]]
-            for s in stage.subjects]  # fmt: skip
-    return "\n".join(
-        [
-            "## Time alignment",
-            "",
-            "IMC-OMC lag estimated from the femur's angular speed (invariant to the world frames "
-            "and to sensor offsets), beside the reference code's hand-set offsets.",
-            "",
-            markdown_table(
-                ["subject", "sex", "lag (samples)", "reference offset", "difference"], rows
-            ),  # fmt: skip
-            "",
-            f"IMC stage: {len(stage.subjects)} subjects, {len(stage.trajectory_rows)} trajectory "
-            f"rows in {stage.seconds:.1f} s.",
-        ]
-        + ([""] + [f"- {n}" for n in stage.notes] if stage.notes else [])
-    )
-
-
-def imc_report_sections(stage: ImcStage) -> str:
-    from pipeline.reproduce.wang2023.discussion import imc_discussion
-
-    return "\n\n".join(
-        [lag_section(stage), table4_section(stage), table5_section(stage), imc_discussion(stage)]
-    )

@@ -8,19 +8,17 @@ the dataset README and measured here (e.g. the first-sample ablation below), not
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from pipeline.io.tables import markdown_table, mean_sd
 from pipeline.model.anthropometry import EQUATION_INPUTS, load_table1
+from pipeline.reproduce.wang2023.imc import ImcStage
+from pipeline.reproduce.wang2023.imc_report import imc_report_sections
 from pipeline.reproduce.wang2023.omc import landmarks_in_frames
+from pipeline.reproduce.wang2023.optical import OmcStage, subject_sample
 from pipeline.reproduce.wang2023.regression import SubjectSample, fit_table
-
-if TYPE_CHECKING:
-    from pipeline.reproduce.wang2023.imc import ImcStage
-    from pipeline.reproduce.wang2023.run import OmcStage
-    from pipeline.reproduce.wang2023.xsens import XsensStage
+from pipeline.reproduce.wang2023.xsens import XsensStage
+from pipeline.reproduce.wang2023.xsens_report import xsens_report_section
 
 CAUSES = {
     "shank": (
@@ -68,8 +66,6 @@ def _group_mean_inputs(samples: list[SubjectSample], sex: str) -> dict[str, floa
 
 def first_sample_samples(stage: OmcStage) -> list[SubjectSample]:
     """The reference's choice: landmark positions in segment frames at the first valid sample."""
-    from pipeline.reproduce.wang2023.run import _sample
-
     out = []
     for subject, r in zip(stage.subjects, stage.results, strict=True):
         first = np.zeros(r.n_frames, bool)
@@ -79,7 +75,7 @@ def first_sample_samples(stage: OmcStage) -> list[SubjectSample]:
             n: landmarks_in_frames(lm[n], r.femur_R, r.femur_origin, first) for n in ("EFM", "EFL")
         }
         t = {n: landmarks_in_frames(lm[n], r.tibia_R, r.tibia_origin, first) for n in ("MM", "LM")}
-        s = _sample(subject, r)
+        s = subject_sample(subject, r)
         out.append(
             SubjectSample(
                 s.subject_id, s.sex, s.height_m, s.shank_lateral_m, s.shank_medial_m,
@@ -90,10 +86,8 @@ def first_sample_samples(stage: OmcStage) -> list[SubjectSample]:
 
 
 def table1_section(stage: OmcStage) -> str:
-    from pipeline.reproduce.wang2023.run import _sample
-
     paper = load_table1()
-    samples = [_sample(s, r) for s, r in zip(stage.subjects, stage.results, strict=True)]
+    samples = [subject_sample(s, r) for s, r in zip(stage.subjects, stage.results, strict=True)]
     ablation = {
         (f.sex, f.equation, f.landmark, f.axis): f
         for f in fit_table(first_sample_samples(stage), k_folds=5, seed=0)
@@ -259,11 +253,7 @@ def render_report(
         table3_section(stage),
     ]
     if imc_stage is not None:
-        from pipeline.reproduce.wang2023.imc import imc_report_sections
-
         parts += ["", imc_report_sections(imc_stage)]
     if xsens_stage is not None:
-        from pipeline.reproduce.wang2023.xsens import xsens_report_section
-
         parts += ["", xsens_report_section(xsens_stage)]
     return "\n".join(parts) + "\n"

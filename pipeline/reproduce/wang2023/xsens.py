@@ -29,6 +29,9 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.io.c3d import read_c3d
 from pipeline.io.tables import csv_text
+from pipeline.model.anthropometry import load_table1
+from pipeline.reproduce.wang2023.dataset import load_subject, subject_paths
+from pipeline.reproduce.wang2023.omc import process_subject
 from pipeline.reproduce.wang2023.xsens_mvn import (
     LANDMARKS,
     UNIFICATIONS,
@@ -143,9 +146,6 @@ def _xsens_dir(data_dir: Path) -> Path:
 
 def _omc_subjects(data_dir: Path, omc_stage) -> list[tuple[str, float, dict]]:
     if omc_stage is None:
-        from pipeline.reproduce.wang2023.dataset import load_subject, subject_paths
-        from pipeline.reproduce.wang2023.omc import process_subject
-
         pairs = []
         for p in subject_paths(data_dir):
             s = load_subject(p)
@@ -160,7 +160,6 @@ def _vs_table1(line: dict, subjects: list[tuple[str, float, dict]]) -> dict:
     optical subject's height, mean±SD over subjects (m). OLS lines pass through the means, so
     the mean is what the paper's Table II would show with the paper's own subjects' positions;
     the SD holds only the slope difference."""
-    from pipeline.model.anthropometry import load_table1
 
     table = load_table1()
     out: dict = {}
@@ -227,14 +226,6 @@ def run_xsens_stage(data_dir: str | Path, omc_stage=None) -> XsensStage:
 
 # --------------------------------------------------------------------------------------------
 # report and tables
-
-
-def xsens_report_section(stage: XsensStage) -> str:
-    """Markdown: Table II (two comparisons), Tables VI and VII beside the paper's values
-    (:func:`pipeline.reproduce.wang2023.xsens_report.xsens_report_section`)."""
-    from pipeline.reproduce.wang2023.xsens_report import xsens_report_section as section
-
-    return section(stage)
 
 
 def xsens_tables(stage: XsensStage) -> dict[str, str]:
