@@ -26,7 +26,7 @@ from pipeline.calibration.joint_constraints import (  # noqa: E402
     project_hinge_positions,
 )
 from pipeline.rotations import angle_between, exp3, normalize  # noqa: E402
-from pipeline.simulate.chain import hinge_trial, spherical_trial  # noqa: E402
+from pipeline.simulate.joint_trials import hinge_trial, spherical_trial  # noqa: E402
 
 METHODS = ("gn", "dwpso", "gwo")
 PAPER_SECONDS = {"dwpso": 1076.1, "gwo": 576.3, "gn": 1556.4}  # Hu 2021 Table 1 (mean of 15)

@@ -8,7 +8,8 @@ import pytest
 from pipeline.calibration.attitude import mahony_filter, tilt_error
 from pipeline.errors import InputError
 from pipeline.rotations import exp3, quat_from_matrix, rot_z
-from pipeline.simulate.chain import hinge_trial, imu_signals
+from pipeline.simulate.chain import imu_signals
+from pipeline.simulate.joint_trials import hinge_trial
 
 
 def _static(R, seconds=20.0, bias=(0.0, 0.0, 0.0), seed=0):

@@ -22,7 +22,7 @@ from pipeline.calibration.joint_constraints import (
 )
 from pipeline.calibration.solvers import diagnose
 from pipeline.errors import InputError
-from pipeline.simulate.chain import hinge_trial, spherical_trial
+from pipeline.simulate.joint_trials import hinge_trial, spherical_trial
 
 
 def _exact(tr) -> JointData:

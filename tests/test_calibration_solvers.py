@@ -11,7 +11,7 @@ from pipeline.calibration.joint_constraints import joint_data, project_hinge_pos
 from pipeline.calibration.solvers import dwpso, gauss_newton, gwo
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, exp3
-from pipeline.simulate.chain import hinge_trial, spherical_trial
+from pipeline.simulate.joint_trials import hinge_trial, spherical_trial
 
 SWARM = {"particles": 30, "wolves": 30, "iterations": 100}
 

@@ -10,7 +10,8 @@ from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.calibration.heading import anatomical_right
 from pipeline.cli import main
 from pipeline.errors import InputError
-from pipeline.io.opensim import OrientationTrial, read_mot, write_orientations_sto
+from pipeline.io.mot import read_mot
+from pipeline.io.opensim import OrientationTrial, write_orientations_sto
 from pipeline.model import Skeleton
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures

@@ -14,21 +14,23 @@ from pipeline.reproduce.wang2023.evaluation import (
     compare_trajectories,
     estimate_lag,
     frame_from_femur,
-    icc_a1,
-    icc_a1_axes,
     initial_frame,
     orientation_error_euler,
-    pearson_r,
-    pearson_r_axes,
     plane_normal,
     points_to_omc,
     range_of_motion,
-    rms_error,
     rms_orientation_error,
     rotations_to_omc,
     trajectory_error,
-    two_way_mean_squares,
     unify_frames,
+)
+from pipeline.reproduce.wang2023.statistics import (
+    icc_a1,
+    icc_a1_axes,
+    pearson_r,
+    pearson_r_axes,
+    rms_error,
+    two_way_mean_squares,
 )
 from pipeline.rotations import angle_between, axis_angle, exp3, matrix_from_euler_zyx, rot_x, rot_z
 

@@ -7,14 +7,8 @@ import pytest
 
 from pipeline.errors import InputError
 from pipeline.rotations import exp3, matrix_from_quat
-from pipeline.simulate.chain import (
-    Sinusoids,
-    chain_kinematics,
-    gravity_vector,
-    hinge_trial,
-    imu_signals,
-    spherical_trial,
-)
+from pipeline.simulate.chain import Sinusoids, chain_kinematics, gravity_vector, imu_signals
+from pipeline.simulate.joint_trials import hinge_trial, spherical_trial
 
 RATE = 1000.0
 T = np.arange(int(2 * RATE)) / RATE

@@ -25,12 +25,8 @@ from pipeline.analysis.landmarks import jcs_angles, joint_angles
 from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.io.atomic import output_set
-from pipeline.io.opensim import (
-    SENSOR_TO_SEGMENT,
-    OrientationTrial,
-    sensor_to_opensim_matrix,
-    write_mot,
-)
+from pipeline.io.mot import write_mot
+from pipeline.io.opensim import SENSOR_TO_SEGMENT, OrientationTrial, sensor_to_opensim_matrix
 from pipeline.io.tables import csv_text, markdown_table
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures

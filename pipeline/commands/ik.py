@@ -14,7 +14,8 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_set
-from pipeline.io.opensim import OrientationTrial, read_orientations_sto, write_mot
+from pipeline.io.mot import write_mot
+from pipeline.io.opensim import OrientationTrial, read_orientations_sto
 from pipeline.io.tables import csv_text
 from pipeline.io.xsens import read_xsens_trial
 from pipeline.model.anthropometry import Measures

@@ -41,19 +41,17 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
+from pipeline.io.sto_header import declared_rate, labels_and_rows, split_header
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_quat, quat_from_matrix, rot_x, rot_y, rot_z
 
 __all__ = [
     "SENSOR_TO_SEGMENT",
-    "MotTable",
     "OrientationTrial",
     "map_sensors",
-    "read_mot",
     "read_orientations_sto",
     "rotate_world",
     "sensor_to_opensim_matrix",
-    "write_mot",
     "write_orientations_sto",
 ]
 
@@ -94,58 +92,6 @@ class OrientationTrial:
         return tuple(self.sensors)
 
 
-def _split_header(lines: list[str], path: Path) -> tuple[str, dict[str, str], int]:
-    """Header (name line, key=value pairs) and the index of the ``endheader`` line."""
-    try:
-        end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
-    except StopIteration:
-        raise InputError(
-            "no 'endheader' line: expected an OpenSim .sto/.mot header ending in 'endheader'",
-            file=path,
-        ) from None
-    name, header = "", {}
-    for i, ln in enumerate(lines[:end]):
-        s = ln.strip()
-        if "=" in s:
-            k, v = s.split("=", 1)
-            header[k.strip()] = v.strip()
-        elif i == 0:
-            name = s
-    return name, header, end
-
-
-def _labels_and_rows(lines: list[str], end: int, path: Path) -> tuple[list[str], list[str], int]:
-    i = end + 1
-    while i < len(lines) and not lines[i].strip():
-        i += 1
-    if i >= len(lines):
-        raise InputError("no column labels after 'endheader'", file=path)
-    labels = [s.strip() for s in lines[i].rstrip("\r\n").split("\t")]
-    if labels[0].lower() != "time":
-        raise InputError(
-            f"first column must be 'time', found {labels[0]!r}", file=path, field="labels"
-        )
-    if len(set(labels)) != len(labels):
-        dup = sorted({x for x in labels if labels.count(x) > 1})
-        raise InputError(f"duplicate column label(s) {dup}", file=path, field="labels")
-    rows = lines[i + 1 :]
-    while rows and not rows[-1].strip():
-        rows.pop()
-    if not rows:
-        raise InputError("no data rows after the column labels", file=path)
-    return labels, rows, i + 2  # 1-based file line of the first data row
-
-
-def _declared_rate(header: dict[str, str], path: Path) -> float | None:
-    raw = header.get("DataRate")
-    if raw is None:
-        return None
-    try:
-        return float(raw)
-    except ValueError:
-        raise InputError(f"DataRate={raw!r} is not a number", file=path, field="DataRate") from None
-
-
 def read_orientations_sto(
     path: str | Path,
     *,
@@ -162,7 +108,7 @@ def read_orientations_sto(
     """
     path = Path(path)
     lines = read_text_lines(path)
-    _, header, end = _split_header(lines, path)
+    _, header, end = split_header(lines, path)
     dtype = header.get("DataType")
     if dtype is not None and dtype.lower() != "quaternion":
         raise InputError(
@@ -171,7 +117,7 @@ def read_orientations_sto(
             file=path,
             field="DataType",
         )
-    labels, rows, first_line = _labels_and_rows(lines, end, path)
+    labels, rows, first_line = labels_and_rows(lines, end, path)
     sensors_names = labels[1:]
     if not sensors_names:
         raise InputError("no sensor columns after 'time'", file=path, field="labels")
@@ -187,7 +133,7 @@ def read_orientations_sto(
         ) from None
     notes = Notes()
     time = check_time(data[:, 0], file=path, first_line=first_line)
-    info = check_rate(time, _declared_rate(header, path), rtol=rate_rtol, notes=notes, file=path)
+    info = check_rate(time, declared_rate(header, path), rtol=rate_rtol, notes=notes, file=path)
     sensors: dict[str, np.ndarray] = {}
     for k, name in enumerate(sensors_names):
         q = data[:, 1 + 4 * k : 5 + 4 * k]
@@ -199,7 +145,7 @@ def read_orientations_sto(
         )
     return OrientationTrial(
         time=time,
-        rate_hz=float(_declared_rate(header, path) or info.rate_hz),
+        rate_hz=float(declared_rate(header, path) or info.rate_hz),
         sensors=sensors,
         header=header,
         notes=notes.as_tuple(),
@@ -287,126 +233,3 @@ def map_sensors(
                 file=trial.source,
             )
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# numeric .mot / .sto tables
-
-_TRANSLATION_SUFFIXES = ("_tx", "_ty", "_tz")
-
-
-def _angle_columns(names: Iterable[str], angle_columns: Iterable[str] | None) -> set[str]:
-    if angle_columns is not None:
-        return set(angle_columns)
-    return {n for n in names if not n.endswith(_TRANSLATION_SUFFIXES)}
-
-
-@dataclass(frozen=True)
-class MotTable:
-    """A numeric OpenSim table; ``columns`` in SI (angles in radians) whatever the file used."""
-
-    time: np.ndarray
-    columns: dict[str, np.ndarray]
-    in_degrees: bool
-    name: str = ""
-    header: dict[str, str] = field(default_factory=dict)
-    notes: tuple[str, ...] = ()
-    source: Path | None = None
-
-
-def write_mot(
-    path: str | Path,
-    time: np.ndarray,
-    columns: Mapping[str, np.ndarray],
-    in_degrees: bool = True,
-    *,
-    angle_columns: Iterable[str] | None = None,
-    name: str = "Coordinates",
-) -> Path:
-    """Write a version-1 OpenSim Storage table (``.mot``) atomically.
-
-    ``columns`` hold SI values (angles in radians). With ``in_degrees`` the angular columns
-    (``angle_columns``, default all but ``*_tx/_ty/_tz``) are written in degrees and the header
-    says ``inDegrees=yes``, as OpenSim's IK output does.
-    """
-    path = Path(path)
-    t = np.asarray(time, dtype=float).ravel()
-    names = list(columns)
-    if "time" in names:
-        raise ValueError("'time' is passed separately, not as a column")
-    cols = []
-    for n in names:
-        c = np.asarray(columns[n], dtype=float).ravel()
-        if c.size != t.size:
-            raise ValueError(f"column {n!r} has {c.size} values, time has {t.size}")
-        cols.append(c)
-    check_time(t, file=path, min_samples=1)
-    ang = _angle_columns(names, angle_columns) if in_degrees else set()
-    data = np.column_stack(
-        [t] + [np.degrees(c) if n in ang else c for n, c in zip(names, cols, strict=True)]
-    )
-    head = [
-        name,
-        "version=1",
-        f"nRows={t.size}",
-        f"nColumns={len(names) + 1}",
-        f"inDegrees={'yes' if in_degrees else 'no'}",
-        "endheader",
-        "\t".join(["time", *names]),
-    ]
-    with atomic_write(path, newline="\n") as f:
-        f.write("\n".join(head) + "\n")
-        for row in data:
-            f.write("\t".join(f"{v:.17g}" for v in row) + "\n")
-    return path
-
-
-def read_mot(
-    path: str | Path,
-    *,
-    angle_columns: Iterable[str] | None = None,
-    max_gap_s: float = DEFAULT_MAX_GAP_S,
-) -> MotTable:
-    """Read an OpenSim numeric ``.mot``/``.sto`` table; angles are returned in radians.
-
-    Checks the header (``endheader``, ``nRows``/``nColumns`` against the data: a shorter table
-    is reported as truncated), time strictly increasing, and fills short NaN gaps (noted).
-    """
-    path = Path(path)
-    lines = read_text_lines(path)
-    name, header, end = _split_header(lines, path)
-    labels, rows, first_line = _labels_and_rows(lines, end, path)
-    data = parse_table(rows, labels, file=path, first_line=first_line)
-    for key, have in (("nRows", data.shape[0]), ("nColumns", data.shape[1])):
-        if key in header:
-            try:
-                want = int(header[key])
-            except ValueError:
-                raise InputError(f"{key}={header[key]!r} is not an integer", file=path) from None
-            if want != have:
-                hint = " (file truncated?)" if key == "nRows" and have < want else ""
-                raise InputError(
-                    f"header says {key}={want} but the table has {have}{hint}",
-                    file=path,
-                    field=key,
-                )
-    in_deg = header.get("inDegrees", "no").strip().lower() == "yes"
-    notes = Notes()
-    time = check_time(data[:, 0], file=path, first_line=first_line, min_samples=1)
-    names = labels[1:]
-    ang = _angle_columns(names, angle_columns) if in_deg else set()
-    cols = {}
-    for k, n in enumerate(names):
-        c = data[:, k + 1]
-        if time.size > 1:
-            c = fill_gaps(time, c, max_gap_s=max_gap_s, notes=notes, file=path, field=n)
-        cols[n] = np.radians(c) if n in ang else c
-    return MotTable(
-        time=time,
-        columns=cols,
-        in_degrees=in_deg,
-        name=name,
-        header=header,
-        notes=notes.as_tuple(),
-        source=path,
-    )

@@ -11,7 +11,7 @@ _EXPORTS = {
     "chain_kinematics": "chain",
     "GRAVITY": "model",
     "gravity_vector": "chain",
-    "hinge_trial": "chain",
+    "hinge_trial": "joint_trials",
     "imu_signals": "chain",
     "ImuSignals": "chain",
     "joint_trajectories": "motions",
@@ -25,7 +25,7 @@ _EXPORTS = {
     "SimulatedImu": "model",
     "SimulatedTrial": "model",
     "Sinusoids": "chain",
-    "spherical_trial": "chain",
+    "spherical_trial": "joint_trials",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -29,6 +29,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.reproduce.wang2023.statistics import (
+    finite_rows,
+    icc_a1_axes,
+    pearson_r_axes,
+    rms_error,
+)
 from pipeline.rotations import axis_angle, euler_zyx_from_matrix, normalize
 
 __all__ = [
@@ -38,20 +44,14 @@ __all__ = [
     "compare_trajectories",
     "estimate_lag",
     "frame_from_femur",
-    "icc_a1",
-    "icc_a1_axes",
     "initial_frame",
     "orientation_error_euler",
-    "pearson_r",
-    "pearson_r_axes",
     "plane_normal",
     "points_to_omc",
     "range_of_motion",
-    "rms_error",
     "rms_orientation_error",
     "rotations_to_omc",
     "trajectory_error",
-    "two_way_mean_squares",
     "unify_frames",
 ]
 
@@ -144,10 +144,6 @@ def align(a: np.ndarray, b: np.ndarray, lag: int) -> tuple[np.ndarray, np.ndarra
 # --------------------------------------------------------------------------- eq 18-19
 
 
-def _finite_rows(x: np.ndarray) -> np.ndarray:
-    return x[np.all(np.isfinite(x), axis=1)]
-
-
 def plane_normal(points: np.ndarray, through_origin: bool = False) -> np.ndarray:
     """Unit normal of the least-squares plane through ``points`` (N, 3) (sign arbitrary).
 
@@ -155,7 +151,7 @@ def plane_normal(points: np.ndarray, through_origin: bool = False) -> np.ndarray
     centred points, or of the raw points if ``through_origin`` (the plane is then constrained to
     contain the origin). NaN rows are skipped.
     """
-    p = _finite_rows(np.asarray(points, dtype=float).reshape(-1, 3))
+    p = finite_rows(np.asarray(points, dtype=float).reshape(-1, 3))
     if len(p) < 3:
         raise InputError(f"need at least 3 finite points to fit a plane, got {len(p)}")
     _, s, vt = np.linalg.svd(p if through_origin else p - p.mean(axis=0), full_matrices=False)
@@ -190,7 +186,7 @@ def initial_frame(
     z0 = plane_normal(knee_path, through_origin=through_hip)
     hint = np.asarray(right_hint, dtype=float)
     if hint.ndim == 2:
-        hint = np.mean(_finite_rows(hint), axis=0)
+        hint = np.mean(finite_rows(hint), axis=0)
     side = float(z0 @ hint)
     if not np.isfinite(side) or abs(side) < 1e-12:
         raise InputError("right_hint is (nearly) in the plane of the knee path; cannot tell right")
@@ -243,77 +239,6 @@ def trajectory_error(t_imc_in_omc: np.ndarray, T_omc: np.ndarray) -> np.ndarray:
     return a - b
 
 
-# --------------------------------------------------------------------------- statistics
-
-
-def rms_error(e: np.ndarray) -> float:
-    """RMS over time of the error norm, ``sqrt(mean_k |e^k|^2)``, over finite rows of e (N, d)."""
-    e = np.asarray(e, dtype=float)
-    ok = _finite_rows(e[:, None] if e.ndim == 1 else e)
-    if len(ok) == 0:
-        return float("nan")
-    return float(np.sqrt(np.mean(np.sum(ok**2, axis=1))))
-
-
-def pearson_r(a: np.ndarray, b: np.ndarray) -> float:
-    """Pearson correlation of two series (N,) over the samples finite in both (NaN if undefined)."""
-    a = np.asarray(a, dtype=float).ravel()
-    b = np.asarray(b, dtype=float).ravel()
-    ok = np.isfinite(a) & np.isfinite(b)
-    if ok.sum() < 2:
-        return float("nan")
-    a, b = a[ok] - a[ok].mean(), b[ok] - b[ok].mean()
-    den = np.sqrt((a * a).sum() * (b * b).sum())
-    return float((a * b).sum() / den) if den > 0 else float("nan")
-
-
-def pearson_r_axes(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Per-axis Pearson r of two trajectories (N, d) -> (d,)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    return np.array([pearson_r(a[:, j], b[:, j]) for j in range(a.shape[1])])
-
-
-def two_way_mean_squares(y: np.ndarray) -> tuple[float, float, float]:
-    """Two-way ANOVA mean squares of ``y`` (n targets x k raters), rows with NaN dropped.
-
-    Returns ``(MSR, MSC, MSE)``: between targets ``k sum_i (ybar_i. - ybar)^2 / (n-1)``, between
-    raters ``n sum_j (ybar_.j - ybar)^2 / (k-1)``, residual ``SSE / ((n-1)(k-1))`` with
-    ``SSE = SST - SSR - SSC`` (Shrout & Fleiss 1979 BMS, JMS, EMS).
-    """
-    y = np.asarray(y, dtype=float)
-    if y.ndim != 2 or y.shape[1] < 2:
-        raise InputError(f"expected an (n targets, k >= 2 raters) table, got shape {y.shape}")
-    y = _finite_rows(y)
-    n, k = y.shape
-    if n < 2:
-        raise InputError(f"need at least 2 complete targets for an ICC, got {n}")
-    gm = y.mean()
-    ssr = k * np.sum((y.mean(axis=1) - gm) ** 2)
-    ssc = n * np.sum((y.mean(axis=0) - gm) ** 2)
-    sse = np.sum((y - gm) ** 2) - ssr - ssc
-    return float(ssr / (n - 1)), float(ssc / (k - 1)), float(sse / ((n - 1) * (k - 1)))
-
-
-def icc_a1(y: np.ndarray) -> float:
-    """ICC(A,1): two-way, absolute agreement, single measures (McGraw & Wong 1996).
-
-    ``ICC = (MSR - MSE) / (MSR + (k-1) MSE + k (MSC - MSE) / n)`` on an (n targets x k raters)
-    table; identical to Shrout & Fleiss (1979) ICC(2,1). A constant offset between raters raises
-    MSC and lowers the ICC although the Pearson r is unchanged. NaN if the denominator is 0.
-    """
-    y = np.asarray(y, dtype=float)
-    msr, msc, mse = two_way_mean_squares(y)
-    n, k = _finite_rows(y).shape
-    den = msr + (k - 1) * mse + k * (msc - mse) / n
-    return float((msr - mse) / den) if den > 0 else float("nan")
-
-
-def icc_a1_axes(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Per-axis ICC(A,1) between two trajectories (N, d): targets = time frames, raters = 2."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    return np.array([icc_a1(np.column_stack([a[:, j], b[:, j]])) for j in range(a.shape[1])])
-
-
 # --------------------------------------------------------------------------- orientations
 
 
@@ -354,7 +279,7 @@ def orientation_error_euler(
 def rms_orientation_error(R_imc: np.ndarray, R_omc: np.ndarray, frame: str = "body") -> np.ndarray:
     """RMS over time of each ZYX Euler angle of the orientation error, (3,) rad [z, y, x]."""
     e = orientation_error_euler(R_imc, R_omc, frame)
-    ok = _finite_rows(e)
+    ok = finite_rows(e)
     return np.sqrt(np.mean(ok**2, axis=0)) if len(ok) else np.full(3, np.nan)
 
 

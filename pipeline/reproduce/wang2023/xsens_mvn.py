@@ -62,7 +62,6 @@ from pipeline.reproduce.wang2023.evaluation import (
     frame_from_femur,
     initial_frame,
     points_to_omc,
-    rms_error,
     rms_orientation_error,
     rotations_to_omc,
     unify_frames,
@@ -73,6 +72,7 @@ from pipeline.reproduce.wang2023.omc import (
     landmarks_in_frames,
     tibial_frames,
 )
+from pipeline.reproduce.wang2023.statistics import rms_error
 from pipeline.rotations import angle_between
 
 LANDMARKS = ("EFM", "EFL", "MM", "LM")
