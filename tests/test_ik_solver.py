@@ -8,7 +8,8 @@ import pytest
 from scipy.optimize import minimize
 
 from pipeline.errors import InputError
-from pipeline.ik.solver import OrientationTask, frame_rotations, orientation_residuals, solve_ik
+from pipeline.ik.solver import frame_rotations, orientation_residuals, solve_ik
+from pipeline.ik.problem import OrientationTask
 from pipeline.rotations import exp3, log3, normalize, rot_x, rot_y, rot_z
 
 HIP = np.array([0.0, -0.08, 0.08])  # right hip centre in the pelvis frame (ISB: y up, z right)
@@ -324,3 +325,24 @@ def test_input_errors_name_the_target():
         solve_ik(m, R, q0=np.zeros(3))
     with pytest.raises(InputError, match="root"):
         solve_ik(m, R, root=np.eye(4))
+
+
+def test_missing_foot_target_with_zero_damping_is_solved():
+    """Regression: with ``damping=0`` a frame whose foot target is missing leaves the ankle DoFs
+    without information; the normal matrix is singular and LAPACK's ``dposv`` fails (``info > 0``).
+    That failure was ignored (converged False, a 72.6 deg residual on a reachable frame); the step
+    is now the minimum-norm one in the observed subspace, the ankle held."""
+    from pipeline.model import Skeleton, SubjectGeometry
+
+    sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="free", legs=("right",))
+    rng = np.random.default_rng(3)
+    frames = ["right_femur", "right_tibia", "right_foot"]
+    lo, hi = sk.lower_limits, sk.upper_limits
+    Q = np.array([lo + (hi - lo) * rng.uniform(0.3, 0.7, sk.nq) for _ in range(4)])
+    targets = frame_rotations(sk.model, Q, frames)
+    targets["right_foot"][2] = np.nan  # frame 2: no foot target
+    res = solve_ik(sk.model, targets, damping=0.0)
+    assert res.converged.all()
+    assert np.degrees(np.nanmax(res.residual_rms)) < 1e-3
+    ankle = [sk.q_index(j) for j in sk.leg_joints("right", "ankle")]
+    np.testing.assert_allclose(res.q[2, ankle], res.q[1, ankle])  # held at the previous frame

@@ -9,11 +9,15 @@ from pipeline._lazy import lazy_exports
 _EXPORTS = {
     "box_margin": "bounds",
     "box_step": "bounds",
+    "frame_id": "problem",
     "frame_rotations": "solver",
+    "IKProblem": "problem",
     "IKResult": "solver",
     "joint_box": "bounds",
     "orientation_residuals": "solver",
-    "OrientationTask": "solver",
+    "OrientationTask": "problem",
+    "setup_ik": "problem",
+    "solve_frame": "solver",
     "solve_ik": "solver",
     "UNBOUNDED": "bounds",
 }

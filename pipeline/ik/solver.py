@@ -11,14 +11,18 @@ kinematics. Perturbing ``q`` by a tangent step ``dq`` (``pin.integrate``) turns 
 ``R_i exp(J_i^w dq)``, ``J_i^w`` the angular rows of the LOCAL frame Jacobian; hence the exact
 residual Jacobian ``dr_i/dq = Jlog3(R_i*^T R_i) J_i^w`` (``pin.Jlog3`` = inverse right Jacobian).
 
-Each frame is solved by Levenberg-Marquardt-damped Gauss-Newton, ``(J^T W J + mu I) dq = -J^T W
+The trial is set up once (:func:`pipeline.ik.problem.setup_ik`); each frame is then one call of
+:func:`solve_frame`: Levenberg-Marquardt-damped Gauss-Newton, ``(J^T W J + mu I) dq = -J^T W
 r``. Since ``Jlog3(M)^T log3(M) = log3(M)`` (the inverse left Jacobian fixes its own rotation
 vector), the gradient ``sum_i w_i (J_i^w)^T r_i`` is exact without ``Jlog3``; the Gauss-Newton
 matrix drops ``Jlog3^T Jlog3 = I + O(|r|^2)``, which only changes the (linear) rate, not the fixed
 point. As ``J_i^w = R_i^T A m_i`` (``A``: world axes of the joints, the angular rows of Pinocchio's
 WORLD joint Jacobians; ``m_i``: DoFs that move frame ``i``), the normal equations need no per-frame
 Jacobian: ``J^T W J = (A^T A) o sum_i w_i m_i m_i^T`` and ``J^T W r = sum_i w_i m_i o (A^T u_i)``
-with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. Damping does not move the fixed point
+with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no present task observes (e.g. the ankle of a
+frame without its foot target) the matrix is singular: LAPACK's ``dposv`` reports it
+(``info > 0``) and the step is then the minimum-norm least-squares one, which leaves that DoF
+alone. Damping does not move the fixed point
 either, so the result is the exact weighted least-squares optimum (stationary: ``J^T W r = 0`` with
 the exact Jacobian of :func:`orientation_residuals`); with an exactly reachable target set it
 reproduces the targets (Wang 2023 eq 15-17 then follow from the model's forward kinematics).
@@ -47,19 +51,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
-from pipeline.errors import InputError
-from pipeline.ik.bounds import box_margin, box_step, joint_box
+from pipeline.ik.bounds import box_margin, box_step
+from pipeline.ik.problem import IKProblem, OrientationTask, frame_id, setup_ik
 from pipeline.rotations import log3
 
-__all__ = ["IKResult", "OrientationTask", "frame_rotations", "orientation_residuals", "solve_ik"]
-
-
-@dataclass(frozen=True)
-class OrientationTask:
-    """Track the world orientation of model frame ``frame`` with weight ``weight`` (>= 0)."""
-
-    frame: str
-    weight: float = 1.0
+__all__ = ["IKResult", "frame_rotations", "orientation_residuals", "solve_frame", "solve_ik"]
 
 
 @dataclass(frozen=True)
@@ -89,7 +85,7 @@ def frame_rotations(
     Rows of ``q`` containing NaN give NaN rotations.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    fids = [_frame_id(model, f) for f in frames]
+    fids = [frame_id(model, f) for f in frames]
     data = model.createData()
     out = np.full((len(fids), q.shape[0], 3, 3), np.nan)
     for n in np.flatnonzero(np.isfinite(q).all(axis=1)):
@@ -113,7 +109,7 @@ def orientation_residuals(
     pin.computeJointJacobians(model, data, q)
     r, J = [], []
     for name, Rt in targets.items():
-        fid = _frame_id(model, name)
+        fid = frame_id(model, name)
         M = np.asarray(Rt, dtype=float).T @ pin.updateFramePlacement(model, data, fid).rotation
         r.append(pin.log3(M))
         J.append(
@@ -122,98 +118,87 @@ def orientation_residuals(
     return np.concatenate(r), np.vstack(J)
 
 
-def _frame_id(model: pin.Model, name: str) -> int:
-    if not isinstance(name, str) or not model.existFrame(name):
-        known = sorted({f.name for f in model.frames})
-        raise InputError(
-            f"no frame named {name!r} in the model (known frames: {', '.join(known[:40])}"
-            + (", ..." if len(known) > 40 else "")
-            + ")",
-            field=str(name),
-        )
-    return model.getFrameId(name)
+def solve_frame(
+    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None
+) -> tuple[np.ndarray, int, bool]:
+    """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``.
 
-
-def _parse_tasks(
-    targets: Mapping, weights: Mapping[str, float] | None
-) -> tuple[list[OrientationTask], list[np.ndarray]]:
-    if not isinstance(targets, Mapping) or len(targets) == 0:
-        raise InputError("targets must be a non-empty dict frame -> (N, 3, 3) world rotations")
-    weights = dict(weights or {})
-    tasks, arrays = [], []
-    for key, value in targets.items():
-        task = key if isinstance(key, OrientationTask) else OrientationTask(str(key))
-        w = float(weights.pop(task.frame, task.weight))
-        if not np.isfinite(w) or w < 0:
-            raise InputError(f"weight must be a finite number >= 0, got {w}", field=task.frame)
-        tasks.append(OrientationTask(task.frame, w))
-        arr = np.asarray(value, dtype=float)
-        if arr.ndim == 2:
-            arr = arr[None]
-        if arr.ndim != 3 or arr.shape[1:] != (3, 3):
-            raise InputError(
-                f"expected (N, 3, 3) rotation matrices, got shape {arr.shape}", field=task.frame
-            )
-        arrays.append(arr)
-    if weights:
-        raise InputError(f"weights given for frames without targets: {sorted(weights)}")
-    n = {a.shape[0] for a in arrays}
-    if len(n) != 1:
-        raise InputError(f"all targets need the same number of frames, got {sorted(n)}")
-    for task, arr in zip(tasks, arrays, strict=True):
-        ok = np.all(np.isfinite(arr), axis=(1, 2))
-        if ok.any():
-            a = arr[ok]
-            ortho = np.abs(np.swapaxes(a, 1, 2) @ a - np.eye(3)).max()
-            det = np.abs(np.linalg.det(a) - 1.0).max()
-            if ortho > 1e-3 or det > 1e-3:
-                raise InputError(
-                    "targets must be rotation matrices (R^T R = I, det 1); "
-                    f"deviation {max(ortho, det):.3g}",
-                    field=task.frame,
-                )
-    return tasks, arrays
-
-
-def _support_dofs(model: pin.Model, fids: list[int]) -> np.ndarray:
-    """Tangent indices that rotate at least one task frame (structural, checked numerically)."""
-    joints: set[int] = set()
-    for fid in fids:
-        j = model.frames[fid].parentJoint
-        while j > 0:
-            joints.add(j)
-            j = model.parents[j]
-    cand = sorted(
-        v
-        for j in joints
-        for v in range(model.joints[j].idx_v, model.joints[j].idx_v + model.nvs[j])
-    )
-    # drop DoFs with an identically zero angular Jacobian (translations, prismatic joints)
-    data = model.createData()
-    rng = np.random.default_rng(0)
-    seen = np.zeros(model.nv, dtype=bool)
-    for _ in range(2):
-        qr = pin.integrate(model, pin.neutral(model), rng.uniform(-1.0, 1.0, model.nv))
-        pin.computeJointJacobians(model, data, qr)
-        for fid in fids:
-            seen |= (
-                np.abs(pin.getFrameJacobian(model, data, fid, pin.LOCAL)[3:]).max(axis=0) > 1e-12
-            )
-    return np.array([v for v in cand if seen[v]], dtype=int)
-
-
-def _joints_of(model: pin.Model, cols: np.ndarray) -> list[int]:
-    return sorted({j for j in range(1, model.njoints) for v in cols if _owns(model, j, v)})
-
-
-def _owns(model: pin.Model, j: int, v: int) -> bool:
-    return model.joints[j].idx_v <= v < model.joints[j].idx_v + model.nvs[j]
-
-
-def _q_of_v(model: pin.Model, v: int) -> int:
-    """Configuration index of tangent index ``v`` of a one-DoF (nq = nv = 1) joint."""
-    j = next(j for j in range(1, model.njoints) if _owns(model, j, v))
-    return model.joints[j].idx_q
+    ``previous`` (2, nq): the solutions of frames ``n-2`` and ``n-1`` for the constant-velocity
+    warm start (``extrapolate``). A frame without any finite target returns ``q`` untouched with
+    0 iterations. When the normal matrix is singular (no damping and a DoF that no present task
+    observes), the step is the minimum-norm least-squares one: unobserved DoFs do not move.
+    """
+    model, data = p.model, p.data
+    finite = p.finite[n]
+    if finite.all():
+        Rn, Wm, C = p.RtT[n], p.Wm_all, p.C_all
+    else:
+        if not finite.any():
+            return q, 0, False
+        Rn = np.where(finite[:, None, None], p.RtT[n], np.eye(3))
+        Wm, C = p.normal_weights(p.weights * finite)
+    cq, bq, blo, bhi, bsel = p.cq, p.bq, p.blo, p.bhi, p.bsel
+    has_limits, all_bounded = p.has_limits, p.bsel.size == p.cols.size
+    if p.extrapolate and p.euclid and previous is not None and np.isfinite(previous).all():
+        q[cq] += previous[1, cq] - previous[0, cq]  # constant-velocity prediction
+        if has_limits:
+            q[bq] = np.clip(q[bq], blo, bhi)
+    na, k = p.cols.size, len(p.fids)
+    U = np.empty((3, k))  # world-frame residuals u_i = R_i r_i = log3(R_i R_i*^T)
+    v = np.zeros(model.nv)
+    mu_eye = p.damping * np.eye(na)
+    lam, tol = p.regularization, p.tol
+    log3_, cjj, ufp = pin.log3, pin.computeJointJacobians, pin.updateFramePlacement
+    rs = (6, model.nv)
+    margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
+    prev = np.inf
+    it = 0
+    for it in range(1, p.max_iters + 1):
+        cjj(model, data, q)
+        for i, fid in enumerate(p.fids):
+            U[:, i] = log3_(ufp(model, data, fid).rotation @ Rn[i])
+        Wa = data.J.reshape(rs)[3:, p.cs]  # angular rows of the WORLD joint Jacobians
+        # J_i^w = R_i^T (Wa o m_i): J^T W J = (Wa^T Wa) o C; J^T W r = rowsum((Wa^T U) o Wm)
+        H = (Wa.T @ Wa) * C + mu_eye
+        g = ((Wa.T @ U) * Wm).sum(axis=1)
+        if lam > 0.0:
+            e = pin.difference(model, p.q_ref, q)[p.cols]
+            De = pin.dDifference(model, p.q_ref, q, pin.ARG1)[np.ix_(p.cols, p.cols)]
+            H += lam * (De.T @ De)
+            g += lam * (De.T @ e)
+        _, x, info = dposv(H, g)
+        d = -x if info == 0 else -np.linalg.lstsq(H, g, rcond=None)[0]
+        dn = max(d.max(), -d.min())
+        clipped = False
+        if dn >= margin:  # a bound may be crossed (margin: distance of q to the box)
+            qb = q[bq]
+            qn = qb + (d if all_bounded else d[bsel])
+            if (qn < blo).any() or (qn > bhi).any():
+                dlo = np.full(na, -np.inf)
+                dhi = np.full(na, np.inf)
+                dlo[bsel] = np.minimum(blo - qb, 0.0)
+                dhi[bsel] = np.maximum(bhi - qb, 0.0)
+                d = box_step(H, g, dlo, dhi, d)
+                dn = max(d.max(), -d.min())
+                clipped = True
+        if p.euclid:
+            q[cq] += d
+        else:
+            v[p.cs] = d
+            q[:] = pin.integrate(model, q, v)
+        if clipped:
+            q[bq] = np.clip(q[bq], blo, bhi)
+            margin = box_margin(q[bq], blo, bhi)
+        else:
+            margin -= dn
+        # stop when the linear-rate estimate of the error left after this step,
+        # |d|^2 / (|d_prev| - |d|), is below tol / 10 (the rate seen over the first steps
+        # underestimates the asymptotic one by up to ~6x on noisy hinge fits), or on a step
+        # below tol / 10
+        if dn < 0.1 * tol or (it > 1 and prev > 2.0 * dn and 10.0 * dn * dn < tol * (prev - dn)):
+            return q, it, True
+        prev = dn
+    return q, it, False
 
 
 def solve_ik(
@@ -245,140 +230,29 @@ def solve_ik(
     present (off by default: with white orientation noise it costs iterations). Raises
     ``InputError`` on unknown frames, wrong shapes, non-rotation targets or weights < 0.
     """
-    tasks, arrays = _parse_tasks(targets, weights)
-    fids = [_frame_id(model, t.frame) for t in tasks]
-    k, N = len(tasks), arrays[0].shape[0]
-    Rt = np.stack(arrays, axis=1)  # (N, k, 3, 3)
-    if root is not None:
-        root = np.asarray(root, dtype=float)
-        if root.shape not in ((3, 3), (N, 3, 3)):
-            raise InputError(
-                f"expected (3, 3) or ({N}, 3, 3), got shape {root.shape}", field="root"
-            )
-        root = np.broadcast_to(root, (N, 3, 3))
-        Rt = np.swapaxes(root, 1, 2)[:, None] @ Rt
-    RtT = np.ascontiguousarray(np.swapaxes(Rt, 2, 3))
-    finite = np.all(np.isfinite(Rt), axis=(2, 3))  # (N, k)
-
-    q_ref = pin.neutral(model) if q0 is None else np.asarray(q0, dtype=float).copy()
-    if q_ref.shape != (model.nq,) or not np.all(np.isfinite(q_ref)):
-        raise InputError(
-            f"expected a finite ({model.nq},) configuration, got {q_ref.shape}", field="q0"
-        )
-
-    cols = _support_dofs(model, fids)
-    na = cols.size
-    if na == 0:
-        raise InputError("no joint of the model rotates any of the target frames")
-    cs = slice(cols[0], cols[-1] + 1) if np.all(np.diff(cols) == 1) else cols
-
-    # box limits on tangent DoFs of 1-DoF joints (q and v coincide there)
-    lo, hi, qidx = joint_box(model, cols, limits)
-    bounded = qidx >= 0
-    bq, blo, bhi = qidx[bounded], lo[bounded], hi[bounded]
-    has_limits = bool(bounded.any())
-    if has_limits:
-        q_ref[bq] = np.clip(q_ref[bq], blo, bhi)
-
-    weights = np.array([t.weight for t in tasks])
-    # support masks: DoF a (of cols) rotates task frame i
-    masks = np.zeros((k, na))
-    for i, fid in enumerate(fids):
-        sup = set(model.supports[model.frames[fid].parentJoint])
-        masks[i] = [any(_owns(model, j, int(v)) for j in sup) for v in cols]
-    euclid = all(model.nqs[j] == 1 and model.nvs[j] == 1 for j in _joints_of(model, cols))
-    qcols = np.array([_q_of_v(model, v) for v in cols]) if euclid else cols
-    cq = slice(qcols[0], qcols[-1] + 1) if np.all(np.diff(qcols) == 1) else qcols
-    bsel = np.flatnonzero(bounded)
-    all_bounded = bool(bounded.all())
-    data = model.createData()
+    p = setup_ik(model, targets, weights, q0=q0, root=root, max_iters=max_iters, tol=tol,
+                 limits=limits, damping=damping, regularization=regularization,
+                 extrapolate=extrapolate)  # fmt: skip
+    N = p.n_frames
     Q = np.full((N, model.nq), np.nan)
     iters = np.zeros(N, dtype=int)
     conv = np.zeros(N, dtype=bool)
-    U = np.empty((3, k))  # world-frame residuals u_i = R_i r_i = log3(R_i R_i*^T)
-    v = np.zeros(model.nv)
-    mu_eye = damping * np.eye(na)
-    lam = float(regularization)
-    q = q_ref.copy()
-    log3_, cjj, ufp = pin.log3, pin.computeJointJacobians, pin.updateFramePlacement
-
-    def world_axes(data=data, rs=(6, model.nv)):  # angular rows of the WORLD joint Jacobians
-        return data.J.reshape(rs)[3:, cs]
-
-    def normal_weights(w):
-        Wm = masks.T * w  # (na, k)
-        return Wm, Wm @ masks  # sum_i w_i m_i m_i^T
-
-    Wm_all, C_all = normal_weights(weights)
-    all_finite = finite.all(axis=1)
-    tasks_range = list(enumerate(fids))
+    all_finite = p.finite.all(axis=1)
+    q = p.q_ref.copy()
     for n in range(N):
-        if all_finite[n]:
-            Rn, Wm, C = RtT[n], Wm_all, C_all
-        else:
-            fin = finite[n]
-            if not fin.any():
-                continue
-            Rn = np.where(fin[:, None, None], RtT[n], np.eye(3))
-            Wm, C = normal_weights(weights * fin)
-        if extrapolate and euclid and n >= 2 and all_finite[n - 2 : n + 1].all():
-            q[cq] += Q[n - 1, cq] - Q[n - 2, cq]  # constant-velocity prediction
-            if has_limits:
-                q[bq] = np.clip(q[bq], blo, bhi)
-        margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
-        prev = np.inf
-        for it in range(1, max_iters + 1):
-            iters[n] = it
-            cjj(model, data, q)
-            for i, fid in tasks_range:
-                U[:, i] = log3_(ufp(model, data, fid).rotation @ Rn[i])
-            Wa = world_axes()
-            # J_i^w = R_i^T (Wa o m_i): J^T W J = (Wa^T Wa) o C; J^T W r = rowsum((Wa^T U) o Wm)
-            H = (Wa.T @ Wa) * C + mu_eye
-            g = ((Wa.T @ U) * Wm).sum(axis=1)
-            if lam > 0.0:
-                e = pin.difference(model, q_ref, q)[cols]
-                De = pin.dDifference(model, q_ref, q, pin.ARG1)[np.ix_(cols, cols)]
-                H += lam * (De.T @ De)
-                g += lam * (De.T @ e)
-            d = -dposv(H, g)[1]
-            dn = max(d.max(), -d.min())
-            clipped = False
-            if dn >= margin:  # a bound may be crossed (margin: distance of q to the box)
-                qb = q[bq]
-                qn = qb + (d if all_bounded else d[bsel])
-                if (qn < blo).any() or (qn > bhi).any():
-                    dlo = np.full(na, -np.inf)
-                    dhi = np.full(na, np.inf)
-                    dlo[bsel] = np.minimum(blo - qb, 0.0)
-                    dhi[bsel] = np.maximum(bhi - qb, 0.0)
-                    d = box_step(H, g, dlo, dhi, d)
-                    dn = max(d.max(), -d.min())
-                    clipped = True
-            if euclid:
-                q[cq] += d
-            else:
-                v[cs] = d
-                q = pin.integrate(model, q, v)
-            if clipped:
-                q[bq] = np.clip(q[bq], blo, bhi)
-                margin = box_margin(q[bq], blo, bhi)
-            else:
-                margin -= dn
-            # stop when the linear-rate estimate of the error left after this step,
-            # |d|^2 / (|d_prev| - |d|), is below tol / 10 (the rate seen over the first steps
-            # underestimates the asymptotic one by up to ~6x on noisy hinge fits), or on a step
-            # below tol / 10
-            if dn < 0.1 * tol or (
-                it > 1 and prev > 2.0 * dn and 10.0 * dn * dn < tol * (prev - dn)
-            ):
-                conv[n] = True
-                break
-            prev = dn
+        if not p.finite[n].any():
+            continue
+        previous = Q[n - 2 : n] if n >= 2 and all_finite[n - 2 : n + 1].all() else None
+        q, iters[n], conv[n] = solve_frame(p, n, q, previous)
         Q[n] = q
+    return _result(p, Q, iters, conv)
 
-    # residuals at the returned configurations (vectorised log map)
-    R_fit = np.stack(list(frame_rotations(model, Q, [t.frame for t in tasks]).values()), axis=1)
+
+def _result(p: IKProblem, Q: np.ndarray, iters: np.ndarray, conv: np.ndarray) -> IKResult:
+    """Residuals at the returned configurations (vectorised log map)."""
+    tasks, RtT, finite = p.tasks, p.RtT, p.finite
+    N, k = finite.shape
+    R_fit = np.stack(list(frame_rotations(p.model, Q, [t.frame for t in tasks]).values()), axis=1)
     ok = np.all(np.isfinite(R_fit), axis=(2, 3)) & finite
     err = np.full((N, k), np.nan)
     if ok.any():
