@@ -173,8 +173,9 @@ def _pairs(items: list[str] | None, option: str) -> dict[str, str] | None:
 def _cmd_scale(args) -> int:
     from pipeline.commands.scale import run_scale
 
-    print(run_scale(_measures(args), args.out, knee=args.knee,
-                    knee_axis_femur=args.knee_axis_femur, knee_axis_tibia=args.knee_axis_tibia))  # fmt: skip
+    line = run_scale(_measures(args), args.out, knee=args.knee,
+                     knee_axis_femur=args.knee_axis_femur, knee_axis_tibia=args.knee_axis_tibia)
+    print(line)
     return 0
 
 

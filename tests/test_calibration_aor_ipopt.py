@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -222,15 +221,13 @@ def test_bad_inputs_raise():
         aor_correction_ipopt(R, R, A_F, A_T)  # knee never moves
 
 
-def test_runtime_of_a_3000_sample_trial(skeleton):
+def test_timings_reported_for_a_3000_sample_trial(skeleton):
+    # speed belongs to scripts/bench_*.py (shared, noisy machines): only the bookkeeping here
     rng = np.random.default_rng(6)
     D_F, D_T = _misalignments(rng)
     eF, eT = _simulate(skeleton, rng, D_F, D_T, off_deg=2.0, noise_deg=1.0)
-    aor_correction_ipopt(eF, eT, A_F, A_T)  # builds (and caches) the l2 solver
-    t0 = time.perf_counter()
     r = aor_correction_ipopt(eF, eT, A_F, A_T)
-    assert time.perf_counter() - t0 < 0.5 and r.seconds < 0.5  # measured ~0.02 s
-    assert r.solver_seconds < r.seconds
+    assert 0 < r.solver_seconds <= r.seconds
 
 
 # --------------------------------------------------------------------------------------------

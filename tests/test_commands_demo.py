@@ -1,5 +1,6 @@
 """`pipeline demo`: the whole product on a simulated subject, checked against the truth."""
 
+import numpy as np
 import pytest
 
 from pipeline.cli import main
@@ -12,8 +13,30 @@ def result(tmp_path_factory):
 
 
 def test_writes_every_output(result):
-    for path in result.files:
-        assert path.exists() and path.stat().st_size > 0, path
+    from pipeline.io.mot import read_mot
+    from pipeline.model import Skeleton
+
+    names = {p.name: p for p in result.files}
+    assert set(names) == {"demo_report.md", "demo_ik.mot", "demo_landmarks.csv", "subject.urdf",
+                          "demo_ik_model.urdf", "demo.rrd"}  # fmt: skip
+    # the .mot holds the IK's angles (degrees in the file, radians read back), 2 s + 15 s
+    mot = read_mot(names["demo_ik.mot"])
+    assert mot.time.size == 1700
+    knee = mot.columns["knee_angle_r"]
+    assert 0.5 < knee.max() < 1.5 and knee.min() > -0.2  # gait: ~30-80 deg flexion, no hyperext.
+    # the landmarks CSV has three columns per landmark and the model's leg lengths
+    lines = names["demo_landmarks.csv"].read_text().splitlines()
+    header = lines[0].split(",")
+    assert header[0] == "time" and len(lines) == 1701 and (len(header) - 1) % 3 == 0
+    row = np.array(lines[1].split(","), dtype=float)
+    col = {h: i for i, h in enumerate(header)}
+    hip = row[[col[f"right_HJC_{a}"] for a in "xyz"]]
+    knee_c = row[[col[f"right_KJC_{a}"] for a in "xyz"]]
+    sk = Skeleton.from_urdf(names["subject.urdf"])
+    sk.forward(sk.neutral())
+    thigh = np.linalg.norm(sk.frame_position("right_HJC") - sk.frame_position("right_KJC"))
+    assert np.linalg.norm(hip - knee_c) == pytest.approx(thigh, abs=1e-4)
+    assert "axis error vs truth" in names["demo_report.md"].read_text()
 
 
 def test_calibration_recovers_the_knee_axis(result):

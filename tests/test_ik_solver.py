@@ -8,8 +8,8 @@ import pytest
 from scipy.optimize import minimize
 
 from pipeline.errors import InputError
-from pipeline.ik.solver import frame_rotations, orientation_residuals, solve_ik
 from pipeline.ik.problem import OrientationTask
+from pipeline.ik.solver import frame_rotations, orientation_residuals, solve_ik
 from pipeline.rotations import exp3, log3, normalize, rot_x, rot_y, rot_z
 
 HIP = np.array([0.0, -0.08, 0.08])  # right hip centre in the pelvis frame (ISB: y up, z right)

@@ -125,7 +125,8 @@ def test_help_loads_no_domain_code():
         import sys
         from pipeline.cli import build_parser
         build_parser()
-        print(sorted(m for m in sys.modules if m.startswith(("numpy", "pinocchio", "pipeline.model.builder"))))
+        heavy = ("numpy", "pinocchio", "pipeline.model.builder")
+        print(sorted(m for m in sys.modules if m.startswith(heavy)))
     """)
     assert out.strip() == "[]"
 
@@ -138,8 +139,8 @@ def test_wheel_installs_and_scales_a_model(tmp_path):
                     str(ROOT)], check=True, capture_output=True, timeout=600)  # fmt: skip
     (wheel,) = wheels.glob("imu_skeleton_pipeline-*.whl")
     target = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target",
-                    str(target), str(wheel)], check=True, capture_output=True, timeout=600)  # fmt: skip
+    install = [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target)]
+    subprocess.run([*install, str(wheel)], check=True, capture_output=True, timeout=600)
     # dependencies come from this environment; the package itself from the wheel's files
     out = _run(
         f"""

@@ -60,7 +60,20 @@ def test_scale_cli_refuses_implausible_height_without_writing(tmp_path, capsys):
 def test_scale_cli_writes_model(tmp_path, capsys):
     out = tmp_path / "m.urdf"
     assert main(["scale", "--sex", "m", "--height-m", "1.80", "--out", str(out)]) == 0
-    assert out.exists() and "wrote" in capsys.readouterr().out
+    assert "wrote" in capsys.readouterr().out
+    # the file is the model of those measures: same dimensions as the library's geometry, and the
+    # CLI's default knee is the library's default
+    from pipeline.model.conventions import DEFAULT_KNEE
+
+    sk = Skeleton.from_urdf(out)
+    geometry, _ = geometry_from_measures(Measures("m", 1.80))
+    assert sk.knee == DEFAULT_KNEE
+    sk.forward(sk.neutral())
+    thigh = np.linalg.norm(sk.frame_position("right_HJC") - sk.frame_position("right_KJC"))
+    shank = np.linalg.norm(sk.frame_position("right_KJC") - sk.frame_position("right_AJC"))
+    assert thigh == pytest.approx(geometry.thigh_length, abs=1e-9)
+    assert shank == pytest.approx(geometry.shank_length, abs=1e-9)
+    assert 0.35 < thigh < 0.5 and 0.35 < shank < 0.5  # a 1.80 m adult
 
 
 @pytest.mark.dataset

@@ -1,4 +1,5 @@
-"""Tests of pipeline.reproduce.wang2023.evaluation: lag, Wang eq 18-20, RMS, Pearson r, ICC(A,1), Euler errors, ROM."""
+"""Tests of pipeline.reproduce.wang2023.evaluation: lag, Wang eq 18-20, RMS, Pearson r, ICC(A,1),
+Euler errors, ROM."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
-"""pipeline.reproduce.wang2023.regression: OLS, R², F-test and K-fold fitting of the Table I equations (Wang §III.A),
-on synthetic subjects with known coefficients and, if present, on the published data."""
+"""pipeline.reproduce.wang2023.regression: OLS, R², F-test and K-fold fitting of the Table I
+equations (Wang §III.A), on synthetic subjects with known coefficients and, if present, on the
+published data."""
 
 from __future__ import annotations
 

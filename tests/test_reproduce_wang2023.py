@@ -9,7 +9,8 @@ import pytest
 from pipeline.cli import main
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "wang2023"
-pytestmark = pytest.mark.dataset
+# one shared run of the whole reproduction (~15 s) for every test of this file
+pytestmark = [pytest.mark.dataset, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,5 @@
-"""Xsens MVN exports and optical C3D files (pipeline.reproduce.wang2023.xsens_mvn): hand cases, a synthetic leg with
-a known hip, and the published files' labels."""
+"""Xsens MVN exports and optical C3D files (pipeline.reproduce.wang2023.xsens_mvn): hand cases, a
+synthetic leg with a known hip, and the published files' labels."""
 
 from __future__ import annotations
 

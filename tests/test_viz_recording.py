@@ -1,4 +1,5 @@
-"""Tests of pipeline.viz.recording: write a trial to .rrd, read it back (entities, rows, values), commands."""
+"""Tests of pipeline.viz.recording: write a trial to .rrd, read it back (entities, rows, values),
+commands."""
 
 from __future__ import annotations
 

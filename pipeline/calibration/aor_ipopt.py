@@ -126,20 +126,33 @@ class AorCorrection:
 # the NLP
 
 
+# Layout of the unknowns x: the rotation vectors of the femur and tibia corrections (around their
+# starting values R0F, R0T) and the 2-D tangent offsets of the femoral and tibial AoRs.
+X_CORRECTION_FEMUR, X_CORRECTION_TIBIA = slice(0, 3), slice(3, 6)
+X_AXIS_FEMUR, X_AXIS_TIBIA, X_AXES = slice(6, 8), slice(8, 10), slice(6, 10)
+NX = 10
+# Layout of the geometry parameters p: R0F, R0T (3x3, column-major), the reference AoRs aF, aT and
+# their tangent bases TF, TT (3x2, column-major). Each solver appends its data after them.
+P_R0F, P_R0T, P_AF, P_AT = slice(0, 9), slice(9, 18), slice(18, 21), slice(21, 24)
+P_TF, P_TT = slice(24, 30), slice(30, 36)
+NP_GEOMETRY = 36
+N_REGULARISER_WEIGHTS = 2
+
+
 def _axes_sym(x, p):
-    """Symbolic C_F, C_T, b_F, b_T from the unknowns x (10) and the parameters p (36)."""
-    R0F, R0T = ca.reshape(p[0:9], 3, 3), ca.reshape(p[9:18], 3, 3)
-    aF, aT = p[18:21], p[21:24]
-    TF, TT = ca.reshape(p[24:30], 3, 2), ca.reshape(p[30:36], 3, 2)
-    CF = ca.mtimes(R0F, exp3_sym(x[0:3]))
-    CT = ca.mtimes(R0T, exp3_sym(x[3:6]))
-    bF = ca.mtimes(exp3_sym(ca.mtimes(TF, x[6:8])), aF)
-    bT = ca.mtimes(exp3_sym(ca.mtimes(TT, x[8:10])), aT)
+    """Symbolic C_F, C_T, b_F, b_T from the unknowns x (:data:`NX`) and the geometry parameters."""
+    R0F, R0T = ca.reshape(p[P_R0F], 3, 3), ca.reshape(p[P_R0T], 3, 3)
+    aF, aT = p[P_AF], p[P_AT]
+    TF, TT = ca.reshape(p[P_TF], 3, 2), ca.reshape(p[P_TT], 3, 2)
+    CF = ca.mtimes(R0F, exp3_sym(x[X_CORRECTION_FEMUR]))
+    CT = ca.mtimes(R0T, exp3_sym(x[X_CORRECTION_TIBIA]))
+    bF = ca.mtimes(exp3_sym(ca.mtimes(TF, x[X_AXIS_FEMUR])), aF)
+    bT = ca.mtimes(exp3_sym(ca.mtimes(TT, x[X_AXIS_TIBIA])), aT)
     return CF, CT, bF, bT
 
 
 def _regularisers(x, CF, CT, weights):
-    prior = weights[0] * ca.sumsqr(x[6:10])
+    prior = weights[0] * ca.sumsqr(x[X_AXES])
     corr = weights[1] * ((3 - ca.trace(CF)) + (3 - ca.trace(CT)))
     return prior + corr
 
@@ -149,12 +162,13 @@ _OPTS = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes"}}
 
 @lru_cache(maxsize=4)
 def _l2_solver(max_iter: int, tol: float) -> ca.Function:
-    """Data term ``2 - 2 vᵀ S u``: parameters = (36 geometry, 9 S, 2 weights)."""
-    x, p = ca.SX.sym("x", 10), ca.SX.sym("p", 47)
+    """Data term ``2 - 2 vᵀ S u``: parameters = (geometry, 9 S, 2 weights)."""
+    g = NP_GEOMETRY
+    x, p = ca.SX.sym("x", NX), ca.SX.sym("p", g + 9 + N_REGULARISER_WEIGHTS)
     CF, CT, bF, bT = _axes_sym(x, p)
-    S = ca.reshape(p[36:45], 3, 3)
+    S = ca.reshape(p[g : g + 9], 3, 3)
     u, v = ca.mtimes(CT, bT), ca.mtimes(CF, bF)
-    f = 2 - 2 * ca.mtimes(v.T, ca.mtimes(S, u)) + _regularisers(x, CF, CT, p[45:47])
+    f = 2 - 2 * ca.mtimes(v.T, ca.mtimes(S, u)) + _regularisers(x, CF, CT, p[g + 9 :])
     opts = {**_OPTS, "ipopt": {**_OPTS["ipopt"], "max_iter": max_iter, "tol": tol}}
     return ca.nlpsol("aor_l2", "ipopt", {"x": x, "p": p, "f": f}, opts)
 
@@ -169,14 +183,15 @@ def _sample_cost(kind: str, scale: float) -> ca.Function:
 
 @lru_cache(maxsize=4)
 def _robust_solver(n: int, kind: str, scale: float, max_iter: int, tol: float) -> ca.Function:
-    """Per-sample data term (MX, mapped): parameters = (36 geometry, 9n M_k, n weights, 2)."""
-    x, p = ca.MX.sym("x", 10), ca.MX.sym("p", 36 + 10 * n + 2)
+    """Per-sample data term (MX, mapped): parameters = (geometry, 9n M_k, n weights, 2)."""
+    g = NP_GEOMETRY
+    x, p = ca.MX.sym("x", NX), ca.MX.sym("p", g + 10 * n + N_REGULARISER_WEIGHTS)
     CF, CT, bF, bT = _axes_sym(x, p)
     u, v = ca.mtimes(CT, bT), ca.mtimes(CF, bF)
-    m = ca.reshape(p[36 : 36 + 9 * n], 9, n)
-    w = p[36 + 9 * n : 36 + 10 * n]
+    m = ca.reshape(p[g : g + 9 * n], 9, n)
+    w = p[g + 9 * n : g + 10 * n]
     terms = _sample_cost(kind, scale).map(n)(u, v, m, w.T)
-    f = ca.sum2(terms) / ca.sum1(w) + _regularisers(x, CF, CT, p[36 + 10 * n :])
+    f = ca.sum2(terms) / ca.sum1(w) + _regularisers(x, CF, CT, p[g + 10 * n :])
     opts = {**_OPTS, "ipopt": {**_OPTS["ipopt"], "max_iter": max_iter, "tol": tol}}
     return ca.nlpsol(f"aor_{kind}", "ipopt", {"x": x, "p": p, "f": f}, opts)
 
@@ -210,7 +225,8 @@ def aor_correction_ipopt(
     Args:
         femur_R, tibia_R: IMC segment orientations ``(N, 3, 3)``; NaN rows are skipped.
         reference_femur_axis, reference_tibia_axis: reference knee AoR (population or
-            individual, e.g. :func:`pipeline.model.skeleton.knee_axis` of the subject's model); pointing right.
+            individual, e.g. :func:`pipeline.model.skeleton.knee_axis` of the subject's model);
+            pointing right.
         prior_weight: ``λ_p`` (``np.inf`` fixes ``b = a``); correction_weight: ``λ_c``.
         loss: ``'l2'``, ``'huber'`` or ``'cauchy'``; loss_scale: ``s`` (rad of hinge miss).
         weights: ``'motion'`` (default), ``'uniform'`` or an array ``(N,)``.
@@ -252,11 +268,11 @@ def aor_correction_ipopt(
         solver = _robust_solver(n, loss, float(loss_scale), max_iter, tol)
         m = np.swapaxes(M[keep], 1, 2).reshape(n, 9)  # column-major entries of each M_k
         p = np.concatenate([geom, m.ravel(), w[keep], lam])
-    lbx, ubx = -np.inf * np.ones(10), np.inf * np.ones(10)
+    lbx, ubx = -np.inf * np.ones(NX), np.inf * np.ones(NX)
     if fixed_prior:
-        lbx[6:], ubx[6:] = 0.0, 0.0
+        lbx[X_AXES], ubx[X_AXES] = 0.0, 0.0
     t1 = time.perf_counter()
-    sol = solver(x0=np.zeros(10), p=p, lbx=lbx, ubx=ubx)
+    sol = solver(x0=np.zeros(NX), p=p, lbx=lbx, ubx=ubx)
     solver_seconds = time.perf_counter() - t1
     stats = solver.stats()
     x = np.array(sol["x"]).ravel()
@@ -291,7 +307,7 @@ def aor_correction_ipopt(
 
 @lru_cache(maxsize=1)
 def _evaluator() -> ca.Function:
-    x, p = ca.SX.sym("x", 10), ca.SX.sym("p", 36)
+    x, p = ca.SX.sym("x", NX), ca.SX.sym("p", NP_GEOMETRY)
     return ca.Function("axes", [x, p], list(_axes_sym(x, p)))
 
 

@@ -16,8 +16,9 @@ Positions are joint centres seen from the sensor (sensor -> joint), as in
 * eq 30/38: joint rotation = proximal segment -> distal segment, ``R_prox(t)^T R_dist(t)`` with
   ``R_seg(t) = R_S(t) F``; eq 38's ``R_C^B(0)`` terms re-express the same product through the
   static pose, which is not needed when both sensor orientations share a world frame.
-* eq 39-42 (ZXY Cardan angles of the joint rotation): :func:`pipeline.rotations.euler_zxy_from_matrix`
-  and :func:`pipeline.rotations.matrix_from_euler_zxy`.
+* eq 39-42 (ZXY Cardan angles of the joint rotation):
+  :func:`pipeline.rotations.euler_zxy_from_matrix` and
+  :func:`pipeline.rotations.matrix_from_euler_zxy`.
 """
 
 from __future__ import annotations

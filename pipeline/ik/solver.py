@@ -19,13 +19,13 @@ matrix drops ``Jlog3^T Jlog3 = I + O(|r|^2)``, which only changes the (linear) r
 point. As ``J_i^w = R_i^T A m_i`` (``A``: world axes of the joints, the angular rows of Pinocchio's
 WORLD joint Jacobians; ``m_i``: DoFs that move frame ``i``), the normal equations need no per-frame
 Jacobian: ``J^T W J = (A^T A) o sum_i w_i m_i m_i^T`` and ``J^T W r = sum_i w_i m_i o (A^T u_i)``
-with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no present task observes (e.g. the ankle of a
-frame without its foot target) the matrix is singular: LAPACK's ``dposv`` reports it
-(``info > 0``) and the step is then the minimum-norm least-squares one, which leaves that DoF
-alone. Damping does not move the fixed point
-either, so the result is the exact weighted least-squares optimum (stationary: ``J^T W r = 0`` with
-the exact Jacobian of :func:`orientation_residuals`); with an exactly reachable target set it
-reproduces the targets (Wang 2023 eq 15-17 then follow from the model's forward kinematics).
+with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no
+present task observes (e.g. the ankle of a frame without its foot target) the matrix is singular:
+LAPACK's ``dposv`` reports it (``info > 0``) and the step is then the minimum-norm least-squares
+one, which leaves that DoF alone. Damping does not move the fixed point either, so the result is the
+exact weighted least-squares optimum (stationary: ``J^T W r = 0`` with the exact Jacobian of
+:func:`orientation_residuals`); with an exactly reachable target set it reproduces the targets (Wang
+2023 eq 15-17 then follow from the model's forward kinematics).
 
 Warm start: the previous frame's solution (plus its last velocity if ``extrapolate``); revolute
 angles are never wrapped, so trajectories are continuous. Stopping: when the linear-rate estimate

@@ -8,8 +8,9 @@ CLI prints the notes.
 
 Conventions: rows are counted from 0 over the data rows; readers that know where the data start in
 the file pass ``first_line`` so messages also give the 1-based file line. Reading and parsing text
-tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text`, :class:`Notes` in
-:mod:`pipeline.io.notes` and the gap filling :func:`fill_gaps` in :mod:`pipeline.io.gaps`.
+tables (:func:`parse_table`, :func:`read_text_lines`) live in :mod:`pipeline.io.text`,
+:class:`Notes` in :mod:`pipeline.io.notes` and the gap filling :func:`fill_gaps` in
+:mod:`pipeline.io.gaps`.
 """
 
 from __future__ import annotations

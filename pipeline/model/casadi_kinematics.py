@@ -209,7 +209,8 @@ class CasadiKinematics:
         try:
             return self._frame_ids[frame]
         except KeyError:
-            raise InputError(f"expected a frame of the model, got {frame!r}", field="frame") from None
+            msg = f"expected a frame of the model, got {frame!r}"
+            raise InputError(msg, field="frame") from None
 
     # ---- expressions --------------------------------------------------------------------------
     def _frame_function(self, fid: int) -> ca.Function:

@@ -286,7 +286,8 @@ class SubjectGeometry:
     ) -> SubjectGeometry:
         """A plausible geometry from height alone (thigh 0.24 H, shank 0.245 H, knee 0.10 m).
 
-        For tests and demos only; real subjects use :mod:`pipeline.model.anthropometry` (Wang eq 14).
+        For tests and demos only; real subjects use :mod:`pipeline.model.anthropometry` (Wang eq
+        14).
         """
         h = float(height_m)
         thigh, shank, k, a = 0.24 * h, 0.245 * h, 0.10 * h / 1.75, 0.07 * h / 1.75

@@ -1,8 +1,8 @@
 """From a subject's measures to a scaled model: Wang eq 14 (Table I) + the population knee AoR.
 
 ``scale_model`` is what ``pipeline scale`` runs: the regression equations give the landmark
-positions in the segment frames (:func:`pipeline.model.anthropometry.predict_landmarks`), the knee AoR
-defaults to the sex-specific population mean computed from the Wang 2023 dataset
+positions in the segment frames (:func:`pipeline.model.anthropometry.predict_landmarks`), the knee
+AoR defaults to the sex-specific population mean computed from the Wang 2023 dataset
 (``models/wang2023_knee_aor.csv``), and :func:`pipeline.model.builder.build_urdf` writes the URDF,
 which is then the single source of truth for every dimension downstream.
 """

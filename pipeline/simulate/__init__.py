@@ -1,6 +1,7 @@
 """Simulation (ground truth for every estimator): a model in, a trial with known truth out. Motions
 with exact ``q, v, a`` (:mod:`~pipeline.simulate.motions`), IMU signals of misplaced noisy sensors
-on the model (:func:`simulate_trial`), and a model-free two-segment chain (:mod:`~pipeline.simulate.chain`).
+on the model (:func:`simulate_trial`), and a model-free two-segment chain
+(:mod:`~pipeline.simulate.chain`).
 
 The public names below load their module on first use (:mod:`pipeline._lazy`).
 """

@@ -1,10 +1,10 @@
 """Motions of the model-based simulator: exact joint trajectories on a free-flyer skeleton.
 
-Joint trajectories are sums of sinusoids (:class:`pipeline.simulate.chain.Sinusoids`), so ``q``, ``v``
-and ``a`` are exact. The skeleton has a free-flyer root (``q[:7]`` = pelvis position and
+Joint trajectories are sums of sinusoids (:class:`pipeline.simulate.chain.Sinusoids`), so ``q``,
+``v`` and ``a`` are exact. The skeleton has a free-flyer root (``q[:7]`` = pelvis position and
 quaternion ``x, y, z, w``; ``v[:6]`` = pelvis velocity in the pelvis frame, linear then angular;
-``a[:6]`` its time derivative). World frame: z up; segment frames ISB (x anterior, y proximal,
-z right). Motions:
+``a[:6]`` its time derivative). World frame: z up; segment frames ISB (x anterior, y proximal, z
+right). Motions:
 
 * ``'gait'`` (alias ``'rich'``): walking at ~1.2 m/s along a weaving path (heading +-15-22 deg
   at 0.08 Hz), stride ~0.9 Hz, pelvis yaw/obliquity/tilt and bounce, both legs half a stride apart

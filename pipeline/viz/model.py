@@ -1,9 +1,10 @@
 """Rerun recording of a scaled model's motion: segment meshes, landmarks, IMU axes, bones, angles.
 
 :func:`log_motion` takes configurations ``Q`` (N, nq) of a :class:`~pipeline.model.Skeleton`, runs
-the forward kinematics of every frame it draws once (:func:`pipeline.analysis.landmarks.frame_trajectories`)
-and writes an offline ``.rrd`` with the columnar API (one ``send_columns`` call per entity for the
-whole trial; see :mod:`pipeline.viz.recording`). Layout (timeline ``time``, seconds; model coordinates, m):
+the forward kinematics of every frame it draws once
+(:func:`pipeline.analysis.landmarks.frame_trajectories`) and writes an offline ``.rrd`` with the
+columnar API (one ``send_columns`` call per entity for the whole trial; see
+:mod:`pipeline.viz.recording`). Layout (timeline ``time``, seconds; model coordinates, m):
 
 * ``world``: view coordinates (``up_axis`` up; the model is Y-up, so ``'y'`` stands it upright).
 * ``world/model/<segment>``: the segment pose ``(R, p)`` as ``Transform3D`` columns (translation,
@@ -17,10 +18,10 @@ whole trial; see :mod:`pipeline.viz.recording`). Layout (timeline ``time``, seco
   ``world/reference/<name>`` and ``world/errors/<name>`` for ``reference_landmarks``.
 * ``world/imus/<frame>``: IMU frame poses as ``Transform3D`` columns with static axes.
 * ``world/bones/<side>``: ``LineStrips3D`` HJC-KJC-AJC, one strip per row.
-* ``plots/<side>_<joint>/<angle>``: ISB joint angles (:func:`pipeline.analysis.landmarks.joint_angles`) in
-  degrees, one colour per angle (``ANGLE_COLORS``: flexion blue, adduction red, rotation green,
-  the colours of the z, x, y axes they turn about); ``plots/<name>`` for ``extra_scalars``
-  (logged as given).
+* ``plots/<side>_<joint>/<angle>``: ISB joint angles
+  (:func:`pipeline.analysis.landmarks.joint_angles`) in degrees, one colour per angle
+  (``ANGLE_COLORS``: flexion blue, adduction red, rotation green, the colours of the z, x, y axes
+  they turn about); ``plots/<name>`` for ``extra_scalars`` (logged as given).
 
 Default layout (blueprint): the 3D view, its camera looking at the legs from the front right
 with the line grid on the ground (the lowest point the feet reach), beside one time-series view

@@ -133,7 +133,9 @@ def check_time(time: np.ndarray) -> np.ndarray:
 
 
 @contextmanager
-def open_recording(path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None):
+def open_recording(
+    path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None
+):
     """An offline recording to ``path`` with view coordinates on ``world`` and ``blueprint`` as its
     default layout; deleted on failure."""
     rr = import_rerun()
@@ -236,7 +238,8 @@ def log_poses(
             rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
         if ok.any():
             xyzw = quat_xyzw_from_matrix(R[ok])  # rerun: scalar-last
-            send_columns(rec, entity, t, ok, rr.Transform3D.columns(translation=p[ok], quaternion=xyzw))
+            columns = rr.Transform3D.columns(translation=p[ok], quaternion=xyzw)
+            send_columns(rec, entity, t, ok, columns)
 
 
 def log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:

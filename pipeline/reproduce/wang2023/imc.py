@@ -14,10 +14,10 @@ For each of the 16 IMC subjects and each configuration
 * ``positions``: ``regression`` (Table I, smallest-SD equation given h, s_L, s_M, k, a) or ``omc``
   (the subject's own landmark positions in the segment frames),
 
-the trajectories follow eq 15-17 (:func:`pipeline.analysis.landmarks.wang_trajectories`, equal to the
-free-knee model's forward kinematics), the IMC-OMC lag is estimated from the femur's angular
-speed (not the reference's offset table), the frames are unified by eq 18-19 and compared by
-eq 20, RMS, Pearson r and ICC(A,1); orientation errors are ZYX angles of R_imcᵀ R_omc (Table V).
+the trajectories follow eq 15-17 (:func:`pipeline.analysis.landmarks.wang_trajectories`, equal to
+the free-knee model's forward kinematics), the IMC-OMC lag is estimated from the femur's angular
+speed (not the reference's offset table), the frames are unified by eq 18-19 and compared by eq 20,
+RMS, Pearson r and ICC(A,1); orientation errors are ZYX angles of R_imcᵀ R_omc (Table V).
 """
 
 from __future__ import annotations
@@ -88,8 +88,8 @@ def hinge_ik_orientations(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Femur and tibia orientations of the best hinge-consistent pose at every sample.
 
-    Orientation IK (:func:`pipeline.ik.solver.solve_ik`, equal weights, no limits) on a one-leg model
-    whose knee is a hinge about the population AoR of the subject's sex (``sex_aor``): the AoR
+    Orientation IK (:func:`pipeline.ik.solver.solve_ik`, equal weights, no limits) on a one-leg
+    model whose knee is a hinge about the population AoR of the subject's sex (``sex_aor``): the AoR
     constraint applied frame by frame instead of one constant correction (Wang eq 9-13). The
     landmark positions do not enter orientation IK, so the returned frames serve eq 15-17 with any
     positions.

@@ -12,9 +12,10 @@ For each sex group ('m', 'f', 'all') and each equation family of :data:`EQUATION
   coefficients are the mean of the K folds' coefficients, the test error (measured - predicted,
   pooled over folds) gives ``cv_mean_mm`` and ``cv_sd_mm``.
 
-The results convert to :class:`~pipeline.model.anthropometry.RegressionEquation` rows, so a fitted table
-is used by :func:`~pipeline.model.anthropometry.predict_landmarks` exactly like the shipped Table I.
-These names are also importable from :mod:`pipeline.model.anthropometry` (where they used to live).
+The results convert to :class:`~pipeline.model.anthropometry.RegressionEquation` rows, so a fitted
+table is used by :func:`~pipeline.model.anthropometry.predict_landmarks` exactly like the shipped
+Table I. These names are also importable from :mod:`pipeline.model.anthropometry` (where they used
+to live).
 """
 
 from __future__ import annotations
@@ -205,7 +206,8 @@ def fit_table(
                 y = np.array([s.coordinate_mm(landmark, axis) for s in members])
                 fit = _fit_one(x, y, folds)
                 results.append(
-                    FitResult(group, equation, landmark, axis, **fit, source="fit", n=n, k_folds=k_folds)
+                    FitResult(group, equation, landmark, axis, **fit, source="fit", n=n,
+                              k_folds=k_folds)  # fmt: skip
                 )
     return results
 

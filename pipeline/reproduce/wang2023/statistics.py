@@ -8,7 +8,8 @@ import numpy as np
 
 from pipeline.errors import InputError
 
-__all__ = ["finite_rows", "icc_a1", "icc_a1_axes", "pearson_r", "pearson_r_axes", "rms_error", "two_way_mean_squares"]
+__all__ = ["finite_rows", "icc_a1", "icc_a1_axes", "pearson_r", "pearson_r_axes", "rms_error",
+"two_way_mean_squares"]
 
 
 def finite_rows(x: np.ndarray) -> np.ndarray:

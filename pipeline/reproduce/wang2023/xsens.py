@@ -3,18 +3,20 @@ Tables VI-VII).
 
 Data: ``xsens/`` of the published dataset (README there). Reading and modelling the MVN and
 optical files (labels, hip centre, segment frames, one trial's comparison) is
-:mod:`pipeline.reproduce.wang2023.xsens_mvn`; the Markdown section is :mod:`pipeline.reproduce.wang2023.xsens_report`.
+:mod:`pipeline.reproduce.wang2023.xsens_mvn`; the Markdown section is
+:mod:`pipeline.reproduce.wang2023.xsens_report`.
 
 **Table II, MVN scaling.** The five static MVN models (``XsensStatic_c3d/``,
-:func:`pipeline.reproduce.wang2023.xsens_mvn.static_model`) get the right HJC offset averaged over the MVN motion
-exports (:func:`pipeline.reproduce.wang2023.xsens_mvn.mvn_hip_offset`). Each MVN coordinate is linear in height (fit
-over the five heights) and evaluated at every optical subject's height: Table II = mean±SD over
-subjects of ``MVN(h) - OMC`` (the paper's SDs equal the between-subject SDs of Table I, so this
-is what it did). Also given: MVN minus the paper's Table I height equations at the five heights.
+:func:`pipeline.reproduce.wang2023.xsens_mvn.static_model`) get the right HJC offset averaged over
+the MVN motion exports (:func:`pipeline.reproduce.wang2023.xsens_mvn.mvn_hip_offset`). Each MVN
+coordinate is linear in height (fit over the five heights) and evaluated at every optical subject's
+height: Table II = mean±SD over subjects of ``MVN(h) - OMC`` (the paper's SDs equal the
+between-subject SDs of Table I, so this is what it did). Also given: MVN minus the paper's Table I
+height equations at the five heights.
 
 **Tables VI-VII, MVN trajectories.** The four ``Subject{1,2}/HipF{1,2}`` trials (:data:`TRIALS`),
-each by :func:`pipeline.reproduce.wang2023.xsens_mvn.compare_trial`; Subject 1 HipF2 has no MVN export and uses
-``rawData.mat``.
+each by :func:`pipeline.reproduce.wang2023.xsens_mvn.compare_trial`; Subject 1 HipF2 has no MVN
+export and uses ``rawData.mat``.
 """
 
 from __future__ import annotations

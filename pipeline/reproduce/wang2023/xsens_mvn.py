@@ -25,9 +25,9 @@ that offset; motion trials use MVN's own right hip at every sample (:func:`mvn_h
 because the MVN pelvis moves 15-34 mm during these trials (the reference code did the same).
 
 **Static models (Table II).** Landmarks are the median over the static frames. Femoral frame as
-the paper (:func:`pipeline.reproduce.wang2023.omc.femoral_frames`); tibial frame with the MVN tibia z axis (medial
-to lateral epicondyle, §II.D: the substitute for the knee AoR in a static pose) as knee axis.
-Each MVN coordinate is linear in height (:func:`linear_in_height`).
+the paper (:func:`pipeline.reproduce.wang2023.omc.femoral_frames`); tibial frame with the MVN tibia
+z axis (medial to lateral epicondyle, §II.D: the substitute for the knee AoR in a static pose) as
+knee axis. Each MVN coordinate is linear in height (:func:`linear_in_height`).
 
 **Trials (Tables VI-VII).** :func:`compare_trial` for one ``Subject{1,2}/HipF{1,2}`` folder:
 optical landmarks from ``OMCHipF*.c3d``; MVN landmarks from ``xsensHipF*.c3d`` resampled
