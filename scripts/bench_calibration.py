@@ -79,7 +79,7 @@ def main() -> None:
         for method, run in runs:
             r = run()
             a1, a2, p1, p2 = errors(tr, r)
-            und = ", ".join(r.observability["undetermined"]) or "-"
+            und = ", ".join(r.observability.undetermined) or "-"
             print(
                 f"{name:<30}{method:<14}{a1:>10.3f}{a2:>10.3f}{p1:>9.2f}{p2:>9.2f}"
                 f"{r.seconds:>8.3f}  {und}"

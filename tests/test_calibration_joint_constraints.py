@@ -149,9 +149,9 @@ def test_observability_flags_the_still_thigh():
         d = joint_data(tr.time, tr.imu_1.gyr, tr.imu_1.acc, tr.imu_2.gyr, tr.imu_2.acc)
         p1, p2 = project_hinge_positions(tr.position_1, tr.position_2, tr.axis_1, tr.axis_2)
         out[name] = diagnose(d, tr.axis_1, tr.axis_2, p1, p2)
-    assert out["rich"]["undetermined"] == []
-    assert out["rich"]["expected"] == ["position along the hinge axis"]
-    assert "axis_1 (sensor 1)" in out["still"]["undetermined"]
-    assert "axis_2 (sensor 2)" not in out["still"]["undetermined"]
-    assert "position_1 (sensor 1)" in out["still"]["undetermined"]
-    assert "axis_1" in out["still"]["message"]
+    assert out["rich"].undetermined == ()
+    assert out["rich"].expected == ("position along the hinge axis",)
+    assert "axis_1 (sensor 1)" in out["still"].undetermined
+    assert "axis_2 (sensor 2)" not in out["still"].undetermined
+    assert "position_1 (sensor 1)" in out["still"].undetermined
+    assert "axis_1" in out["still"].message

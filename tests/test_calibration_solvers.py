@@ -89,7 +89,7 @@ def test_hinge_truth_recovered(hinge, method, axis_deg, pos_mm):
     assert e1 < axis_deg and e2 < axis_deg  # signs consistent and right
     assert p1 < pos_mm and p2 < pos_mm
     assert r.method == method and r.seconds > 0 and r.iterations > 0
-    assert r.observability["undetermined"] == []
+    assert r.observability.undetermined == ()
 
 
 @pytest.mark.parametrize(("method", "pos_mm"), [("gn", 3.0), ("dwpso", 5.0), ("gwo", 15.0)])
@@ -122,7 +122,7 @@ def test_ipopt_rich_trial_meets_targets():
     assert max(e1, e2) < 0.1 and max(p1, p2) < 2.0
     assert r.axis_1 @ r.position_1_m + r.axis_2 @ r.position_2_m == pytest.approx(0, abs=1e-8)
     assert np.linalg.norm(r.axis_1) == pytest.approx(1.0)
-    assert r.observability["solver_status"] == "Solve_Succeeded"
+    assert r.observability.solver_status == "Solve_Succeeded"
 
 
 def test_ipopt_spherical_and_robust_loss_against_outliers(sphere, hinge):
@@ -152,9 +152,22 @@ def test_still_thigh_flagged_and_prior_keeps_the_axis():
     tr = hinge_trial("still_thigh", duration=10.0, seed=1)
     d = _data(tr)
     r = calibrate(d, "hinge", "gn", quat_1=tr.imu_1.quat, quat_2=tr.imu_2.quat)
-    assert "axis_1 (sensor 1)" in r.observability["undetermined"]
+    assert "axis_1 (sensor 1)" in r.observability.undetermined
     prior = exp3(np.deg2rad([2.0, -1.5, 0.0])) @ tr.axis_1  # a population axis 2.5 deg off
     rp = calibrate_ipopt(d, "hinge", prior_axis_1=prior, prior_weight=1.0)
     e1, e2, _, _ = _errors(tr, rp)
     assert e1 < 3.0 and e2 < 0.5  # the prior also fixes the signs
-    assert "prior" in rp.observability["message"]
+    assert "prior" in rp.observability.message
+
+
+def test_observability_is_typed_and_serialises_to_the_cli_layout(hinge):
+    from pipeline.calibration.solvers import Observability
+
+    tr, d = hinge
+    r = calibrate(d, "hinge", "gn", quat_1=tr.imu_1.quat, quat_2=tr.imu_2.quat)
+    obs = r.observability
+    assert isinstance(obs, Observability) and obs.determined
+    assert obs.axes is not None and obs.axes.condition >= 1.0 and obs.axes.sd.shape == (4,)
+    layout = obs.as_dict()
+    assert list(layout) == ["undetermined", "expected", "axes", "positions", "message"]
+    assert layout["expected"] == ["position along the hinge axis"]

@@ -100,3 +100,26 @@ def test_debug_shows_the_traceback(tmp_path):
     with pytest.raises(InputError):
         main(["--debug", "ik", "--orientations", str(tmp_path / "nope.sto"), "--sex", "m",
               "--height-m", "1.75", "--out", str(tmp_path / "o")])  # fmt: skip
+
+
+def test_cli_defaults_are_the_librarys():
+    """The CLI's defaults were once their own (``--knee free`` vs ``build_urdf``'s hinge,
+    ``--method ipopt`` vs ``calibrate``'s gn): now both read one constant."""
+    import inspect
+
+    from pipeline.calibration.calibrate import DEFAULT_METHOD, calibrate
+    from pipeline.cli import build_parser
+    from pipeline.model.builder import build_urdf, urdf_text
+    from pipeline.model.conventions import DEFAULT_KNEE
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.process import process_recording
+
+    parser = build_parser()
+    scale = parser.parse_args(["scale", "--sex", "f", "--height-m", "1.6", "--out", "a.urdf"])
+    ik = parser.parse_args(["ik", "--orientations", "x.sto", "--sex", "f", "--height-m", "1.6",
+                            "--out", "o"])  # fmt: skip
+    cal = parser.parse_args(["calibrate", "hinge", "--imu1", "a.csv", "--imu2", "b.csv"])
+    assert scale.knee == ik.knee == DEFAULT_KNEE
+    for f in (build_urdf, urdf_text, Skeleton.build, process_recording):
+        assert inspect.signature(f).parameters["knee"].default == DEFAULT_KNEE, f
+    assert cal.method == DEFAULT_METHOD == inspect.signature(calibrate).parameters["method"].default

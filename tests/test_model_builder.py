@@ -324,3 +324,13 @@ def test_freeflyer_root_moves_everything(tmp_path):
         Skeleton.from_urdf(path, root="hovering")
     with pytest.raises(InputError):
         sk.forward(np.zeros(3))
+
+
+def test_pinocchio_check_failure_is_an_input_error(monkeypatch):
+    """The builder's self-check raised RuntimeError; the package's contract is InputError."""
+    from pipeline.errors import InputError
+    from pipeline.model import builder
+
+    monkeypatch.setattr(builder, "joint_names", lambda knee, legs: ["no_such_joint"])
+    with pytest.raises(InputError, match="expected"):
+        builder.urdf_text(builder.SubjectGeometry.default(1.75, "m", "right"), legs=("right",))

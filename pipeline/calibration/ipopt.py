@@ -19,6 +19,7 @@ a few Gauss-Newton steps (:mod:`pipeline.calibration.solvers`) on a decimated co
 
 from __future__ import annotations
 
+import dataclasses
 import time as _time
 
 import casadi as ca
@@ -160,9 +161,11 @@ def calibrate_ipopt(
         o1, o2 = xs[:3], xs[3:]
     seconds = _time.perf_counter() - t0
     obs = diagnose(data, j1, j2, o1, o2)
-    obs["solver_status"] = stats.get("return_status", "")
+    message = obs.message
     if prior_axis_1 is not None or prior_axis_2 is not None:
-        obs["message"] += f" | axis prior used (weight {prior_weight})"
+        message += f" | axis prior used (weight {prior_weight})"
+    obs = dataclasses.replace(obs, message=message,
+                              solver_status=str(stats.get("return_status", "")))  # fmt: skip
     return CalibrationResult(
         axis_1=j1,
         axis_2=j2,

@@ -33,6 +33,7 @@ from pipeline.errors import InputError
 from pipeline.rotations import matrix_from_quat, normalize, skew
 
 __all__ = [
+    "DirectionDiagnostics",
     "JointData",
     "angular_acceleration",
     "axis_from_spherical",
@@ -220,6 +221,29 @@ def consistent_axis_signs(
     return j1, j2
 
 
+@dataclass(frozen=True)
+class DirectionDiagnostics:
+    """:func:`observability` of one parameter group: the singular values of ``J / sqrt(N)``, their
+    condition number, the predicted SD of each parameter (parameter units), the names of the
+    undetermined directions and a one-line message."""
+
+    singular_values: np.ndarray
+    condition: float
+    sd: np.ndarray
+    undetermined: tuple[str, ...]
+    message: str
+
+    def as_dict(self) -> dict:
+        """The JSON layout of ``pipeline calibrate --json``."""
+        return {
+            "singular_values": self.singular_values,
+            "condition": self.condition,
+            "sd": self.sd,
+            "undetermined": list(self.undetermined),
+            "message": self.message,
+        }
+
+
 def observability(
     jacobian: np.ndarray,
     blocks: dict[str, slice],
@@ -228,7 +252,7 @@ def observability(
     abs_tol: float = np.inf,
     directions: dict[str, np.ndarray] | None = None,
     rel_tol: float = 0.02,
-) -> dict:
+) -> DirectionDiagnostics:
     """Rank and uncertainty diagnostics of a residual Jacobian (N, P) at the solution.
 
     With ``J / sqrt(N) = U S V^T``, a right-singular direction ``v_k`` is weakly determined when
@@ -237,7 +261,7 @@ def observability(
     after a known direction in ``directions`` (``name -> (P,)``, e.g. the shift of both hinge
     positions along the axis) when ``|v_k . d| > 0.9``, otherwise after the parameter blocks
     (``name -> column slice``) carrying more than a quarter of its weight.
-    Returns ``{'singular_values', 'condition', 'sd' (P,), 'undetermined': [names], 'message'}``.
+    Returns a :class:`DirectionDiagnostics`.
     """
     J = np.asarray(jacobian, float)
     n = J.shape[0]
@@ -259,10 +283,4 @@ def observability(
         msg += " undetermined by this motion"
     else:
         msg = f"all parameters determined (condition number {cond:.1f})"
-    return {
-        "singular_values": s,
-        "condition": cond,
-        "sd": sd,
-        "undetermined": names,
-        "message": msg,
-    }
+    return DirectionDiagnostics(s, cond, sd, tuple(names), msg)

@@ -13,6 +13,7 @@ import numpy as np
 
 from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS, calibrate
 from pipeline.calibration.joint_constraints import joint_data
+from pipeline.calibration.solvers import Observability
 from pipeline.errors import InputError
 from pipeline.io.checks import check_same_length, check_same_rate
 from pipeline.io.imu_csv import read_imu_csv
@@ -48,14 +49,13 @@ def _read_pair(imu1: Path, imu2: Path):
     return r1, r2
 
 
-def _observability_summary(obs: dict) -> dict:
-    out = jsonable(obs)
-    undetermined = list(obs.get("undetermined", []))
-    out["determined"] = not undetermined
-    if undetermined:
+def _observability_summary(obs: Observability) -> dict:
+    out = jsonable(obs.as_dict())
+    out["determined"] = obs.determined
+    if not obs.determined:
         out["warning"] = (
             "UNDETERMINED by this motion: "
-            + "; ".join(undetermined)
+            + "; ".join(obs.undetermined)
             + " - these values are not trustworthy (excite the segments about other axes, "
             "or use the IPOPT method with a population-axis prior)"
         )
