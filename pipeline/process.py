@@ -30,11 +30,11 @@ from pipeline.errors import InputError
 from pipeline.ik.solver import solve_ik
 from pipeline.io.opensim import (
     SENSOR_TO_SEGMENT,
-    OrientationTrial,
     map_sensors,
     rotate_world,
     sensor_to_opensim_matrix,
 )
+from pipeline.io.recording import Recording
 from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import DEFAULT_KNEE
 from pipeline.model.scaling import geometry_from_measures
@@ -77,7 +77,7 @@ class IKRun:
 
 
 def process_recording(
-    trial: OrientationTrial,
+    trial: Recording,
     measures: Measures,
     *,
     knee: str = DEFAULT_KNEE,
@@ -124,7 +124,7 @@ def process_recording(
                  sk, seconds, notes)  # fmt: skip
 
 
-def _used_sensor_names(trial: OrientationTrial) -> list[str]:
+def _used_sensor_names(trial: Recording) -> list[str]:
     return [s for s in trial.sensor_names if SENSOR_TO_SEGMENT.get(s, "torso") != "torso"]
 
 

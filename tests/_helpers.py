@@ -64,3 +64,10 @@ def blueprint_views(bp: dict[str, dict[str, list]]) -> dict[str, tuple[str, str,
         for path, v in bp.items()
         if "ViewBlueprint:class_identifier" in v
     }
+
+
+def imu_recording(time, gyr, acc, quat=None):
+    """A one-sensor recording of raw signals (what an IMU CSV holds)."""
+    from pipeline.io.recording import Recording
+
+    return Recording.single("imu", time, gyr=gyr, acc=acc, quat=quat)

@@ -161,7 +161,7 @@ def test_still_thigh_flagged_and_prior_keeps_the_axis():
 
 
 def test_observability_is_typed_and_serialises_to_the_cli_layout(hinge):
-    from pipeline.calibration.solvers import Observability
+    from pipeline.calibration.observability import Observability
 
     tr, d = hinge
     r = calibrate(d, "hinge", "gn", quat_1=tr.imu_1.quat, quat_2=tr.imu_2.quat)

@@ -6,11 +6,12 @@ import json
 
 import numpy as np
 import pytest
+from _helpers import imu_recording
 
 from pipeline.calibration.joint_constraints import project_hinge_positions
 from pipeline.cli import main
 from pipeline.commands.calibrate import CALIBRATION_KEYS
-from pipeline.io.imu_csv import ImuRecording, read_imu_csv, write_imu_csv
+from pipeline.io.imu_csv import read_imu_csv, write_imu_csv
 from pipeline.rotations import angle_between
 
 
@@ -104,16 +105,16 @@ def test_bad_inputs_exit_2_with_one_line(capsys, sim, tmp_path):
     rec = read_imu_csv(f2)
     short = write_imu_csv(
         tmp_path / "short.csv",
-        ImuRecording(rec.time[:1000], rec.gyr[:1000], rec.acc[:1000], rec.quat[:1000]),
+        imu_recording(rec.time[:1000], rec.gyr[:1000], rec.acc[:1000], rec.quat[:1000]),
     )
     argv = ["calibrate", "hinge", "--imu1", str(f1), "--imu2", str(short)]
     _fails(capsys, argv, "short.csv", "right_femur_imu.csv", "1500", "1000")
     slow = write_imu_csv(
-        tmp_path / "slow.csv", ImuRecording(2 * rec.time, rec.gyr, rec.acc, rec.quat)
+        tmp_path / "slow.csv", imu_recording(2 * rec.time, rec.gyr, rec.acc, rec.quat)
     )
     _fails(capsys, ["calibrate", "hinge", "--imu1", str(f1), "--imu2", str(slow)], "rate")
     late = write_imu_csv(
-        tmp_path / "late.csv", ImuRecording(rec.time + 1.0, rec.gyr, rec.acc, rec.quat)
+        tmp_path / "late.csv", imu_recording(rec.time + 1.0, rec.gyr, rec.acc, rec.quat)
     )
     _fails(capsys, ["calibrate", "hinge", "--imu1", str(f1), "--imu2", str(late)], "time")
     _fails(capsys, ["simulate", "--out", str(f1)], "directory")

@@ -4,23 +4,25 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import imu_recording
 
 from pipeline.errors import InputError
 from pipeline.io.checks import make_quaternions_continuous
-from pipeline.io.imu_csv import ImuRecording, read_imu_csv, write_imu_csv
+from pipeline.io.imu_csv import read_imu_csv, write_imu_csv
+from pipeline.io.recording import Recording
 from pipeline.rotations import exp3, quat_from_matrix
 
 HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z"
 
 
-def _rec(n: int = 300, rate: float = 100.0, quat: bool = True) -> ImuRecording:
+def _rec(n: int = 300, rate: float = 100.0, quat: bool = True) -> Recording:
     t = np.arange(n) / rate
     w = np.column_stack([2.0 * np.sin(2 * np.pi * t), 0.5 * np.cos(t), 0.2 + 0 * t])  # rad/s
     a = np.column_stack([0.5 * np.sin(t), 9.81 + 0.3 * np.cos(5 * t), -0.2 + 0 * t])  # m/s^2
     q = None
     if quat:
         q = make_quaternions_continuous(quat_from_matrix(exp3(t[:, None] * [0.3, -0.6, 1.0])))[0]
-    return ImuRecording(time=t, gyr=w, acc=a, quat=q)
+    return imu_recording(time=t, gyr=w, acc=a, quat=q)
 
 
 def _csv(path, rows, header=HEADER):
@@ -28,7 +30,7 @@ def _csv(path, rows, header=HEADER):
     return path
 
 
-def _lines(rec: ImuRecording):
+def _lines(rec: Recording):
     cols = [rec.time[:, None], rec.gyr, rec.acc] + ([rec.quat] if rec.quat is not None else [])
     return [",".join(f"{v:.12g}" for v in row) for row in np.hstack(cols)]
 
@@ -126,7 +128,7 @@ def test_short_gap_interpolated_and_reported_long_refused(tmp_path):
     gyr[100:104] = np.nan
     quat = rec.quat.copy()
     quat[200:205] = np.nan
-    holed = ImuRecording(time=rec.time, gyr=gyr, acc=rec.acc, quat=quat)
+    holed = imu_recording(time=rec.time, gyr=gyr, acc=rec.acc, quat=quat)
     back = read_imu_csv(write_imu_csv(tmp_path / "a.csv", holed))
     # linear interpolation of a smooth signal over 40 ms: close to the truth, not equal
     assert np.abs(back.gyr[100:104] - rec.gyr[100:104]).max() < 0.05
@@ -137,7 +139,7 @@ def test_short_gap_interpolated_and_reported_long_refused(tmp_path):
     assert any("field quat: filled 5 missing sample(s)" in n and "slerp" in n for n in back.notes)
     acc = rec.acc.copy()
     acc[10:40] = np.nan
-    p = write_imu_csv(tmp_path / "b.csv", ImuRecording(time=rec.time, gyr=rec.gyr, acc=acc))
+    p = write_imu_csv(tmp_path / "b.csv", imu_recording(time=rec.time, gyr=rec.gyr, acc=acc))
     with pytest.raises(InputError, match=r"field acc: gap of 30 missing samples \(0\.3 s\)"):
         read_imu_csv(p)
     back2 = read_imu_csv(p, max_gap_s=0.5)
@@ -148,24 +150,24 @@ def test_non_unit_and_zero_quaternions(tmp_path):
     rec = _rec(30)
     q = rec.quat.copy()
     q[5] *= 1.5
-    p = write_imu_csv(tmp_path / "a.csv", ImuRecording(rec.time, rec.gyr, rec.acc, q))
+    p = write_imu_csv(tmp_path / "a.csv", imu_recording(rec.time, rec.gyr, rec.acc, q))
     with pytest.raises(
         InputError, match=r"field quat: not unit quaternions \(norm 1\.5 at row 5 \(line 7\)"
     ):
         read_imu_csv(p)
     q = rec.quat.copy()
     q[6] = 0
-    p = write_imu_csv(tmp_path / "b.csv", ImuRecording(rec.time, rec.gyr, rec.acc, q))
+    p = write_imu_csv(tmp_path / "b.csv", imu_recording(rec.time, rec.gyr, rec.acc, q))
     with pytest.raises(InputError, match=r"zero quaternion at row 6"):
         read_imu_csv(p)
 
 
 def test_gyro_in_deg_per_s_and_acc_in_g_refused(tmp_path):
     rec = _rec(200, quat=False)
-    p = write_imu_csv(tmp_path / "a.csv", ImuRecording(rec.time, np.degrees(rec.gyr), rec.acc))
+    p = write_imu_csv(tmp_path / "a.csv", imu_recording(rec.time, np.degrees(rec.gyr), rec.acc))
     with pytest.raises(InputError, match="field gyr: .*looks like deg/s.*multiply deg/s by pi/180"):
         read_imu_csv(p)
-    p = write_imu_csv(tmp_path / "b.csv", ImuRecording(rec.time, rec.gyr, rec.acc / 9.81))
+    p = write_imu_csv(tmp_path / "b.csv", imu_recording(rec.time, rec.gyr, rec.acc / 9.81))
     with pytest.raises(InputError, match=r"field acc: median \|a\| is 0\.99\d, close to 1.*in g"):
         read_imu_csv(p)
 
@@ -173,7 +175,7 @@ def test_gyro_in_deg_per_s_and_acc_in_g_refused(tmp_path):
 def test_write_is_atomic_on_bad_input(tmp_path):
     p = tmp_path / "a.csv"
     p.write_text("keep")
-    bad = ImuRecording(time=np.arange(5.0), gyr=np.zeros((4, 3)), acc=np.zeros((5, 3)))
+    bad = imu_recording(time=np.arange(5.0), gyr=np.zeros((4, 3)), acc=np.zeros((5, 3)))
     with pytest.raises(ValueError, match="4 rows, time has 5"):
         write_imu_csv(p, bad)
     assert p.read_text() == "keep"

@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from pipeline.errors import InputError
 from pipeline.io import mot, opensim
 from pipeline.io.checks import make_quaternions_continuous
+from pipeline.io.recording import Recording
 from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
@@ -70,8 +71,8 @@ def test_real_quaternions_4_ik():
     line = path.read_text().splitlines()[7].split("\t")
     assert float(line[0]) == 417.0
     q_file = np.array([float(v) for v in line[1].split(",")])
-    np.testing.assert_allclose(tr.sensors["torso_imu"][0], q_file / np.linalg.norm(q_file))
-    for q in tr.sensors.values():
+    np.testing.assert_allclose(tr.sensors["torso_imu"].quat[0], q_file / np.linalg.norm(q_file))
+    for q in tr.orientations().values():
         np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-12)
         assert np.all(np.sum(q[1:] * q[:-1], axis=1) > 0)  # continuous
     segs = opensim.map_sensors(tr, required=["pelvis", "right_femur", "left_foot", "torso"])
@@ -88,12 +89,14 @@ def test_real_xsens_walking_and_opensense_rotation():
     rot = opensim.rotate_world(tr, R)
     for name in tr.sensors:
         np.testing.assert_allclose(
-            matrix_from_quat(rot.sensors[name]), R @ matrix_from_quat(tr.sensors[name]), atol=1e-12
+            matrix_from_quat(rot.sensors[name].quat),
+            R @ matrix_from_quat(tr.sensors[name].quat),
+            atol=1e-12,
         )
     # relative orientation pelvis -> femur does not depend on the world frame
     rel = lambda t: (  # noqa: E731
-        np.swapaxes(matrix_from_quat(t.sensors["pelvis_imu"]), 1, 2)
-        @ matrix_from_quat(t.sensors["femur_r_imu"])
+        np.swapaxes(matrix_from_quat(t.sensors["pelvis_imu"].quat), 1, 2)
+        @ matrix_from_quat(t.sensors["femur_r_imu"].quat)
     )
     np.testing.assert_allclose(rel(rot), rel(tr), atol=1e-12)
     assert "world frame rotated by a fixed rotation of 90 deg" in rot.notes[-1]
@@ -110,12 +113,12 @@ def test_sensor_to_opensim_matrix_is_space_fixed_xyz():
 
 def test_sto_write_read_round_trip(tmp_path):
     t, sensors = _truth()
-    tr = opensim.OrientationTrial(time=t, rate_hz=100.0, sensors=sensors)
+    tr = Recording.from_orientations(t, 100.0, sensors)
     p = opensim.write_orientations_sto(tmp_path / "o.sto", tr)
     back = opensim.read_orientations_sto(p)
     np.testing.assert_array_equal(back.time, t)
     for n in NAMES:
-        np.testing.assert_allclose(back.sensors[n], sensors[n], atol=1e-15)
+        np.testing.assert_allclose(back.sensors[n].quat, sensors[n], atol=1e-15)
     assert back.notes == () and list(back.sensors) == NAMES
 
 
@@ -161,7 +164,7 @@ def test_map_sensors_missing_names_file_sensor_and_columns(tmp_path):
     tr = opensim.read_orientations_sto(p)
     segs = opensim.map_sensors(tr, required=["pelvis", "right_femur"])
     assert set(segs) == {"pelvis", "right_femur", "right_tibia"}
-    np.testing.assert_array_equal(segs["right_tibia"], tr.sensors["tibia_r_imu"])
+    np.testing.assert_array_equal(segs["right_tibia"], tr.sensors["tibia_r_imu"].quat)
     with pytest.raises(InputError) as e:
         opensim.map_sensors(tr, required=["pelvis", "left_tibia", "left_foot"])
     msg = str(e.value)
@@ -246,7 +249,7 @@ def test_short_nan_gap_slerped_and_reported(tmp_path):
     holed["femur_r_imu"][40:45] = np.nan
     p = _write_sto(tmp_path / "o.sto", t, holed)
     tr = opensim.read_orientations_sto(p)
-    assert _rot_err(tr.sensors["femur_r_imu"], sensors["femur_r_imu"]).max() < 1e-9
+    assert _rot_err(tr.sensors["femur_r_imu"].quat, sensors["femur_r_imu"]).max() < 1e-9
     assert any(
         "field femur_r_imu: filled 5 missing sample(s) from t=2.4 s to t=2.44 s (slerp)" in n
         for n in tr.notes
@@ -276,7 +279,7 @@ def test_non_unit_zero_and_slightly_off_quaternions(tmp_path):
     s = {k: v.copy() for k, v in sensors.items()}
     s["pelvis_imu"] *= 1.02
     tr = opensim.read_orientations_sto(_write_sto(tmp_path / "c.sto", t, s))
-    np.testing.assert_allclose(tr.sensors["pelvis_imu"], sensors["pelvis_imu"], atol=1e-14)
+    np.testing.assert_allclose(tr.sensors["pelvis_imu"].quat, sensors["pelvis_imu"], atol=1e-14)
     assert any("normalised 20 quaternion(s)" in n for n in tr.notes)
 
 
@@ -297,7 +300,7 @@ def test_opensim_loads_our_files(tmp_path):
     p = mot.write_mot(tmp_path / "ik.mot", t, {"knee_angle_r": -0.5 * t, "pelvis_tx": t})
     tt, sensors = _truth(20)
     ps = opensim.write_orientations_sto(
-        tmp_path / "o.sto", opensim.OrientationTrial(time=tt, rate_hz=100.0, sensors=sensors)
+        tmp_path / "o.sto", Recording.from_orientations(tt, 100.0, sensors)
     )
     script = f"""
 import json, opensim as osim

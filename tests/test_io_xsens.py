@@ -89,7 +89,7 @@ def test_orientation_formats_agree_with_truth(tmp_path, orientation):
         orientation=orientation,
     )
     rec = xsens.read_xsens_txt(p)
-    assert rec.orientation_from == orientation
+    assert rec.header["orientation_from"] == orientation
     assert rec.rate_hz == 100.0 and rec.header["Update Rate"] == "100.0Hz"
     np.testing.assert_allclose(rec.time, t, atol=1e-12)
     assert _err(rec.quat, R).max() < 2e-5  # six printed decimals
@@ -100,13 +100,13 @@ def test_orientation_formats_agree_with_truth(tmp_path, orientation):
     np.testing.assert_allclose(
         np.einsum("nji,j->ni", matrix_from_quat(rec.quat), G), rec.acc, atol=2e-4
     )
-    assert rec.sensor_id == orientation  # last '_' field of the file name
+    assert rec.name == orientation  # last '_' field of the file name
 
 
 def test_sensor_id_from_file_name(tmp_path):
     t, R, acc, gyr = _motion(20)
     rec = xsens.read_xsens_txt(_write(tmp_path / "MT_012005D6_009-001_00B421AF.txt", R, acc, gyr))
-    assert rec.sensor_id == "00B421AF"
+    assert rec.name == "00B421AF"
 
 
 def test_packet_counter_wraps(tmp_path):
@@ -216,9 +216,9 @@ def test_trial_from_several_sensors(tmp_path):
     )
     assert trial.sensor_names == ("pelvis_imu", "femur_r_imu") and trial.rate_hz == 100.0
     np.testing.assert_allclose(trial.time, t, atol=1e-12)
-    assert _err(trial.sensors["femur_r_imu"], R2).max() < 2e-5
-    q = make_quaternions_continuous(trial.sensors["pelvis_imu"])[0]
-    np.testing.assert_array_equal(q, trial.sensors["pelvis_imu"])  # already continuous
+    assert _err(trial.sensors["femur_r_imu"].quat, R2).max() < 2e-5
+    q = make_quaternions_continuous(trial.sensors["pelvis_imu"].quat)[0]
+    np.testing.assert_array_equal(q, trial.sensors["pelvis_imu"].quat)  # already continuous
     with pytest.raises(InputError, match="no file for sensor 00B4XXXX \\(tibia_r_imu\\)"):
         xsens.read_xsens_trial(tmp_path, {"00B4XXXX": "tibia_r_imu"}, prefix="MT_012005D6_009-001_")
 

@@ -11,7 +11,8 @@ from pipeline.calibration.heading import anatomical_right
 from pipeline.cli import main
 from pipeline.errors import InputError
 from pipeline.io.mot import read_mot
-from pipeline.io.opensim import OrientationTrial, write_orientations_sto
+from pipeline.io.opensim import write_orientations_sto
+from pipeline.io.recording import Recording
 from pipeline.model import Skeleton
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures
@@ -49,8 +50,7 @@ def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
         R = frames[seg][0] @ mount
         sensors[name] = quat_from_matrix(R)
         mountings[seg] = mount
-    trial = OrientationTrial(time=t, rate_hz=100.0, sensors=sensors, header={}, notes=(),
-                             source=None)  # fmt: skip
+    trial = Recording.from_orientations(t, 100.0, sensors)  # fmt: skip
     return sk, Q, trial, H
 
 
@@ -83,11 +83,11 @@ def test_hinge_knee_model_reproduces_a_hinge_walk(tmp_path):
 
 def test_still_subject_has_no_anatomical_heading(tmp_path):
     _, _, trial, _ = _walk(tmp_path, n=300)
-    still = {k: np.repeat(v[:1], 300, axis=0) for k, v in trial.sensors.items()}
+    still = {k: np.repeat(v[:1], 300, axis=0) for k, v in trial.orientations().items()}
     from pipeline.io.opensim import map_sensors
     from pipeline.rotations import matrix_from_quat
 
-    t2 = OrientationTrial(trial.time, 100.0, still, {}, (), None)
+    t2 = Recording.from_orientations(trial.time, 100.0, still)
     rotations = {s: matrix_from_quat(q) for s, q in map_sensors(t2).items()}
     with pytest.raises(InputError, match="barely move"):
         anatomical_right(rotations)
@@ -97,7 +97,7 @@ def test_missing_pelvis_sensor_is_refused(tmp_path):
     _, _, trial, _ = _walk(tmp_path, n=200)
     sensors = {k: v for k, v in trial.sensors.items() if k != "pelvis_imu"}
     path = tmp_path / "nopelvis.sto"
-    write_orientations_sto(path, OrientationTrial(trial.time, 100.0, sensors, {}, (), None))
+    write_orientations_sto(path, trial.with_sensors(sensors))
     code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
                  "--out", str(tmp_path / "o")])  # fmt: skip
     assert code == 2
@@ -146,7 +146,7 @@ def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
     folder = tmp_path / "xsens"
     folder.mkdir()
     ids = {}
-    for k, (name, q) in enumerate(trial.sensors.items()):
+    for k, (name, q) in enumerate(trial.orientations().items()):
         ids[name] = f"00B421{k:02d}"
         R = matrix_from_quat(q)
         zeros = np.zeros((len(R), 3))

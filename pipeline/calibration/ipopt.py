@@ -33,7 +33,8 @@ from pipeline.calibration.joint_constraints import (
     project_hinge_positions,
 )
 from pipeline.calibration.losses import robust_loss
-from pipeline.calibration.solvers import CalibrationResult, diagnose, solve_subproblem
+from pipeline.calibration.observability import diagnose
+from pipeline.calibration.solvers import CalibrationResult, solve_subproblem
 from pipeline.errors import InputError
 from pipeline.rotations import normalize
 

@@ -33,7 +33,6 @@ from pipeline.errors import InputError
 from pipeline.rotations import matrix_from_quat, normalize, skew
 
 __all__ = [
-    "DirectionDiagnostics",
     "JointData",
     "angular_acceleration",
     "axis_from_spherical",
@@ -43,7 +42,6 @@ __all__ = [
     "hinge_jacobian_spherical",
     "hinge_residual",
     "joint_data",
-    "observability",
     "project_hinge_positions",
     "spherical_from_axis",
     "spherical_jacobian",
@@ -219,68 +217,3 @@ def consistent_axis_signs(
     if np.dot(j1, ref) < 0:
         j1, j2 = -j1, -j2
     return j1, j2
-
-
-@dataclass(frozen=True)
-class DirectionDiagnostics:
-    """:func:`observability` of one parameter group: the singular values of ``J / sqrt(N)``, their
-    condition number, the predicted SD of each parameter (parameter units), the names of the
-    undetermined directions and a one-line message."""
-
-    singular_values: np.ndarray
-    condition: float
-    sd: np.ndarray
-    undetermined: tuple[str, ...]
-    message: str
-
-    def as_dict(self) -> dict:
-        """The JSON layout of ``pipeline calibrate --json``."""
-        return {
-            "singular_values": self.singular_values,
-            "condition": self.condition,
-            "sd": self.sd,
-            "undetermined": list(self.undetermined),
-            "message": self.message,
-        }
-
-
-def observability(
-    jacobian: np.ndarray,
-    blocks: dict[str, slice],
-    *,
-    residual: np.ndarray | None = None,
-    abs_tol: float = np.inf,
-    directions: dict[str, np.ndarray] | None = None,
-    rel_tol: float = 0.02,
-) -> DirectionDiagnostics:
-    """Rank and uncertainty diagnostics of a residual Jacobian (N, P) at the solution.
-
-    With ``J / sqrt(N) = U S V^T``, a right-singular direction ``v_k`` is weakly determined when
-    ``s_k / s_max < rel_tol`` (rank), or when its standard deviation under white residuals,
-    ``sd_k = rms(residual) / (sqrt(N) s_k)``, exceeds ``abs_tol`` (parameter units). It is named
-    after a known direction in ``directions`` (``name -> (P,)``, e.g. the shift of both hinge
-    positions along the axis) when ``|v_k . d| > 0.9``, otherwise after the parameter blocks
-    (``name -> column slice``) carrying more than a quarter of its weight.
-    Returns a :class:`DirectionDiagnostics`.
-    """
-    J = np.asarray(jacobian, float)
-    n = J.shape[0]
-    _, s, vt = np.linalg.svd(J / np.sqrt(n), full_matrices=False)
-    smax = s[0] if s.size and s[0] > 0 else 1.0
-    rms = 0.0 if residual is None else float(np.sqrt(np.mean(np.square(residual))))
-    sd_k = rms / (np.sqrt(n) * np.maximum(s, 1e-300))
-    weak = [k for k in range(s.size) if s[k] / smax < rel_tol or sd_k[k] > abs_tol]
-    names: list[str] = []
-    for k in weak:
-        hit = [m for m, d in (directions or {}).items() if abs(vt[k] @ normalize(d)) > 0.9]
-        if not hit:
-            hit = [m for m, sl in blocks.items() if np.sum(vt[k, sl] ** 2) > 0.25]
-        names += [m for m in hit if m not in names]
-    cond = float(smax / max(s[-1], 1e-300)) if s.size else float("inf")
-    sd = np.sqrt(np.einsum("kp,k->p", vt**2, np.minimum(sd_k, 1e6) ** 2))
-    if names:
-        msg = f"{len(weak)} weakly determined direction(s): " + "; ".join(names)
-        msg += " undetermined by this motion"
-    else:
-        msg = f"all parameters determined (condition number {cond:.1f})"
-    return DirectionDiagnostics(s, cond, sd, tuple(names), msg)

@@ -27,28 +27,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.calibration.joint_constraints import (
-    DirectionDiagnostics,
     JointData,
     axis_from_spherical,
     consistent_axis_signs,
     gamma_matrix,
-    hinge_jacobian,
     hinge_jacobian_spherical,
     hinge_residual,
-    observability,
     project_hinge_positions,
     spherical_jacobian,
     spherical_residual,
 )
+from pipeline.calibration.observability import Observability, diagnose
 from pipeline.errors import InputError
-from pipeline.rotations import tangent_basis
 
 __all__ = [
     "CalibrationResult",
-    "Observability",
     "Subproblem",
     "calibrate_classic",
-    "diagnose",
     "dwpso",
     "gauss_newton",
     "gwo",
@@ -76,37 +71,6 @@ class CalibrationResult:
     seconds: float
     method: str
     observability: Observability
-
-
-@dataclass(frozen=True)
-class Observability:
-    """What the motion determines (:func:`diagnose`): ``undetermined`` directions (not to be
-    trusted), ``expected`` ones (the shift of hinge positions along the axis, fixed by eq 16), the
-    diagnostics of the ``axes`` and ``positions`` groups, a ``message`` and, for IPOPT, the
-    ``solver_status``."""
-
-    undetermined: tuple[str, ...] = ()
-    expected: tuple[str, ...] = ()
-    axes: DirectionDiagnostics | None = None
-    positions: DirectionDiagnostics | None = None
-    message: str = ""
-    solver_status: str | None = None
-
-    @property
-    def determined(self) -> bool:
-        return not self.undetermined
-
-    def as_dict(self) -> dict:
-        """The JSON layout of ``pipeline calibrate --json``."""
-        out: dict = {"undetermined": list(self.undetermined), "expected": list(self.expected)}
-        for name in ("axes", "positions"):
-            block = getattr(self, name)
-            if block is not None:
-                out[name] = block.as_dict()
-        out["message"] = self.message
-        if self.solver_status is not None:
-            out["solver_status"] = self.solver_status
-        return out
 
 
 # ------------------------------------------------------------------------------- cost functions
@@ -327,60 +291,6 @@ def solve_subproblem(
         kw = {k: opts[k] for k in ("wolves", "iterations") if k in opts}
         return gwo(pop_cost, lo, hi, wrap=wrap, seed=seed, **kw)
     raise InputError(f"expected method 'gn', 'dwpso' or 'gwo', got {method!r}", field="method")
-
-
-def diagnose(
-    data: JointData,
-    j1=None,
-    j2=None,
-    o1=None,
-    o2=None,
-    *,
-    rel_tol: float = 0.02,
-    axis_sd_deg: float = 2.0,
-    position_sd_m: float = 0.005,
-) -> Observability:
-    """Observability at a solution: Jacobians of eq 6 (axes, tangent coordinates) and eq 3
-    (positions) (:func:`observability`); a direction is undetermined when rank-deficient
-    (``rel_tol``) or when its predicted SD exceeds ``axis_sd_deg`` / ``position_sd_m``. The
-    shift of hinge positions along the axis is expected and listed under ``expected``."""
-    undetermined: list[str] = []
-    expected: list[str] = []
-    axes = positions = None
-    msgs = []
-    if j1 is not None:
-        B1, B2 = tangent_basis(j1), tangent_basis(j2)
-        J = hinge_jacobian(j1, j2, data.gyr_1, data.gyr_2)
-        Jt = np.hstack([J[:, :3] @ B1, J[:, 3:] @ B2])
-        blocks = {"axis_1 (sensor 1)": slice(0, 2), "axis_2 (sensor 2)": slice(2, 4)}
-        axes = observability(
-            Jt,
-            blocks,
-            residual=hinge_residual(j1, j2, data.gyr_1, data.gyr_2),
-            abs_tol=np.deg2rad(axis_sd_deg),
-            rel_tol=rel_tol,
-        )
-        undetermined += axes.undetermined
-        msgs.append("axes: " + axes.message)
-    if o1 is not None:
-        along = "position along the hinge axis"
-        dirs = {} if j1 is None else {along: np.concatenate([j1, j2])}
-        blocks = {"position_1 (sensor 1)": slice(0, 3), "position_2 (sensor 2)": slice(3, 6)}
-        positions = observability(
-            spherical_jacobian(o1, o2, data),
-            blocks,
-            directions=dirs,
-            rel_tol=rel_tol,
-            residual=spherical_residual(o1, o2, data),
-            abs_tol=position_sd_m,
-        )
-        for n in positions.undetermined:
-            (expected if n == along else undetermined).append(n)
-        msg = positions.message
-        if along in expected:
-            msg += " (the shift along a hinge axis is expected; fixed by eq 16)"
-        msgs.append("positions: " + msg)
-    return Observability(tuple(undetermined), tuple(expected), axes, positions, " | ".join(msgs))
 
 
 def calibrate_classic(

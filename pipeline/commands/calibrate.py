@@ -13,7 +13,7 @@ import numpy as np
 
 from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS, calibrate
 from pipeline.calibration.joint_constraints import joint_data
-from pipeline.calibration.solvers import Observability
+from pipeline.calibration.observability import Observability
 from pipeline.errors import InputError
 from pipeline.io.checks import check_same_length, check_same_rate
 from pipeline.io.imu_csv import read_imu_csv

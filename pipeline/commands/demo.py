@@ -26,7 +26,8 @@ from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.io.atomic import output_set
 from pipeline.io.mot import write_mot
-from pipeline.io.opensim import SENSOR_TO_SEGMENT, OrientationTrial, sensor_to_opensim_matrix
+from pipeline.io.opensim import SENSOR_TO_SEGMENT, sensor_to_opensim_matrix
+from pipeline.io.recording import Recording
 from pipeline.io.tables import csv_text, markdown_table
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures
@@ -111,7 +112,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
             if f in names
         }
         n = n0 + len(trial.time)
-        orient = OrientationTrial(np.arange(n) / 100.0, 100.0, sensors, {}, (), None)
+        orient = Recording.from_orientations(np.arange(n) / 100.0, 100.0, sensors)
         run = process_recording(orient, SUBJECT, knee="free", sensor_to_model=Z_UP_TO_Y_UP)
         run.skeleton.write_urdf(out.path(out_dir / "demo_ik_model.urdf"))
         timings["ik"] = time.perf_counter() - t0

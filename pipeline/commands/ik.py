@@ -15,7 +15,8 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_set
 from pipeline.io.mot import write_mot
-from pipeline.io.opensim import OrientationTrial, read_orientations_sto
+from pipeline.io.opensim import read_orientations_sto
+from pipeline.io.recording import Recording
 from pipeline.io.tables import csv_text
 from pipeline.io.xsens import read_xsens_trial
 from pipeline.model.anthropometry import Measures
@@ -27,7 +28,7 @@ __all__ = ["load_orientations", "run_ik"]
 
 def load_orientations(
     path: str | Path, xsens_map: dict[str, str] | None = None
-) -> OrientationTrial:
+) -> Recording:
     """An OpenSim ``.sto`` file, or a folder of Xsens MT ``.txt`` exports (one per sensor).
 
     For a folder, ``xsens_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's

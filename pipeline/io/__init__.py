@@ -1,6 +1,7 @@
 """Formats (stage 1 of the data flow): users' files in, typed arrays in SI units out, and the
 writers of every output. Takes: OpenSim ``.sto``/``.mot``, IMU CSV, Xsens MT ``.txt``, C3D.
-Gives: recordings (:class:`OrientationTrial`, :class:`ImuRecording`, ...) whose readers checked
+Gives: one :class:`Recording` type (named sensors' orientations and raw signals on one time
+base) whose readers checked
 time stamps, rates, units and quaternions and filled short gaps (noted); the one CSV writer
 (:mod:`pipeline.io.tables`), atomic all-or-nothing output sets (:mod:`pipeline.io.atomic`).
 
@@ -28,7 +29,6 @@ _EXPORTS = {
     "FileLike": "text",
     "fill_gaps": "gaps",
     "GYR_COLUMNS": "imu_csv",
-    "ImuRecording": "imu_csv",
     "jsonable": "jsonio",
     "labels_and_rows": "sto_header",
     "make_quaternions_continuous": "checks",
@@ -37,7 +37,6 @@ _EXPORTS = {
     "mean_sd": "tables",
     "MotTable": "mot",
     "Notes": "notes",
-    "OrientationTrial": "opensim",
     "output_set": "atomic",
     "OutputSet": "atomic",
     "parse_table": "text",
@@ -50,9 +49,11 @@ _EXPORTS = {
     "read_text_lines": "text",
     "read_xsens_trial": "xsens",
     "read_xsens_txt": "xsens",
+    "Recording": "recording",
     "rotate_world": "opensim",
     "sensor_to_opensim_matrix": "opensim",
     "SENSOR_TO_SEGMENT": "opensim",
+    "SensorSignals": "recording",
     "split_header": "sto_header",
     "UNIT_TO_METRES": "c3d",
     "where": "text",
@@ -62,7 +63,6 @@ _EXPORTS = {
     "write_mot": "mot",
     "write_orientations_sto": "opensim",
     "write_text_atomic": "atomic",
-    "XsensRecording": "xsens",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

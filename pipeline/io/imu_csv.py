@@ -12,7 +12,6 @@ and accelerometers in g are detected from their magnitude and refused with a hin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,7 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
+from pipeline.io.recording import Recording
 from pipeline.io.tables import write_array_csv
 from pipeline.io.text import parse_table, read_text_lines
 
@@ -35,7 +35,6 @@ __all__ = [
     "ACC_COLUMNS",
     "GYR_COLUMNS",
     "QUAT_COLUMNS",
-    "ImuRecording",
     "read_imu_csv",
     "write_imu_csv",
 ]
@@ -45,31 +44,15 @@ ACC_COLUMNS = ("acc_x", "acc_y", "acc_z")
 QUAT_COLUMNS = ("quat_w", "quat_x", "quat_y", "quat_z")
 
 
-@dataclass(frozen=True)
-class ImuRecording:
-    """One IMU: ``time`` (N,) s, ``gyr`` (N, 3) rad/s, ``acc`` (N, 3) m/s^2, ``quat`` (N, 4) or
-    ``None`` (``[w, x, y, z]``, sensor in world)."""
-
-    time: np.ndarray
-    gyr: np.ndarray
-    acc: np.ndarray
-    quat: np.ndarray | None = None
-    source: Path | None = None
-    notes: tuple[str, ...] = ()
-
-    @property
-    def rate_hz(self) -> float:
-        return float(1.0 / np.median(np.diff(self.time)))
-
-
 def read_imu_csv(
     path: str | Path,
     *,
     rate_hz: float | None = None,
     max_gap_s: float = DEFAULT_MAX_GAP_S,
     rate_rtol: float = 0.01,
-) -> ImuRecording:
-    """Read a raw IMU CSV into an :class:`ImuRecording`.
+) -> Recording:
+    """Read a raw IMU CSV into a one-sensor :class:`~pipeline.io.recording.Recording` named after
+    the file (its stem).
 
     Checks: header with the required columns (missing ones listed with those found), complete
     rows (a file cut mid-row is refused), numbers, strictly increasing time, the rate against
@@ -131,11 +114,12 @@ def read_imu_csv(
             field="quat",
             first_line=2,
         )
-    return ImuRecording(time=time, gyr=gyr, acc=acc, quat=quat, source=path, notes=notes.as_tuple())
+    return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, source=path,
+                            notes=notes.as_tuple())  # fmt: skip
 
 
-def write_imu_csv(path: str | Path, rec: ImuRecording) -> Path:
-    """Write ``rec`` as a raw IMU CSV (atomic, full double precision)."""
+def write_imu_csv(path: str | Path, rec: Recording) -> Path:
+    """Write a one-sensor ``rec`` as a raw IMU CSV (atomic, full double precision)."""
     path = Path(path)
     n = rec.time.size
     parts = [

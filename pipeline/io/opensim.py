@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -41,13 +40,13 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
+from pipeline.io.recording import Recording
 from pipeline.io.sto_header import declared_rate, labels_and_rows, split_header
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_quat, quat_from_matrix, rot_x, rot_y, rot_z
 
 __all__ = [
     "SENSOR_TO_SEGMENT",
-    "OrientationTrial",
     "map_sensors",
     "read_orientations_sto",
     "rotate_world",
@@ -68,37 +67,13 @@ SENSOR_TO_SEGMENT: dict[str, str] = {
 """OpenSense sensor column name -> segment name used by the pipeline."""
 
 
-@dataclass(frozen=True)
-class OrientationTrial:
-    """IMU orientations on one time base.
-
-    ``sensors[name]`` is ``(N, 4)`` unit quaternions ``[w, x, y, z]`` (sign-continuous): the
-    sensor frame's orientation in the IMU world frame, ``p_world = R(q) p_sensor``.
-    """
-
-    time: np.ndarray
-    rate_hz: float
-    sensors: dict[str, np.ndarray]
-    header: dict[str, str] = field(default_factory=dict)
-    notes: tuple[str, ...] = ()
-    source: Path | None = None
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.time.size)
-
-    @property
-    def sensor_names(self) -> tuple[str, ...]:
-        return tuple(self.sensors)
-
-
 def read_orientations_sto(
     path: str | Path,
     *,
     max_gap_s: float = DEFAULT_MAX_GAP_S,
     rate_rtol: float = 0.01,
-) -> OrientationTrial:
-    """Read an OpenSense orientation ``.sto`` into an :class:`OrientationTrial`.
+) -> Recording:
+    """Read an OpenSense orientation ``.sto`` into a :class:`~pipeline.io.recording.Recording`.
 
     Checks: header with ``endheader``; ``DataType=Quaternion`` when given; every row complete;
     every cell ``w,x,y,z``; time strictly increasing; rate from the time stamps equal to
@@ -143,20 +118,17 @@ def read_orientations_sto(
         sensors[name] = check_quaternions(
             q, notes=notes, file=path, field=name, first_line=first_line
         )
-    return OrientationTrial(
-        time=time,
-        rate_hz=float(declared_rate(header, path) or info.rate_hz),
-        sensors=sensors,
-        header=header,
-        notes=notes.as_tuple(),
-        source=path,
-    )
+    rate = float(declared_rate(header, path) or info.rate_hz)
+    return Recording.from_orientations(time, rate, sensors, header=header, notes=notes.as_tuple(),
+                                       source=path)  # fmt: skip
 
 
-def write_orientations_sto(path: str | Path, trial: OrientationTrial) -> Path:
-    """Write an orientation ``.sto`` that OpenSense reads (atomic; full double precision)."""
+def write_orientations_sto(path: str | Path, trial: Recording) -> Path:
+    """Write the orientations of a recording as an ``.sto`` that OpenSense reads (atomic; full
+    double precision); sensors without orientations are left out."""
     path = Path(path)
-    names = list(trial.sensors)
+    quats = trial.orientations()
+    names = list(quats)
     head = [
         f"DataRate={trial.rate_hz:.6f}",
         "DataType=Quaternion",
@@ -170,7 +142,7 @@ def write_orientations_sto(path: str | Path, trial: OrientationTrial) -> Path:
         for i in range(trial.n_samples):
             cells = [repr(float(trial.time[i]))]
             for n in names:
-                cells.append(",".join(repr(float(v)) for v in trial.sensors[n][i]))
+                cells.append(",".join(repr(float(v)) for v in quats[n][i]))
             f.write("\t".join(cells) + "\n")
     return path
 
@@ -189,26 +161,27 @@ def sensor_to_opensim_matrix(rotations_xyz: Iterable[float]) -> np.ndarray:
     return rot_z(c) @ rot_y(b) @ rot_x(a)
 
 
-def rotate_world(trial: OrientationTrial, R: np.ndarray) -> OrientationTrial:
+def rotate_world(trial: Recording, R: np.ndarray) -> Recording:
     """Express every orientation in a rotated world: ``R_sensor' = R @ R_sensor``.
 
     Pre-multiplication changes the world frame only; the sensor frames (and so the relative
-    orientations between sensors) are unchanged. Returns a new trial with a note.
+    orientations between sensors, and the signals in sensor frames) are unchanged. Returns a new
+    recording with a note.
     """
     R = np.asarray(R, dtype=float)
     if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
         raise ValueError(f"expected a 3x3 rotation matrix, got {R!r}")
-    sensors = {}
-    for name, q in trial.sensors.items():
+    sensors = dict(trial.sensors)
+    for name, q in trial.orientations().items():
         rotated = quat_from_matrix(R @ matrix_from_quat(q))
-        sensors[name] = make_quaternions_continuous(rotated)[0]
+        sensors[name] = sensors[name].replace(quat=make_quaternions_continuous(rotated)[0])
     angle = np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1)))
     note = f"world frame rotated by a fixed rotation of {angle:.4g} deg (pre-multiplied)"
     return dataclasses.replace(trial, sensors=sensors, notes=(*trial.notes, note))
 
 
 def map_sensors(
-    trial: OrientationTrial,
+    trial: Recording,
     required: Iterable[str] | None = None,
     mapping: Mapping[str, str] = SENSOR_TO_SEGMENT,
 ) -> dict[str, np.ndarray]:
@@ -218,7 +191,8 @@ def map_sensors(
     "right_tibia"]``); a missing one is refused naming the file, the sensor column expected for
     it and the columns available.
     """
-    out = {seg: trial.sensors[s] for s, seg in mapping.items() if s in trial.sensors}
+    quats = trial.orientations()
+    out = {seg: quats[s] for s, seg in mapping.items() if s in quats}
     if required is not None:
         seg_to_sensor = {seg: s for s, seg in mapping.items()}
         missing = [r for r in required if r not in out]

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -46,37 +45,16 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
-from pipeline.io.opensim import OrientationTrial
+from pipeline.io.recording import Recording
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_euler_zyx, project_to_so3, quat_from_matrix
 
-__all__ = ["XsensRecording", "read_xsens_trial", "read_xsens_txt"]
+__all__ = ["read_xsens_trial", "read_xsens_txt"]
 
 QUAT_COLUMNS = ("Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3")
 MAT_COLUMNS = tuple(f"Mat[{r}][{c}]" for c in (1, 2, 3) for r in (1, 2, 3))
 EULER_COLUMNS = ("Roll", "Pitch", "Yaw")
 SAMPLE_TIME_FINE_HZ = 10_000.0
-
-
-@dataclass(frozen=True)
-class XsensRecording:
-    """One Xsens sensor file.
-
-    ``quat``: ``(N, 4)`` unit ``[w, x, y, z]``, sensor in the Xsens world (z up). ``acc`` (m/s^2),
-    ``gyr`` (rad/s), ``mag`` (a.u.): ``(N, 3)`` in the sensor frame, or ``None`` when not exported.
-    """
-
-    sensor_id: str
-    time: np.ndarray
-    rate_hz: float
-    quat: np.ndarray
-    acc: np.ndarray | None
-    gyr: np.ndarray | None
-    mag: np.ndarray | None
-    orientation_from: str
-    header: dict[str, str] = field(default_factory=dict)
-    notes: tuple[str, ...] = ()
-    source: Path | None = None
 
 
 def _detect_delimiter(line: str) -> str | None:
@@ -125,7 +103,7 @@ def read_xsens_txt(
     *,
     rate_hz: float | None = None,
     max_gap_s: float = DEFAULT_MAX_GAP_S,
-) -> XsensRecording:
+) -> Recording:
     """Read one MT Manager ``.txt`` export; see the module docstring for the format and checks.
 
     ``rate_hz`` declares the rate when the file has no ``// Update Rate`` comment; if both are
@@ -284,19 +262,10 @@ def read_xsens_txt(
         check_acc_units(acc, file=path, field="Acc")
     if gyr is not None:
         check_gyro_units(gyr, file=path, field="Gyr")
-    return XsensRecording(
-        sensor_id=_sensor_id(path),
-        time=time,
-        rate_hz=float(rate),
-        quat=quat,
-        acc=acc,
-        gyr=gyr,
-        mag=mag,
-        orientation_from=kind,
-        header=comments,
-        notes=notes.as_tuple(),
-        source=path,
-    )
+    header = {**comments, "orientation_from": kind}
+    return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
+                            rate_hz=float(rate), header=header, notes=notes.as_tuple(),
+                            source=path)  # fmt: skip
 
 
 def read_xsens_trial(
@@ -307,15 +276,16 @@ def read_xsens_trial(
     extension: str = ".txt",
     rate_hz: float | None = None,
     max_gap_s: float = DEFAULT_MAX_GAP_S,
-) -> OrientationTrial:
-    """Read one file per sensor, ``folder / (prefix + sensor_id + extension)``, into one trial.
+) -> Recording:
+    """Read one file per sensor, ``folder / (prefix + sensor_id + extension)``, into one
+    recording (all signals of each sensor; the time base starts at 0).
 
     ``sensors`` maps the sensor id in the file name (e.g. ``"00B421AF"``) to the column name
     OpenSense uses (e.g. ``"pelvis_imu"``), like OpenSense's ``myIMUMappings.xml``. All files must
     have the same number of samples and the same rate (refused otherwise).
     """
     folder = Path(folder)
-    recs: dict[str, XsensRecording] = {}
+    recs: dict[str, Recording] = {}
     for sid, name in sensors.items():
         p = folder / f"{prefix}{sid}{extension}"
         if not p.is_file():
@@ -327,10 +297,10 @@ def read_xsens_trial(
     rate = check_same_rate({n: r.rate_hz for n, r in recs.items()}, file=folder)
     first = next(iter(recs.values()))
     notes = tuple(m for r in recs.values() for m in r.notes)
-    return OrientationTrial(
+    return Recording(
         time=first.time - first.time[0],
         rate_hz=rate,
-        sensors={n: r.quat for n, r in recs.items()},
+        sensors={n: r.sensor for n, r in recs.items()},
         header={"DataRate": f"{rate:.6f}", "DataType": "Quaternion", **first.header},
         notes=notes,
         source=folder,

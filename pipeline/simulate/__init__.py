@@ -14,7 +14,6 @@ _EXPORTS = {
     "gravity_vector": "chain",
     "hinge_trial": "joint_trials",
     "imu_signals": "chain",
-    "ImuSignals": "chain",
     "joint_trajectories": "motions",
     "JointTrial": "chain",
     "motion_name": "motions",

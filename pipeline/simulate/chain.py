@@ -30,10 +30,10 @@ import numpy as np
 from scipy.interpolate import make_interp_spline
 
 from pipeline.errors import InputError
+from pipeline.io.recording import Recording
 from pipeline.rotations import exp3, normalize, quat_from_matrix
 
 __all__ = [
-    "ImuSignals",
     "JointTrial",
     "Sinusoids",
     "chain_kinematics",
@@ -48,17 +48,6 @@ AngleFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
-class ImuSignals:
-    """Signals of one IMU: ``gyr`` (rad/s) and ``acc`` (m/s^2, specific force incl. gravity) in
-    the sensor frame, and the sensor orientation ``quat`` (sensor -> world, wxyz)."""
-
-    time: np.ndarray
-    gyr: np.ndarray
-    acc: np.ndarray
-    quat: np.ndarray
-
-
-@dataclass(frozen=True)
 class JointTrial:
     """Two IMUs on two segments joined by a joint, with the truth in each sensor frame.
 
@@ -67,8 +56,8 @@ class JointTrial:
     ``gyr_dot_*``: noise-free angular acceleration in the sensor frames (for tests only).
     """
 
-    imu_1: ImuSignals
-    imu_2: ImuSignals
+    imu_1: Recording
+    imu_2: Recording
     joint: str
     kind: str
     position_1: np.ndarray
@@ -197,7 +186,7 @@ def imu_signals(
     acc_noise: float = 0.0,
     gyro_bias: np.ndarray | Sequence[float] = (0.0, 0.0, 0.0),
     rng: np.random.Generator | int | None = None,
-) -> ImuSignals:
+) -> Recording:
     """Gyro and accelerometer signals of a sensor at ``r_imu`` with orientation ``R_imu`` (both in
     the segment frame) on a segment with pose ``R_seg (N,3,3)``, ``p_seg (N,3)``.
 
@@ -230,4 +219,4 @@ def imu_signals(
     if acc_noise > 0:
         acc = acc + gen.normal(0.0, acc_noise, acc.shape)
     gyr = gyr + np.asarray(gyro_bias, dtype=float)
-    return ImuSignals(time=t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_s))
+    return Recording.single("imu", t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_s))

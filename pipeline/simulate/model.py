@@ -25,13 +25,12 @@ all from ``np.random.SeedSequence(seed)``: one stream for the motion, one for th
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
-from pipeline.io.imu_csv import ImuRecording
+from pipeline.io.recording import Recording
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import exp3, normalize, quat_from_matrix
@@ -79,7 +78,7 @@ class SimulatedImu:
 
     frame: str
     segment: str
-    recording: ImuRecording
+    recording: Recording
     rotation: np.ndarray
     position: np.ndarray
     R_segment: np.ndarray
@@ -115,8 +114,12 @@ class SimulatedTrial:
     gravity: np.ndarray = field(default_factory=lambda: GRAVITY.copy())
 
     @property
-    def urdf_path(self) -> Path:
-        return self.skeleton.urdf_path
+    def recording(self) -> Recording:
+        """All simulated sensors as one :class:`~pipeline.io.recording.Recording` (what a user's
+        readers return: orientations, gyroscope and accelerometer signals)."""
+        first = next(iter(self.imus.values())).recording
+        sensors = {name: imu.recording.sensor for name, imu in self.imus.items()}
+        return Recording(self.time, first.rate_hz, sensors, notes=(f"simulated {self.motion!r}",))
 
     def hinge_truth(self, side: str = "right") -> dict[str, np.ndarray]:
         """Knee truth for a thigh (1) / shank (2) sensor pair, in the calibration's terms:
@@ -244,7 +247,8 @@ def simulate_trial(
         R_meas = R[i]
         if noise.orientation_sd_deg > 0:
             R_meas = R[i] @ exp3(r_noise.normal(0.0, np.deg2rad(noise.orientation_sd_deg), (n, 3)))
-        rec = ImuRecording(time=t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_meas))
+        rec = Recording.single(imu, t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_meas),
+                               rate_hz=rate_hz)  # fmt: skip
         out_imus[imu] = SimulatedImu(
             frame=imu,
             segment=_segment_of(imu),

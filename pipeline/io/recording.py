@@ -1,0 +1,140 @@
+"""The one type of an IMU recording: :class:`Recording`, what every reader and the simulators
+return.
+
+A recording is one time base (``time`` (N,) s, strictly increasing; ``rate_hz``) and named
+sensors, each with any of: the orientation ``quat`` (N, 4) unit ``[w, x, y, z]`` (sensor frame in
+the IMU world, ``p_world = R(q) p_sensor``), the angular velocity ``gyr`` (N, 3) rad/s, the
+specific force ``acc`` (N, 3) m/s^2 and the magnetic field ``mag`` (N, 3) (arbitrary units), all
+in the sensor frame and in SI units (readers convert). ``header`` keeps the file's metadata,
+``notes`` what the reader repaired or noticed, ``source`` the file or folder it came from.
+
+A one-sensor recording (one IMU CSV, one Xsens ``.txt``, a simulated sensor) gives its signals
+directly: ``rec.gyr`` is ``rec.sensors[name].gyr`` when there is exactly one sensor.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.errors import InputError
+
+__all__ = ["Recording", "SensorSignals"]
+
+
+@dataclass(frozen=True)
+class SensorSignals:
+    """One sensor's signals on its recording's time base; ``None`` where not recorded."""
+
+    quat: np.ndarray | None = None
+    gyr: np.ndarray | None = None
+    acc: np.ndarray | None = None
+    mag: np.ndarray | None = None
+
+    def replace(self, **changes: np.ndarray | None) -> SensorSignals:
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Named sensors on one time base (module docstring)."""
+
+    time: np.ndarray
+    rate_hz: float
+    sensors: dict[str, SensorSignals]
+    header: dict[str, str] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    source: Path | None = None
+
+    # ---- construction -------------------------------------------------------------------------
+    @classmethod
+    def single(
+        cls,
+        name: str,
+        time: np.ndarray,
+        *,
+        quat: np.ndarray | None = None,
+        gyr: np.ndarray | None = None,
+        acc: np.ndarray | None = None,
+        mag: np.ndarray | None = None,
+        rate_hz: float | None = None,
+        header: Mapping[str, str] | None = None,
+        notes: tuple[str, ...] = (),
+        source: Path | None = None,
+    ) -> Recording:
+        """A one-sensor recording; ``rate_hz`` defaults to ``1 / median(diff(time))``."""
+        time = np.asarray(time, dtype=float)
+        if rate_hz is None:
+            rate_hz = float(1.0 / np.median(np.diff(time))) if time.size > 1 else float("nan")
+        signals = SensorSignals(quat, gyr, acc, mag)
+        return cls(time, float(rate_hz), {name: signals}, dict(header or {}), tuple(notes), source)
+
+    @classmethod
+    def from_orientations(
+        cls,
+        time: np.ndarray,
+        rate_hz: float,
+        quats: Mapping[str, np.ndarray],
+        *,
+        header: Mapping[str, str] | None = None,
+        notes: tuple[str, ...] = (),
+        source: Path | None = None,
+    ) -> Recording:
+        """Orientations only: sensor name -> (N, 4) ``[w, x, y, z]``."""
+        sensors = {name: SensorSignals(quat=np.asarray(q, float)) for name, q in quats.items()}
+        return cls(np.asarray(time, float), float(rate_hz), sensors, dict(header or {}),
+                   tuple(notes), source)  # fmt: skip
+
+    def with_sensors(self, sensors: Mapping[str, SensorSignals]) -> Recording:
+        """The same recording with other sensors (same time base)."""
+        return dataclasses.replace(self, sensors=dict(sensors))
+
+    # ---- names and views ----------------------------------------------------------------------
+    @property
+    def n_samples(self) -> int:
+        return int(self.time.size)
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        return tuple(self.sensors)
+
+    def orientations(self) -> dict[str, np.ndarray]:
+        """Sensor name -> (N, 4) quaternions, for the sensors that have them."""
+        return {n: s.quat for n, s in self.sensors.items() if s.quat is not None}
+
+    # ---- a one-sensor recording ---------------------------------------------------------------
+    @property
+    def sensor(self) -> SensorSignals:
+        """The signals of a one-sensor recording (an error names the sensors otherwise)."""
+        if len(self.sensors) != 1:
+            raise InputError(
+                f"expected a one-sensor recording, found sensors {list(self.sensors)}",
+                file=self.source,
+            )
+        return next(iter(self.sensors.values()))
+
+    @property
+    def name(self) -> str:
+        """The sensor name of a one-sensor recording."""
+        self.sensor  # noqa: B018  (raises for several sensors)
+        return next(iter(self.sensors))
+
+    @property
+    def quat(self) -> np.ndarray | None:
+        return self.sensor.quat
+
+    @property
+    def gyr(self) -> np.ndarray | None:
+        return self.sensor.gyr
+
+    @property
+    def acc(self) -> np.ndarray | None:
+        return self.sensor.acc
+
+    @property
+    def mag(self) -> np.ndarray | None:
+        return self.sensor.mag
