@@ -219,8 +219,8 @@ def run_opensense(osim, model, sto: Path, rot, work: Path, heading_axis: str = "
 # ---- ours ----------------------------------------------------------------------------------------
 @contextlib.contextmanager
 def timed_solve_ik(record: list):
-    """Wrap pipeline.ik.solver.solve_ik (imported by run_ik at call time) to record its CPU time."""
-    import pipeline.ik.solver as ikmod
+    """Wrap the solve_ik that pipeline.process calls, to record its CPU time."""
+    import pipeline.process as ikmod
 
     original = ikmod.solve_ik
 
@@ -240,13 +240,14 @@ def timed_solve_ik(record: list):
 
 def run_ours(trial, rot, heading: str, knee: str, work: Path) -> dict:
     from pipeline.model.anthropometry import Measures
-    from pipeline.process import mot_columns, run_ik
+    from pipeline.process import mot_columns, process_recording
 
     cpu: list[float] = []
     t0 = time.perf_counter()
     with timed_solve_ik(cpu):
-        run = run_ik(trial, Measures(SEX, HEIGHT_M), work / f"ours_{knee}.urdf", knee=knee,
-                     sensor_to_model=rot, heading=heading)  # fmt: skip
+        run = process_recording(trial, Measures(SEX, HEIGHT_M), knee=knee, sensor_to_model=rot,
+                                heading=heading)
+        run.skeleton.write_urdf(work / f"ours_{knee}.urdf")
     total = time.perf_counter() - t0
     return {
         "time": run.time, "columns": mot_columns(run), "ik_wall": run.seconds_ik,

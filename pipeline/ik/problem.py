@@ -153,6 +153,8 @@ class IKProblem:
     extrapolate: bool
     Wm_all: np.ndarray = field(repr=False, default=None)
     C_all: np.ndarray = field(repr=False, default=None)
+    mu_eye: np.ndarray = field(repr=False, default=None)  # damping * I (na, na)
+    all_bounded: bool = False
 
     @property
     def n_frames(self) -> int:
@@ -232,4 +234,6 @@ def setup_ik(
                         cq, masks, weights, bq, blo, bhi, bsel, euclid, max_iters, tol,
                         float(damping), float(regularization), extrapolate)  # fmt: skip
     problem.Wm_all, problem.C_all = problem.normal_weights(weights)
+    problem.mu_eye = float(damping) * np.eye(na)
+    problem.all_bounded = bool(bounded.all())
     return problem

@@ -138,7 +138,7 @@ def solve_frame(
         Rn = np.where(finite[:, None, None], p.RtT[n], np.eye(3))
         Wm, C = p.normal_weights(p.weights * finite)
     cq, bq, blo, bhi, bsel = p.cq, p.bq, p.blo, p.bhi, p.bsel
-    has_limits, all_bounded = p.has_limits, p.bsel.size == p.cols.size
+    has_limits, all_bounded = bq.size > 0, p.all_bounded
     if p.extrapolate and p.euclid and previous is not None and np.isfinite(previous).all():
         q[cq] += previous[1, cq] - previous[0, cq]  # constant-velocity prediction
         if has_limits:
@@ -146,7 +146,7 @@ def solve_frame(
     na, k = p.cols.size, len(p.fids)
     U = np.empty((3, k))  # world-frame residuals u_i = R_i r_i = log3(R_i R_i*^T)
     v = np.zeros(model.nv)
-    mu_eye = p.damping * np.eye(na)
+    mu_eye = p.mu_eye
     lam, tol = p.regularization, p.tol
     log3_, cjj, ufp = pin.log3, pin.computeJointJacobians, pin.updateFramePlacement
     rs = (6, model.nv)
