@@ -20,7 +20,6 @@ to live).
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -30,6 +29,8 @@ import numpy as np
 from scipy import stats
 
 from pipeline.errors import InputError
+from pipeline.io.atomic import write_text_atomic
+from pipeline.io.tables import csv_text
 from pipeline.model.anthropometry import (
     AXES,
     CSV_COLUMNS,
@@ -224,10 +225,4 @@ def table_from_fits(results: Sequence[FitResult], origin: str = "fit") -> Regres
 
 def write_fit_csv(results: Sequence[FitResult], path: str | Path) -> Path:
     """Write :func:`fit_results_to_rows` as CSV (numbers with 6 significant digits)."""
-    path = Path(path)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(CSV_COLUMNS))
-        writer.writeheader()
-        for row in fit_results_to_rows(results):
-            writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
-    return path
+    return write_text_atomic(Path(path), csv_text(fit_results_to_rows(results), CSV_COLUMNS))
