@@ -71,3 +71,19 @@ def imu_recording(time, gyr, acc, quat=None):
     from pipeline.io.recording import Recording
 
     return Recording.single("imu", time, gyr=gyr, acc=acc, quat=quat)
+
+
+def knee_truth(sim):
+    """``(truth, axis_1, axis_2, position_1, position_2)`` of the right knee written by
+    ``pipeline simulate`` into ``sim/truth.json``, positions projected as Hu eq 16 does."""
+    import json
+
+    from pipeline.calibration.joint_constraints import project_hinge_positions
+
+    truth = json.loads((sim / "truth.json").read_text())
+    k = truth["joints"]["right_knee"]
+    j1, j2 = np.array(k["axis_1"]), np.array(k["axis_2"])
+    o1, o2 = project_hinge_positions(
+        np.array(k["position_1_m"]), np.array(k["position_2_m"]), j1, j2
+    )
+    return truth, j1, j2, o1, o2

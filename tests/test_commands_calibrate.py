@@ -6,9 +6,8 @@ import json
 
 import numpy as np
 import pytest
-from _helpers import imu_recording
+from _helpers import imu_recording, knee_truth
 
-from pipeline.calibration.joint_constraints import project_hinge_positions
 from pipeline.cli import main
 from pipeline.commands.calibrate import CALIBRATION_KEYS
 from pipeline.io.imu_csv import read_imu_csv, write_imu_csv
@@ -22,16 +21,6 @@ def _calibrate(capsys, sim, method, joint="hinge", as_json=True):
     assert main(argv + (["--json"] if as_json else [])) == 0
     out = capsys.readouterr().out
     return json.loads(out) if as_json else out
-
-
-def _knee_truth(sim):
-    truth = json.loads((sim / "truth.json").read_text())
-    k = truth["joints"]["right_knee"]
-    j1, j2 = np.array(k["axis_1"]), np.array(k["axis_2"])
-    o1, o2 = project_hinge_positions(
-        np.array(k["position_1_m"]), np.array(k["position_2_m"]), j1, j2
-    )
-    return truth, j1, j2, o1, o2
 
 
 def _errors(res, j1, j2, o1, o2):
@@ -48,7 +37,7 @@ def _errors(res, j1, j2, o1, o2):
 def test_cli_ipopt_recovers_the_simulated_knee(capsys, sim):
     res = _calibrate(capsys, sim, "ipopt")
     assert tuple(res) == CALIBRATION_KEYS
-    _, j1, j2, o1, o2 = _knee_truth(sim)
+    _, j1, j2, o1, o2 = knee_truth(sim)
     e_axis, e_pos = _errors(res, j1, j2, o1, o2)
     assert e_axis < 0.5  # deg
     assert e_pos < 0.003  # m, after eq 16 projection
@@ -60,7 +49,7 @@ def test_cli_ipopt_recovers_the_simulated_knee(capsys, sim):
 def test_cli_each_method_runs(capsys, sim, method):
     res = _calibrate(capsys, sim, method)
     assert tuple(res) == CALIBRATION_KEYS and res["method"] == method
-    _, j1, j2, o1, o2 = _knee_truth(sim)
+    _, j1, j2, o1, o2 = knee_truth(sim)
     e_axis, e_pos = _errors(res, j1, j2, o1, o2)
     # GWO with the CLI's small swarm is the least accurate (tests/test_solvers.py: <= 2 deg)
     assert e_axis < (2.0 if method == "gwo" else 1.0)

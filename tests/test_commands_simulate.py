@@ -6,24 +6,14 @@ import json
 
 import numpy as np
 import pytest
+from _helpers import knee_truth
 
-from pipeline.calibration.joint_constraints import project_hinge_positions
 from pipeline.commands import simulate
 from pipeline.io.imu_csv import read_imu_csv
 from pipeline.model import Skeleton
 from pipeline.rotations import angle_between
 
 HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,quat_w,quat_x,quat_y,quat_z"
-
-
-def _knee_truth(sim):
-    truth = json.loads((sim / "truth.json").read_text())
-    k = truth["joints"]["right_knee"]
-    j1, j2 = np.array(k["axis_1"]), np.array(k["axis_2"])
-    o1, o2 = project_hinge_positions(
-        np.array(k["position_1_m"]), np.array(k["position_2_m"]), j1, j2
-    )
-    return truth, j1, j2, o1, o2
 
 
 def test_simulate_writes_every_file(sim):
@@ -48,7 +38,7 @@ def test_simulate_writes_every_file(sim):
 def test_truth_json_matches_the_files(sim):
     """The truth is consistent with the written signals: the axis the two sensors' orientations
     map to the world is one physical axis at every sample."""
-    truth, j1, j2, _, _ = _knee_truth(sim)
+    truth, j1, j2, _, _ = knee_truth(sim)
     from pipeline.rotations import matrix_from_quat
 
     q1 = read_imu_csv(sim / "right_femur_imu.csv").quat
