@@ -10,20 +10,28 @@ import argparse
 import sys
 from pathlib import Path
 
-from pipeline.calibration.calibrate import DEFAULT_METHOD, METHODS
+from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS
 from pipeline.errors import InputError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
+from pipeline.simulate.conventions import MOTIONS
 
 EXAMPLES = {
-    "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out subject.urdf",
+    "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
     "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
-    "--sex m --height-m 1.80 --out out/walk",
-    "calibrate": "pipeline calibrate hinge --imu1 thigh.csv --imu2 shank.csv --method ipopt --json",
-    "simulate": "pipeline simulate --out out/sim --motion rich --seed 0",
+    "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
+    "calibrate": "pipeline calibrate hinge --imu1 out/sim/right_femur_imu.csv "
+    "--imu2 out/sim/right_tibia_imu.csv --method ipopt --json",
+    "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
     "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
     "demo": "pipeline demo --out out/demo",
     "view": "pipeline view out/demo/demo.rrd --web",
 }
+
+
+def _version() -> str:
+    from pipeline import __version__
+
+    return __version__
 
 
 def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
@@ -37,12 +45,15 @@ def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
 
 
 def _add_anthropometrics(p: argparse.ArgumentParser, required: bool = True) -> None:
-    p.add_argument("--sex", choices=["m", "f"], required=required, help="sex for the regression")
-    p.add_argument("--height-m", type=float, required=required, help="body height in metres")
-    p.add_argument("--shank-lateral-m", type=float, help="s_L = |EFL - LM| in metres")
-    p.add_argument("--shank-medial-m", type=float, help="s_M = |EFM - MM| in metres")
-    p.add_argument("--knee-width-m", type=float, help="k = |EFM - EFL| in metres")
-    p.add_argument("--ankle-width-m", type=float, help="a = |MM - LM| in metres")
+    p.add_argument("--sex", choices=["m", "f"], required=required,
+                   help="sex, for the regression equations (required)")  # fmt: skip
+    p.add_argument("--height-m", type=float, required=required,
+                   help="body height in metres (required)")  # fmt: skip
+    absent = "default: not measured; the equations use the others"
+    p.add_argument("--shank-lateral-m", type=float, help=f"s_L = |EFL - LM| in metres ({absent})")
+    p.add_argument("--shank-medial-m", type=float, help=f"s_M = |EFM - MM| in metres ({absent})")
+    p.add_argument("--knee-width-m", type=float, help=f"k = |EFM - EFL| in metres ({absent})")
+    p.add_argument("--ankle-width-m", type=float, help=f"a = |MM - LM| in metres ({absent})")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="command")
 
     p = _sub(sub, "scale", "build a subject-scaled URDF from the regression equations")
@@ -108,39 +120,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_ik)
 
     p = _sub(sub, "calibrate", "joint-constraint calibration of IMU placement (Hu 2021)")
-    p.add_argument("joint", choices=["hinge", "spherical"], help="joint model")
+    p.add_argument("joint", choices=JOINTS, help="joint model")
     p.add_argument("--imu1", type=Path, required=True, help="proximal IMU CSV")
     p.add_argument("--imu2", type=Path, required=True, help="distal IMU CSV")
     p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
                    help=f"optimiser (default {DEFAULT_METHOD})")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed for the swarm optimizers")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the random starts and swarms (default 0)")  # fmt: skip
+    p.add_argument("--json", action="store_true",
+                   help="print the result as JSON (default: a text table)")  # fmt: skip
     p.set_defaults(func=_cmd_calibrate)
 
     p = _sub(sub, "simulate", "simulate IMU trials with known truth")
     p.add_argument("--out", type=Path, required=True, help="output directory")
-    p.add_argument(
-        "--motion", choices=["rich", "supine_hip_flexion", "still_thigh"], default="rich"
-    )
-    p.add_argument("--duration-s", type=float, default=15.0)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--motion", choices=MOTIONS, default="gait",
+                   help="simulated motion (default gait)")  # fmt: skip
+    p.add_argument("--duration-s", type=float, default=15.0,
+                   help="duration in seconds (default 15; at most 600)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
 
     p = _sub(sub, "reproduce", "reproduce a paper's results on its published data")
     p.add_argument("paper", choices=["wang2023"])
     p.add_argument("--data", type=Path, required=True, help="dataset directory")
     p.add_argument("--out", type=Path, required=True, help="output directory")
-    p.add_argument("--rerun", type=Path, help="also write one .rrd per IMC subject here")
+    p.add_argument("--rerun", type=Path,
+                   help="also write one .rrd per IMC subject into this folder (default: none)")
     p.set_defaults(func=_cmd_reproduce)
 
     p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
-    p.add_argument("--out", type=Path, default=Path("out/demo"), help="output directory")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, default=Path("out/demo"),
+                   help="output directory (default out/demo)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the simulation (default 0)")
     p.set_defaults(func=_cmd_demo)
 
     p = _sub(sub, "view", "open a recording in the rerun viewer")
     p.add_argument("rrd", type=Path, help=".rrd file")
-    p.add_argument("--web", action="store_true", help="serve the web viewer on 127.0.0.1")
+    p.add_argument("--web", action="store_true",
+                   help="serve the web viewer on 127.0.0.1 (default: the native viewer)")
     p.set_defaults(func=_cmd_view)
     return parser
 

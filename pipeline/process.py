@@ -39,9 +39,14 @@ from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import DEFAULT_KNEE
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import euler_zxy_from_matrix, matrix_from_quat, quat_xyzw_from_matrix
+from pipeline.rotations import (
+    euler_zxy_from_matrix,
+    matrix_from_quat,
+    quat_xyzw_from_matrix,
+    unwrap_angles,
+)
 
-__all__ = ["MOT_NAMES", "IKRun", "mot_columns", "process_recording"]
+__all__ = ["MOT_NAMES", "IKRun", "check_sensor_to_model", "mot_columns", "process_recording"]
 
 #: OpenSim-style coordinate names (Rajagopal 2015 style: knee flexion positive) for our ISB angles.
 MOT_NAMES = {
@@ -60,8 +65,10 @@ class IKRun:
 
     ``skeleton``: the calibrated subject model (spherical pelvis root; its ``urdf`` text carries
     the IMU frames), ``q`` its configurations; ``joint_angles`` ISB angles (rad) and the pelvis'
-    ZXY angles; ``landmarks`` (N, 3) m, pelvis at the origin; ``heading_right`` the subject's right
-    at t0 (world); ``residual_rms`` (N,) rad; ``seconds_ik`` the solve time.
+    ZXY angles, each continuous (unwrapped: no jump of 2 pi between samples, so a range may
+    exceed [-pi, pi] when the subject turns round); ``landmarks`` (N, 3) m, pelvis at the origin;
+    ``heading_right`` the subject's right at t0 (world); ``residual_rms`` (N,) rad; ``seconds_ik``
+    the solve time.
     """
 
     time: np.ndarray
@@ -87,7 +94,8 @@ def process_recording(
     """Steps 1-4 of the module docstring on a read recording; nothing is written."""
     notes = list(trial.notes)
     if sensor_to_model is not None:
-        trial = rotate_world(trial, sensor_to_opensim_matrix(tuple(sensor_to_model)))
+        angles = check_sensor_to_model(sensor_to_model)
+        trial = rotate_world(trial, sensor_to_opensim_matrix(angles))
     rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()}
     if "pelvis" not in rotations:
         raise InputError("a pelvis sensor (pelvis_imu) is required", file=trial.source)
@@ -119,9 +127,30 @@ def process_recording(
     pelvis_world = rotations["pelvis"] @ placements["pelvis_imu"][:3, :3].T
     zxy = euler_zxy_from_matrix(np.einsum("ij,njk->nik", H.T, pelvis_world))
     angles["pelvis_tilt"], angles["pelvis_list"], angles["pelvis_rotation"] = zxy.T
+    # continuous angles: a subject turning round must not make pelvis_rotation jump by 360 deg
+    angles = {name: unwrap_angles(a) for name, a in angles.items()}
     landmarks = landmark_trajectories(sk, result.q)
     return IKRun(trial.time, result.q, angles, landmarks, right, heading, result.residual_rms,
                  sk, seconds, notes)  # fmt: skip
+
+
+def check_sensor_to_model(angles: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The three ``sensor_to_model`` angles (rad) if finite and within [-2 pi, 2 pi]; refused
+    otherwise, with a hint when they look like degrees (e.g. ``-90 0 0`` for ``-1.5708 0 0``)."""
+    a = np.asarray(angles, dtype=float).ravel()
+    if a.shape != (3,):
+        raise InputError(f"expected three angles, got {a.size}", field="sensor_to_model")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"expected finite angles in radians, got {a.tolist()}",
+                         field="sensor_to_model")  # fmt: skip
+    if np.any(np.abs(a) > 2 * np.pi + 1e-9):
+        rad = " ".join(f"{v:.4f}" for v in np.radians(a))
+        raise InputError(
+            f"angles {a.tolist()} exceed 2 pi: they are radians; if you meant degrees, give "
+            f"{rad}",
+            field="sensor_to_model",
+        )
+    return float(a[0]), float(a[1]), float(a[2])
 
 
 def _used_sensor_names(trial: Recording) -> list[str]:

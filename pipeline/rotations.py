@@ -35,6 +35,7 @@ __all__ = [
     "rotation_aligning",
     "skew",
     "tangent_basis",
+    "unwrap_angles",
 ]
 
 
@@ -73,6 +74,17 @@ def _elementary(axis: str, angle: np.ndarray | float) -> np.ndarray:
     out[..., i, i], out[..., j, j] = c, c
     out[..., i, j], out[..., j, i] = -s, s
     return out
+
+
+def unwrap_angles(angle: np.ndarray) -> np.ndarray:
+    """A continuous copy of an angle series (N,) in radians: every jump larger than pi between
+    consecutive finite samples is removed by a multiple of 2 pi (``numpy.unwrap`` over the finite
+    samples; NaN stay NaN). The first finite sample keeps its value."""
+    a = np.array(angle, dtype=float)
+    ok = np.isfinite(a)
+    if ok.sum() > 1:
+        a[ok] = np.unwrap(a[ok])
+    return a
 
 
 def tangent_basis(v: np.ndarray) -> np.ndarray:

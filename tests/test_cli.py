@@ -123,3 +123,16 @@ def test_cli_defaults_are_the_librarys():
     for f in (build_urdf, urdf_text, Skeleton.build, process_recording):
         assert inspect.signature(f).parameters["knee"].default == DEFAULT_KNEE, f
     assert cal.method == DEFAULT_METHOD == inspect.signature(calibrate).parameters["method"].default
+
+
+def test_sensor_to_model_refuses_nan_and_degrees(capsys, tmp_path):
+    sto = Path(__file__).resolve().parents[2] / "shared/data/opensim/quaternions_4_ik.sto"
+    if not sto.is_file():
+        pytest.skip("needs ../shared/data/opensim")
+    base = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.8", "--out"]
+    for bad, needle in ((["nan", "0", "0"], "finite"), (["-90", "0", "0"], "-1.5708")):
+        out = tmp_path / bad[0]
+        assert main([*base, str(out), "--sensor-to-model", *bad]) == 2
+        err = capsys.readouterr().err
+        assert "sensor_to_model" in err and needle in err and "Traceback" not in err
+        assert not out.exists() or not any(out.iterdir())  # nothing written

@@ -97,3 +97,12 @@ def test_rotation_aligning_with_twist_by_hand():
     for phi in (-0.01, 0.01):  # a local optimum of |R - ref| among rotations about the axis
         Rp = exp3(phi * (R_true @ a) / np.linalg.norm(a)) @ R
         assert np.linalg.norm(Rp - ref) > np.linalg.norm(R - ref)
+
+
+def test_unwrap_angles_by_hand():
+    # a heading turning steadily through +180 deg: atan2 wraps to -179, unwrapping continues
+    a = np.radians([170.0, 179.0, -179.0, -170.0, np.nan, -160.0])
+    out = rot.unwrap_angles(a)
+    np.testing.assert_allclose(np.degrees(out[[0, 1, 2, 3, 5]]), [170, 179, 181, 190, 200])
+    assert np.isnan(out[4]) and np.isnan(a[4])
+    np.testing.assert_array_equal(rot.unwrap_angles(np.array([0.1])), [0.1])

@@ -9,7 +9,8 @@ import pytest
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat
-from pipeline.simulate.motions import MOTIONS, joint_trajectories
+from pipeline.simulate.conventions import MOTIONS
+from pipeline.simulate.motions import joint_trajectories
 
 
 @pytest.fixture(scope="module")
@@ -76,11 +77,11 @@ def test_static_is_the_neutral_pose_at_rest(skeleton):
     np.testing.assert_allclose(np.abs(q[0, 3:7]), [np.sqrt(0.5), 0, 0, np.sqrt(0.5)], atol=1e-12)
 
 
-def test_seeded_alias_and_refusals(skeleton):
+def test_seeded_and_refusals(skeleton):
     t = np.arange(100) / 100.0
     gait = joint_trajectories(skeleton, "gait", t, seed=3)
-    for x, y in zip(joint_trajectories(skeleton, "rich", t, seed=3), gait, strict=True):
-        np.testing.assert_array_equal(x, y)  # 'rich' is an alias of 'gait'
+    with pytest.raises(InputError, match="expected a motion in"):
+        joint_trajectories(skeleton, "rich", t)  # one name per motion, the same everywhere
     rng = np.random.default_rng(3)
     for x, y in zip(joint_trajectories(skeleton, "gait", t, seed=rng), gait, strict=True):
         np.testing.assert_array_equal(x, y)  # an int seed is default_rng(seed)

@@ -78,9 +78,9 @@ def _truth(trial, files: dict[str, str], sex: str, height_m: float) -> dict:
 
 
 def run_simulation(
-    out_dir: str | Path, motion: str = "rich", duration_s: float = 15.0, seed: int = 0
+    out_dir: str | Path, motion: str = "gait", duration_s: float = 15.0, seed: int = 0
 ) -> str:
-    """Simulate ``motion`` ('rich'/'gait', 'supine_hip_flexion', 'still_thigh', 'static') on a
+    """Simulate ``motion`` (one of :data:`pipeline.simulate.motions.MOTIONS`) on a
     default scaled subject and write (all or nothing) into ``out_dir``:
 
     ``<imu frame>.csv`` per sensor (``time,gyr_x..acc_z,quat_w..quat_z``, SI units),

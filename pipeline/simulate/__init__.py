@@ -17,7 +17,7 @@ _EXPORTS = {
     "joint_trajectories": "motions",
     "JointTrial": "chain",
     "motion_name": "motions",
-    "MOTIONS": "motions",
+    "MOTIONS": "conventions",
     "point_acceleration": "chain",
     "pose_derivatives": "chain",
     "SensorNoise": "model",

@@ -1,7 +1,7 @@
 """Simulate a trial on a scaled model with Pinocchio: joint trajectories, IMU signals, landmarks.
 
 The motions - exact joint trajectories ``q``, ``v``, ``a`` on a free-flyer root, sums of
-sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'`` alias ``'rich'``,
+sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'``,
 ``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``). World frame: z up, gravity
 ``g = (0, 0, -9.81)``; segment frames ISB (x anterior, y proximal, z right).
 

@@ -6,7 +6,7 @@ quaternion ``x, y, z, w``; ``v[:6]`` = pelvis velocity in the pelvis frame, line
 ``a[:6]`` its time derivative). World frame: z up; segment frames ISB (x anterior, y proximal, z
 right). Motions:
 
-* ``'gait'`` (alias ``'rich'``): walking at ~1.2 m/s along a weaving path (heading +-15-22 deg
+* ``'gait'``: walking at ~1.2 m/s along a weaving path (heading +-15-22 deg
   at 0.08 Hz), stride ~0.9 Hz, pelvis yaw/obliquity/tilt and bounce, both legs half a stride apart
   (hip Z-X-Y, knee 4-72 deg, ankle Z-X);
 * ``'supine_hip_flexion'``: lying on a table (pelvis fixed), right hip and knee flexing together
@@ -31,11 +31,10 @@ from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
+from pipeline.simulate.conventions import MOTIONS
 
-__all__ = ["MOTIONS", "joint_trajectories", "motion_name"]
+__all__ = ["joint_trajectories", "motion_name"]
 
-MOTIONS = ("gait", "supine_hip_flexion", "still_thigh", "static")
-_ALIASES = {"rich": "gait"}
 _X, _Y, _Z = np.eye(3)
 _STANDING = rot_x(np.pi / 2)  # pelvis (y up, z right) -> world (z up, subject faces +x)
 _SUPINE = np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]])  # pelvis x -> up, y -> +x (head)
@@ -79,7 +78,7 @@ _BASE_HZ = {"gait": (0.85, 1.0), "supine_hip_flexion": (0.22, 0.28), "still_thig
 
 
 def motion_name(motion: str) -> str:
-    m = _ALIASES.get(motion, motion)
+    m = motion
     if m not in MOTIONS:
         raise InputError(f"expected a motion in {MOTIONS}, got {motion!r}", field="motion")
     return m
