@@ -257,6 +257,12 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # a fault around the outputs (disk full, permissions, ...)
+        if args.debug:
+            raise
+        where = f"{exc.filename}: " if exc.filename else "cannot write the outputs: "
+        print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

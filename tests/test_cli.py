@@ -136,3 +136,40 @@ def test_sensor_to_model_refuses_nan_and_degrees(capsys, tmp_path):
         err = capsys.readouterr().err
         assert "sensor_to_model" in err and needle in err and "Traceback" not in err
         assert not out.exists() or not any(out.iterdir())  # nothing written
+
+
+def _no_traceback_one_line(capsys, *needles):
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    for n in needles:
+        assert n in err, err
+
+
+def test_output_path_faults_are_one_line_errors(capsys, tmp_path):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for argv, needle in (
+        (["simulate", "--out", str(a_file)], "found a file"),
+        (["simulate", "--out", str(a_file / "sub")], "is a file, not a folder"),
+        (["demo", "--out", str(a_file / "sub")], "is a file, not a folder"),
+    ):
+        assert main(argv) == 2
+        _no_traceback_one_line(capsys, needle, str(a_file))
+    assert a_file.read_text() == "x"
+
+
+def test_full_disk_leaves_nothing_half_written(capsys, tmp_path):
+    """A real 300 kB filesystem (tmpfs; needs root, as in CI): the demo's outputs do not fit."""
+    import subprocess
+
+    tiny = tmp_path / "tiny"
+    tiny.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(tiny)],
+                      capture_output=True).returncode != 0:  # fmt: skip
+        pytest.skip("cannot mount a tmpfs here (needs root)")
+    try:
+        assert main(["demo", "--out", str(tiny / "demo")]) == 2
+        _no_traceback_one_line(capsys, "No space left on device")
+        assert not any(p.is_file() for p in tiny.rglob("*"))  # nothing half-written
+    finally:
+        subprocess.run(["umount", str(tiny)], check=True)

@@ -24,7 +24,7 @@ import numpy as np
 from pipeline.analysis.landmarks import jcs_angles, joint_angles
 from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
-from pipeline.io.atomic import output_set
+from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import SENSOR_TO_SEGMENT, sensor_to_opensim_matrix
 from pipeline.io.recording import Recording
@@ -71,7 +71,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
     """Run the demo; every output is written all-or-nothing into ``out_dir``."""
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    output_dir(out_dir)
     timings: dict[str, float] = {}
     with output_set() as out:
         # 1. scale

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.io.atomic import output_set
+from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
@@ -67,7 +67,7 @@ def run_ik(
     sto, out_dir = Path(sto), Path(out_dir)
     trial = load_orientations(sto, xsens_map)
     name = sto.stem if sto.suffix else sto.name
-    out_dir.mkdir(parents=True, exist_ok=True)
+    output_dir(out_dir)
     with output_set() as out:
         run = process_recording(trial, measures, knee=knee, sensor_to_model=sensor_to_model,
                                 heading=heading)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.io.atomic import output_set
+from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.imu_csv import write_imu_csv
 from pipeline.io.jsonio import jsonable
 from pipeline.io.tables import write_array_csv
@@ -89,8 +89,6 @@ def run_simulation(
     and ``configuration.csv`` (model q). Returns a summary listing the files.
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("expected an output directory, found a file", file=out)
     duration_s = float(duration_s)
     if not np.isfinite(duration_s) or not 0 < duration_s <= MAX_DURATION_S:
         raise InputError(
@@ -108,6 +106,7 @@ def run_simulation(
     lm_header = ["time"] + [f"{n}_{c}" for n in lm_names for c in "xyz"]
     q_header = ["time", "root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz"]
     q_header += ["root_qw"] + skeleton.joint_names[1:]
+    output_dir(out)
     with output_set() as outs:
         for name, fname in files.items():
             write_imu_csv(outs.path(out / fname), trial.imus[name].recording)

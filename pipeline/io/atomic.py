@@ -17,7 +17,37 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["OutputSet", "atomic_write", "output_set", "write_bytes_atomic", "write_text_atomic"]
+from pipeline.errors import InputError
+
+__all__ = [
+    "OutputSet",
+    "atomic_write",
+    "output_dir",
+    "output_set",
+    "write_bytes_atomic",
+    "write_text_atomic",
+]
+
+
+def output_dir(path: str | Path) -> Path:
+    """Check (and create) an output directory, refusing with an :class:`InputError` naming the
+    path: an existing file, a parent that is a file, or a folder that cannot be written."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError("expected an output directory, found a file", file=path, field="out")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(f"{parent} is a file, not a folder", file=path, field="out")
+            break
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the output directory: {exc.strerror}", file=path,
+                         field="out") from exc  # fmt: skip
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise InputError("the output directory is not writable", file=path, field="out")
+    return path
 
 
 def _umask() -> int:

@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pipeline.errors import InputError
-from pipeline.io.atomic import output_set
+from pipeline.io.atomic import output_dir, output_set
 from pipeline.reproduce.wang2023.imc import imc_tables, run_imc_stage
 from pipeline.reproduce.wang2023.optical import omc_tables, run_omc_stage
 from pipeline.reproduce.wang2023.report import render_report
@@ -47,7 +47,7 @@ def reproduce_wang2023(
         xsens_stage = run_xsens_stage(data_dir, omc_stage=stage)
         files.update(xsens_tables(xsens_stage))
     files["report.md"] = render_report(stage, imc_stage, xsens_stage)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    output_dir(out_dir)
     with output_set() as out:
         for name, text in files.items():
             with out.open(out_dir / name) as fh:
