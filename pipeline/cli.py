@@ -159,6 +159,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("rrd", type=Path, help=".rrd file")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 (default: the native viewer)")
+    p.add_argument("--port", type=int, default=9090,
+                   help="port of the web viewer with --web (default 9090)")  # fmt: skip
+    p.add_argument("--grpc-port", type=int, default=9876,
+                   help="port serving the recording's data with --web (default 9876)")  # fmt: skip
     p.set_defaults(func=_cmd_view)
     return parser
 
@@ -244,7 +248,7 @@ def _cmd_demo(args) -> int:
 def _cmd_view(args) -> int:
     from pipeline.commands.view import run_view
 
-    return run_view(args.rrd, web=args.web)
+    return run_view(args.rrd, web=args.web, port=args.port, grpc_port=args.grpc_port)
 
 
 def main(argv: list[str] | None = None) -> int:

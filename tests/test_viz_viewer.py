@@ -27,3 +27,73 @@ def test_viewer_commands(tmp_path):
     )
     with pytest.raises(InputError):
         view(tmp_path / "missing.rrd")
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def rrd(tmp_path):
+    import numpy as np
+
+    from pipeline.viz.recording import log_trial
+
+    path = tmp_path / "t.rrd"
+    log_trial(path, np.arange(5) / 10.0, {"EFM": np.zeros((5, 3))})
+    return path
+
+
+def test_busy_port_refused_before_anything_is_printed(rrd, capsys):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        busy = s.getsockname()[1]
+        with pytest.raises(InputError, match=f"port {busy}.*--port"):
+            view(rrd, web=True, web_port=busy, grpc_port=_free_port())
+    assert capsys.readouterr().out == ""
+
+
+def test_native_viewer_without_display_hints_web(rrd, monkeypatch):
+    from pipeline.viz import viewer
+
+    monkeypatch.setattr(viewer, "has_display", lambda: False)
+    with pytest.raises(InputError, match="--web"):
+        view(rrd)
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_served_viewer_and_its_children(rrd):
+    """`pipeline view --web` stopped with a real SIGTERM leaves no rerun server behind."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from pipeline.viz.viewer import port_in_use
+
+    web, grpc = _free_port(), _free_port()
+    cmd = [sys.executable, "-m", "pipeline", "view", str(rrd), "--web", "--port", str(web),
+           "--grpc-port", str(grpc)]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert f"127.0.0.1:{web}" in proc.stdout.readline()
+        deadline = time.monotonic() + 30
+        while not port_in_use(grpc) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert port_in_use(grpc), "the viewer's server did not start"
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=15)
+        deadline = time.monotonic() + 10
+        while (port_in_use(web) or port_in_use(grpc)) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not port_in_use(web) and not port_in_use(grpc)  # the children are gone
+    finally:
+        if proc.poll() is None:
+            proc.kill()
