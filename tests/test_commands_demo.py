@@ -64,6 +64,9 @@ def test_recording_shows_the_moving_model(result):
     assert "world/model/right_tibia" in names and "world/model/right_tibia/mesh" in names
     assert any(n.startswith("plots/right_knee") for n in names)
     assert counts["/world/model/right_tibia"] == 1700
+    # the simulator's truth is overlaid on the joint-angle plots, over the 15 s of gait only
+    assert counts["/plots/right_knee/flexion_truth"] == 1500
+    assert counts["/plots/left_hip/flexion_truth"] == 1500
 
 
 def test_cli_demo_runs(tmp_path, capsys):

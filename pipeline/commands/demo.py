@@ -149,7 +149,12 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         ]  # fmt: skip
         with out.open(out_dir / "demo_landmarks.csv") as fh:
             fh.write(csv_text(rows, cols))
+        # the simulator's truth beside the estimate (NaN over the standing calibration pose)
+        pad = np.full(n0, np.nan)
+        truth_curves = {k: np.concatenate([pad, truth_angles[k]]) for k in run.joint_angles
+                        if k in truth_angles}  # fmt: skip
         log_motion(out.path(out_dir / "demo.rrd"), run.time, run.skeleton, run.q,
+                   reference_angles=truth_curves,
                    reference_landmarks=reference, recording_name="pipeline demo")  # fmt: skip
         timings["write"] = time.perf_counter() - t0
         total = time.perf_counter() - t_start

@@ -230,6 +230,7 @@ def log_motion(
     bones: bool = True,
     meshes: bool = True,
     reference_landmarks: Mapping[str, np.ndarray] | None = None,
+    reference_angles: Mapping[str, np.ndarray] | None = None,
     error_arrows: bool = True,
     extra_scalars: Mapping[str, np.ndarray] | None = None,
     up_axis: str = "y",
@@ -243,7 +244,10 @@ def log_motion(
     ``landmarks`` / ``imu_frames``: ``True`` for every landmark / IMU frame of the model, or a
     list of frame names. ``reference_landmarks``: name -> (N, 3) m (e.g. optical markers, keyed
     like the landmark frames, ``right_EFM``), drawn in another colour with error arrows
-    reference -> estimate for the names drawn in both. ``extra_scalars``: entity name under
+    reference -> estimate for the names drawn in both. ``reference_angles``: ISB angle name ->
+    (N,) rad (keyed like :func:`pipeline.analysis.landmarks.joint_angles`, e.g.
+    ``right_knee_flexion``; NaN where unknown), drawn as thin lighter curves ``<angle> (truth)``
+    in the same plot as the estimate. ``extra_scalars``: entity name under
     ``plots/`` -> (N,) series, logged unchanged. Rows whose configuration is not finite are not
     logged. Returns ``path``; layout in the module docstring.
     """
@@ -274,6 +278,13 @@ def log_motion(
         for key, y in isb_joint_angles(skeleton, Q_fk).items():
             joint, angle = key.rsplit("_", 1)
             angles[f"plots/{joint}/{angle}"] = np.where(ok, y, np.nan)
+    truth = {}
+    for key, y in (reference_angles or {}).items():
+        joint, angle = key.rsplit("_", 1)
+        if angle not in ANGLE_COLORS:
+            raise InputError(f"expected an ISB angle name like right_knee_flexion, got {key!r}",
+                             field="reference_angles")  # fmt: skip
+        truth[f"plots/{joint}/{angle}_truth"] = check_series(y, n, (), key)
 
     points = {name: traj[name][1] for name in lm_names}
     ground = _lowest_height(traj, segments, mesh_data, list(points.values()), vertical)
@@ -320,5 +331,11 @@ def log_motion(
             style = rr.SeriesLines(colors=[ANGLE_COLORS[angle]], names=[angle])
             rec.log(entity, style, static=True)
         log_scalars(rec, t, angles, scale=float(np.degrees(1.0)))
+        for entity in truth:
+            angle = entity.rsplit("/", 1)[1].removesuffix("_truth")
+            light = tuple(int(c + 0.55 * (255 - c)) for c in ANGLE_COLORS[angle])
+            style = rr.SeriesLines(colors=[light], names=[f"{angle} (truth)"], widths=[1.0])
+            rec.log(entity, style, static=True)
+        log_scalars(rec, t, truth, scale=float(np.degrees(1.0)))
         log_scalars(rec, t, scalars)
     return path
