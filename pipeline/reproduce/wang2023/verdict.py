@@ -1,0 +1,112 @@
+"""The verdict that opens ``report.md``: what reproduces, what does not and why, what goes beyond
+the paper, each sentence computed from this run's tables (nothing here is a copied number except
+the paper's own, imported from the report sections)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage
+from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, PAPER_TABLE_V
+from pipeline.reproduce.wang2023.optical import OmcStage
+
+__all__ = ["TOLERANCE_MM", "table4_agreement", "verdict_section"]
+
+TOLERANCE_MM = 5.0  # a Table IV cell "reproduces" when the group means differ by at most this
+
+
+def _mean(values) -> float:
+    v = np.asarray(list(values), dtype=float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else float("nan")
+
+
+def _paper_mean(cell: str) -> float:
+    return float(cell.split("±")[0])
+
+
+def table4_agreement(stage: ImcStage) -> list[tuple[str, str, str, str, float, float]]:
+    """(positions, correction, sex, landmark, ours, paper) for every Table IV cell the paper has,
+    ours from the stored tibia input (the paper's input); mean RMS over subjects, mm."""
+    out = []
+    for (positions, correction, sex), paper in PAPER_TABLE_IV.items():
+        if correction not in stage.corrections:
+            continue
+        for name, cell in zip(LANDMARKS, paper, strict=True):
+            ours = _mean(
+                r["rms_mm"] for r in stage.trajectory_rows
+                if r["tibia_input"] == "stored" and r["positions"] == positions
+                and r["correction"] == correction and r["sex"] == sex and r["landmark"] == name
+            )  # fmt: skip
+            out.append((positions, correction, sex, name, ours, _paper_mean(cell)))
+    return out
+
+
+def _malleoli(stage: ImcStage, tibia_input: str, correction: str) -> tuple[float, float]:
+    return tuple(
+        _mean(r["rms_mm"] for r in stage.trajectory_rows
+              if r["tibia_input"] == tibia_input and r["positions"] == "regression"
+              and r["correction"] == correction and r["landmark"] == name)  # fmt: skip
+        for name in ("MM", "LM")
+    )
+
+
+def _tibia_z(stage: ImcStage, correction: str) -> float:
+    return _mean(float(r["z_deg"]) for r in stage.orientation_rows
+                 if r["tibia_input"] == "stored" and r["correction"] == correction
+                 and r["segment"] == "tibia" and r["error_frame"] == "world")  # fmt: skip
+
+
+def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
+    """Markdown: the report's first section."""
+    lines = ["## Verdict", ""]
+    lines.append(
+        f"- **Optical stage (Table I, Table III):** all {len(stage.results)} subjects processed; "
+        f"Table I refitted ({len(stage.fits)} equations, 5-fold cross-validation). Where our "
+        "coefficients differ from the paper's, the appendix gives the difference at the group's "
+        "mean inputs and its cause (the reference code's shank-length definition; first-sample "
+        "vs trial-median landmark positions)."
+    )
+    if imc_stage is None:
+        return "\n".join(lines) + "\n"
+    cells = table4_agreement(imc_stage)
+    close = [c for c in cells if abs(c[4] - c[5]) <= TOLERANCE_MM]
+    far = sorted((c for c in cells if abs(c[4] - c[5]) > TOLERANCE_MM),
+                 key=lambda c: -abs(c[4] - c[5]))  # fmt: skip
+    far_text = "; ".join(f"{p}/{c}/{s} {n} {o:.1f} vs {q:.1f}" for p, c, s, n, o, q in far[:6])
+    n_subjects = len({r["subject_id"] for r in imc_stage.trajectory_rows})
+    lines.append(
+        f"- **Table IV (landmark RMS errors, {n_subjects} IMC subjects):** {len(close)} of "
+        f"{len(cells)} cells the paper reports are reproduced within {TOLERANCE_MM:g} mm (group "
+        "means, stored tibia input as in the paper)."
+        + (f" Not reproduced ({len(far)}, landmarks {'/'.join(sorted({c[3] for c in far}))}, "
+           f"sex {'/'.join(sorted({c[2] for c in far}))}), largest first: {far_text} (ours vs "
+           "paper, mm); the appendix's discussion quantifies the known factors (the reference "
+           "code's female AoR for everyone: the `reference` rows), but these cells are not yet "
+           "explained factor by factor." if far else "")
+    )  # fmt: skip
+    if {"none", "average"} <= set(imc_stage.corrections):
+        z0, z1 = _tibia_z(imc_stage, "none"), _tibia_z(imc_stage, "average")
+        p0, p1 = (_paper_mean(PAPER_TABLE_V[c][3]) for c in ("none", "average"))
+        lines.append(
+            f"- **Table V (orientation errors):** the paper's pattern is that of the world-frame "
+            f"error R_imc R_omcᵀ: the tibia's Z error falls from {z0:.1f} to {z1:.1f} deg with the "
+            f"AoR correction (paper {p0:.1f} → {p1:.1f} deg)."
+        )
+    beyond = []
+    for correction in ("none", "average", "ipopt", "hinge_ik"):
+        if correction in imc_stage.corrections:
+            mm, lm = _malleoli(imc_stage, "uncorrected", correction)
+            beyond.append(f"{correction} {mm:.0f}/{lm:.0f}")
+    if beyond:
+        lines.append(
+            "- **Beyond the paper:** on the tibia data as the suit delivered it (`uncorrected`: "
+            "the stored data contain hand-tuned rotations), mean MM/LM RMS (mm, regression "
+            "positions) by correction: " + ", ".join(beyond) + ". The IPOPT formulation and the "
+            "hinge-knee IK need no hand tuning."
+        )
+    lines.append(
+        "- **Time lag:** estimated from the signals (the reference code hand-set it); see the "
+        "appendix for the comparison."
+    )
+    return "\n".join(lines) + "\n"
