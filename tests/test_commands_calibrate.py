@@ -108,3 +108,24 @@ def test_bad_inputs_exit_2_with_one_line(capsys, sim, tmp_path):
     _fails(capsys, ["calibrate", "hinge", "--imu1", str(f1), "--imu2", str(late)], "time")
     _fails(capsys, ["simulate", "--out", str(f1)], "directory")
     _fails(capsys, ["simulate", "--out", str(tmp_path / "x"), "--duration-s", "-1"], "duration")
+
+
+def test_degenerate_inputs_are_refused_not_returned(capsys, sim, tmp_path):
+    from pipeline.commands.simulate import run_simulation
+
+    thigh = sim / "right_femur_imu.csv"
+    # the same file twice, and the same signals under two names
+    assert main(["calibrate", "hinge", "--imu1", str(thigh), "--imu2", str(thigh)]) == 2
+    assert "same file" in capsys.readouterr().err
+    copy = tmp_path / "copy.csv"
+    copy.write_text(thigh.read_text())
+    assert main(["calibrate", "hinge", "--imu1", str(thigh), "--imu2", str(copy)]) == 2
+    assert "identical" in capsys.readouterr().err
+    # a trial with no motion (the simulator's standing pose)
+    still = tmp_path / "still"
+    run_simulation(still, "static", 2.0, 0)
+    argv = ["calibrate", "hinge", "--imu1", str(still / "right_femur_imu.csv"),
+            "--imu2", str(still / "right_tibia_imu.csv")]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "barely move" in err and "Traceback" not in err

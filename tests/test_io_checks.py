@@ -175,3 +175,23 @@ def test_notes_prefix_like_errors():
     n.add("did x", file="a.sto", field="pelvis_imu")
     n.add("did y")
     assert n.as_tuple() == ("a.sto: field pelvis_imu: did x", "did y")
+
+
+def test_time_in_milliseconds_is_refused_with_a_hint():
+    # 100 Hz stamped in ms reads as 0.1 Hz; in us as 1e-4 Hz
+    with pytest.raises(InputError, match=r"milliseconds \(that would be 100 Hz\)"):
+        checks.check_rate(np.arange(50) * 10.0)
+    with pytest.raises(InputError, match="microseconds"):
+        checks.check_rate(np.arange(50) * 1e4)
+    assert checks.check_rate(np.arange(50) / 100.0).rate_hz == pytest.approx(100.0)
+
+
+def test_sto_in_milliseconds_without_datarate_is_refused(tmp_path):
+    from pipeline.io.opensim import read_orientations_sto
+
+    rows = "\n".join(f"{10 * k}\t1,0,0,0" for k in range(20))
+    path = tmp_path / "ms.sto"
+    path.write_text(f"DataType=Quaternion\nversion=3\nendheader\ntime\tpelvis_imu\n{rows}\n")
+    with pytest.raises(InputError, match="milliseconds") as err:
+        read_orientations_sto(path)
+    assert str(path) in str(err.value)

@@ -180,3 +180,10 @@ def test_write_is_atomic_on_bad_input(tmp_path):
         write_imu_csv(p, bad)
     assert p.read_text() == "keep"
     assert [x.name for x in tmp_path.iterdir()] == ["a.csv"]
+
+
+def test_time_in_milliseconds_refused(tmp_path):
+    rec = _rec()
+    p = write_imu_csv(tmp_path / "ms.csv", imu_recording(1000 * rec.time, rec.gyr, rec.acc))
+    with pytest.raises(InputError, match="milliseconds"):
+        read_imu_csv(p)

@@ -19,7 +19,7 @@ from pipeline.io.checks import check_same_length, check_same_rate
 from pipeline.io.imu_csv import read_imu_csv
 from pipeline.io.jsonio import jsonable
 
-__all__ = ["CALIBRATION_KEYS", "run_calibration"]
+__all__ = ["CALIBRATION_KEYS", "MIN_MOTION_RAD_S", "run_calibration"]
 
 CALIBRATION_KEYS = (
     "axis_1",
@@ -34,7 +34,16 @@ CALIBRATION_KEYS = (
 )
 
 
+#: Below this RMS angular speed (rad/s, about 3 deg/s) of both sensors a trial has no motion
+#: to calibrate from: every axis and position would be undetermined. (One still sensor is a
+#: poorly excited trial, whose undetermined parameters the observability test reports.)
+MIN_MOTION_RAD_S = 0.05
+
+
 def _read_pair(imu1: Path, imu2: Path):
+    if imu1.resolve() == imu2.resolve():
+        raise InputError(f"--imu1 and --imu2 name the same file ({imu1}); expected the sensors "
+                         "on the two segments of the joint", field="imu2")  # fmt: skip
     r1, r2 = read_imu_csv(imu1), read_imu_csv(imu2)
     check_same_length({str(imu1): r1.time.size, str(imu2): r2.time.size})
     check_same_rate({str(imu1): r1.rate_hz, str(imu2): r2.rate_hz})
@@ -45,6 +54,19 @@ def _read_pair(imu1: Path, imu2: Path):
             f"time stamps differ by up to {lag:.4g} s between {imu1} and {imu2}; expected the "
             f"two sensors on one time base (within half a sample, {0.5 * dt:.4g} s)",
             field="time",
+        )
+    if r1.gyr.shape == r2.gyr.shape and np.array_equal(r1.gyr, r2.gyr):
+        raise InputError(f"{imu1} and {imu2} hold identical gyroscope signals; expected two "
+                         "sensors on the two segments of the joint", field="gyr")  # fmt: skip
+    speeds = [float(np.sqrt(np.nanmean(np.sum(r.gyr**2, axis=1)))) for r in (r1, r2)]
+    if max(speeds) < MIN_MOTION_RAD_S:  # one still segment is poor excitation, reported later
+        raise InputError(
+            f"the sensors barely move (RMS angular speeds {np.degrees(speeds[0]):.2f} and "
+            f"{np.degrees(speeds[1]):.2f} deg/s, below {np.degrees(MIN_MOTION_RAD_S):.1f} deg/s): "
+            "a joint cannot be calibrated without motion; record the segments moving through "
+            "their range",
+            file=imu1,
+            field="gyr",
         )
     return r1, r2
 

@@ -24,6 +24,7 @@ from pipeline.io.notes import Notes
 from pipeline.io.text import FileLike, where
 
 __all__ = [
+    "PLAUSIBLE_RATE_HZ",
     "RateInfo",
     "check_acc_units",
     "check_gyro_units",
@@ -119,6 +120,10 @@ def estimate_rate(time: np.ndarray) -> RateInfo:
     )
 
 
+#: Sampling rates (Hz) accepted as those of human motion capture.
+PLAUSIBLE_RATE_HZ = (1.0, 10_000.0)
+
+
 def check_rate(
     time: np.ndarray,
     declared_hz: float | None = None,
@@ -131,10 +136,27 @@ def check_rate(
 ) -> RateInfo:
     """Estimate the rate from ``time`` and compare it with a declared one (e.g. .sto ``DataRate``).
 
-    Refuses ``|rate - declared| > rtol * declared``. Notes (does not refuse) irregular sampling:
-    jitter (std of dt) above ``jitter_tol * dt``, or intervals longer than 1.5 dt (dropped samples).
+    Refuses ``|rate - declared| > rtol * declared``, and a rate outside :data:`PLAUSIBLE_RATE_HZ`
+    (human motion capture samples at 1 Hz to 10 kHz): time stamps in milliseconds (or
+    microseconds) read as seconds give 0.01-1 Hz, and the message says so. Notes (does not
+    refuse) irregular sampling: jitter (std of dt) above ``jitter_tol * dt``, or intervals longer
+    than 1.5 dt (dropped samples).
     """
     info = estimate_rate(time)
+    lo, hi = PLAUSIBLE_RATE_HZ
+    if not lo <= info.rate_hz <= hi:
+        hint = ""
+        for unit, factor in (("milliseconds", 1e-3), ("microseconds", 1e-6)):
+            if lo <= info.rate_hz / factor <= hi:
+                hint = (f"; the time looks like {unit} (that would be "
+                        f"{info.rate_hz / factor:.4g} Hz): expected seconds")  # fmt: skip
+                break
+        raise InputError(
+            f"the time stamps give {info.rate_hz:.4g} Hz (median interval {info.dt_s:.6g}), "
+            f"outside the plausible {lo:g}-{hi:g} Hz{hint}",
+            file=file,
+            field=field,
+        )
     if declared_hz is not None:
         if not np.isfinite(declared_hz) or declared_hz <= 0:
             raise InputError(
