@@ -124,7 +124,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--imu1", type=Path, required=True, help="proximal IMU CSV")
     p.add_argument("--imu2", type=Path, required=True, help="distal IMU CSV")
     p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
-                   help=f"optimiser (default {DEFAULT_METHOD})")  # fmt: skip
+                   help=f"optimiser (default {DEFAULT_METHOD}): ipopt is the most accurate and "
+                   "fastest, with robust losses and priors; gn (Gauss-Newton, Hu eq 7-15) is "
+                   "as accurate on well-excited trials; dwpso and gwo are the paper's swarms, "
+                   "kept for comparison (slower; check that they report 'determined')")  # fmt: skip
+    p.add_argument("--iterations", type=int,
+                   help="iteration limit (default: gn 50, ipopt 100, swarms 150 per stage)")
+    p.add_argument("--population", type=int,
+                   help="particles (dwpso) or wolves (gwo) (default 40)")
     p.add_argument("--seed", type=int, default=0,
                    help="seed of the random starts and swarms (default 0)")  # fmt: skip
     p.add_argument("--json", action="store_true",
@@ -220,7 +227,8 @@ def _cmd_ik(args) -> int:
 def _cmd_calibrate(args) -> int:
     from pipeline.commands.calibrate import run_calibration
 
-    print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json))
+    print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json,
+                          iterations=args.iterations, population=args.population))
     return 0
 
 

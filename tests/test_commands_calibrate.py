@@ -55,6 +55,15 @@ def test_cli_each_method_runs(capsys, sim, method):
     assert e_axis < (2.0 if method == "gwo" else 1.0)
     if method == "gn":
         assert e_pos < 0.003
+    # 'determined' is earned: a result far from the truth must not claim it (the swarms at their
+    # default sizes stop before converging, and two independent starts disagree)
+    obs = res["observability"]
+    if obs["determined"]:
+        assert e_axis < 1.0 and e_pos < 0.005, (method, e_axis, e_pos)
+    else:
+        assert "independent starts" in obs["warning"] and "did not converge" in obs["warning"]
+    if e_pos > 0.01:
+        assert not obs["determined"]
 
 
 def test_cli_spherical_and_text_output(capsys, sim):

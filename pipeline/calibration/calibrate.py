@@ -8,6 +8,12 @@
 * ``'gn'``: Gauss-Newton on each constraint with random restarts (Hu eq 7-15).
 * ``'dwpso'`` / ``'gwo'``: the paper's swarm optimisers (eq 17-24 / 25-29), seeded.
 
+**Verification.** A result is called determined only when the observability test finds every
+direction determined *and* an independent start (``seed + 1``) reaches the same solution: axes
+within :data:`AGREEMENT_DEG`, joint positions within :data:`AGREEMENT_M` (both after the eq-16
+projection). A swarm that stopped before converging, or a cost with several minima, is then
+reported as undetermined with the disagreement, never returned as a trustworthy result.
+
 The solvers are imported when :func:`calibrate` runs (CasADi only for ``'ipopt'``), so that this
 module's names (:data:`METHODS`, :data:`DEFAULT_METHOD`) cost nothing to import.
 """
@@ -24,11 +30,14 @@ if TYPE_CHECKING:  # the solvers load SciPy and, for IPOPT, CasADi: only when ca
     from pipeline.calibration.joint_constraints import JointData
     from pipeline.calibration.solvers import CalibrationResult
 
-__all__ = ["DEFAULT_METHOD", "JOINTS", "METHODS", "calibrate"]
+__all__ = ["AGREEMENT_DEG", "AGREEMENT_M", "DEFAULT_METHOD", "JOINTS", "METHODS", "calibrate",
+           "verify"]  # fmt: skip
 
 METHODS = ("gn", "dwpso", "gwo", "ipopt")
 DEFAULT_METHOD = "ipopt"
 JOINTS = ("hinge", "spherical")
+AGREEMENT_DEG = 1.0  # axes of two independent starts must agree within this (deg)
+AGREEMENT_M = 0.005  # and joint positions within this (m)
 
 
 def calibrate(
@@ -39,19 +48,29 @@ def calibrate(
     seed: int = 0,
     quat_1: np.ndarray | None = None,
     quat_2: np.ndarray | None = None,
+    verify_start: bool = True,
     **options: object,
 ) -> CalibrationResult:
     """Calibrate a ``'hinge'`` (axes, eq 4-6, and positions, eq 1-3 and 16) or ``'spherical'``
     (positions) joint from two sensors' signals by ``method`` (module docstring).
 
     ``quat_1``/``quat_2``: the sensors' orientations, when known, make the two axis signs
-    consistent. ``options`` go to the method (e.g. ``loss``, ``prior_axis_1`` for IPOPT;
-    ``restarts``, ``particles``, ``wolves``, ``iterations`` for the others).
+    consistent. ``verify_start``: solve again from an independent start (:func:`verify`).
+    ``options`` go to the method (e.g. ``loss``, ``prior_axis_1`` for IPOPT; ``restarts``,
+    ``particles``, ``wolves``, ``iterations`` for the others).
     """
     if joint not in JOINTS:
         raise InputError(f"expected joint in {JOINTS}, got {joint!r}", field="joint")
     if method not in METHODS:
         raise InputError(f"expected method in {METHODS}, got {method!r}", field="method")
+    result = _solve(data, joint, method, seed, quat_1, quat_2, options)
+    if not verify_start:
+        return result
+    second = _solve(data, joint, method, seed + 1, quat_1, quat_2, options)
+    return verify(result, second)
+
+
+def _solve(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
     if method == "ipopt":
         from pipeline.calibration.ipopt import calibrate_ipopt  # CasADi only when needed
 
@@ -60,3 +79,33 @@ def calibrate(
 
     return calibrate_classic(data, joint, method, seed=seed, quat_1=quat_1, quat_2=quat_2,
                              **options)  # fmt: skip
+
+
+def verify(result: CalibrationResult, second: CalibrationResult) -> CalibrationResult:
+    """``result`` with the agreement of an independent start recorded in its observability: when
+    the axes differ by more than :data:`AGREEMENT_DEG` or the positions by more than
+    :data:`AGREEMENT_M`, the disagreement is added to the undetermined directions."""
+    import dataclasses
+
+    import numpy as np  # noqa: F811  (this module imports nothing heavy at load time)
+
+    from pipeline.rotations import angle_between
+
+    problems = []
+    axis_deg = 0.0
+    if result.axis_1 is not None and second.axis_1 is not None:
+        s = 1.0 if float(np.dot(result.axis_1, second.axis_1)) >= 0 else -1.0  # joint sign
+        e1 = angle_between(result.axis_1, s * second.axis_1)
+        e2 = angle_between(result.axis_2, s * second.axis_2)
+        axis_deg = float(np.degrees(max(e1, e2)))
+        if axis_deg > AGREEMENT_DEG:
+            problems.append(f"axes of two independent starts {axis_deg:.2f} deg apart")
+    pos_m = float(max(np.linalg.norm(result.position_1_m - second.position_1_m),
+                      np.linalg.norm(result.position_2_m - second.position_2_m)))  # fmt: skip
+    if pos_m > AGREEMENT_M:
+        problems.append(f"positions of two independent starts {1e3 * pos_m:.1f} mm apart")
+    obs = result.observability
+    note = f"independent start: axes {axis_deg:.3f} deg, positions {1e3 * pos_m:.2f} mm apart"
+    obs = dataclasses.replace(obs, undetermined=obs.undetermined + tuple(problems),
+                              message=f"{obs.message} | {note}")  # fmt: skip
+    return dataclasses.replace(result, observability=obs, seconds=result.seconds + second.seconds)

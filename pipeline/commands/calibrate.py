@@ -75,12 +75,16 @@ def _observability_summary(obs: Observability) -> dict:
     out = jsonable(obs.as_dict())
     out["determined"] = obs.determined
     if not obs.determined:
-        out["warning"] = (
-            "UNDETERMINED by this motion: "
-            + "; ".join(obs.undetermined)
-            + " - these values are not trustworthy (excite the segments about other axes, "
-            "or use the IPOPT method with a population-axis prior)"
-        )
+        starts = any("independent starts" in u for u in obs.undetermined)
+        advice = []
+        if any("independent starts" not in u for u in obs.undetermined):
+            advice.append("the motion leaves these directions free: excite the segments about "
+                          "other axes, or use ipopt with a population-axis prior")  # fmt: skip
+        if starts:
+            advice.append("two starts disagree: the optimiser did not converge (raise "
+                          "--iterations/--population, or use gn or ipopt)")  # fmt: skip
+        what = "; ".join(obs.undetermined)
+        out["warning"] = f"UNDETERMINED: {what} - not trustworthy ({'; '.join(advice)})"
     return out
 
 
@@ -91,6 +95,9 @@ def run_calibration(
     method: str = DEFAULT_METHOD,
     seed: int = 0,
     as_json: bool = False,
+    *,
+    iterations: int | None = None,
+    population: int | None = None,
 ) -> str:
     """Calibrate a 'hinge' or 'spherical' joint from two IMU CSVs (proximal ``imu1``, distal
     ``imu2``) with ``method`` in ('gn', 'dwpso', 'gwo', 'ipopt') and return the report text.
@@ -110,7 +117,15 @@ def run_calibration(
     # orientations, when both files have them, make the two axis signs consistent
     have_quats = r1.quat is not None and r2.quat is not None
     quats = {"quat_1": r1.quat, "quat_2": r2.quat} if have_quats else {}
-    res = calibrate(data, joint, method, seed=seed, **quats)
+    options = {}
+    if iterations is not None:
+        options["max_iter" if method in ("gn", "ipopt") else "iterations"] = int(iterations)
+    if population is not None:
+        if method not in ("dwpso", "gwo"):
+            raise InputError(f"--population applies to the swarms (dwpso, gwo), not {method}",
+                             field="population")  # fmt: skip
+        options["particles" if method == "dwpso" else "wolves"] = int(population)
+    res = calibrate(data, joint, method, seed=seed, **quats, **options)
     obs = _observability_summary(res.observability)
     out = {
         "axis_1": res.axis_1,
