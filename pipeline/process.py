@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pipeline.analysis.landmarks import joint_angles, landmark_trajectories
-from pipeline.calibration.heading import heading_rotation, subject_right
+from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
 from pipeline.calibration.placement import placements_from_pose
 from pipeline.errors import InputError
 from pipeline.ik.solver import solve_ik
@@ -93,9 +93,10 @@ def process_recording(
 ) -> IKRun:
     """Steps 1-4 of the module docstring on a read recording; nothing is written."""
     notes = list(trial.notes)
+    world = np.eye(3)
     if sensor_to_model is not None:
-        angles = check_sensor_to_model(sensor_to_model)
-        trial = rotate_world(trial, sensor_to_opensim_matrix(angles))
+        world = sensor_to_opensim_matrix(check_sensor_to_model(sensor_to_model))
+        trial = rotate_world(trial, world)
     rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()}
     if "pelvis" not in rotations:
         raise InputError("a pelvis sensor (pelvis_imu) is required", file=trial.source)
@@ -106,6 +107,7 @@ def process_recording(
     if ignored:
         notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
 
+    check_vertical(rotations["pelvis"], notes=notes, applied=world)
     right = subject_right(rotations, heading, notes=notes)
     H = heading_rotation(right)
     geometry, _ = geometry_from_measures(measures)

@@ -28,3 +28,26 @@ def test_pelvis_axis_heading_by_hand():
         pelvis_axis_right({"pelvis": R}, "pelvis_imu:y")
     with pytest.raises(InputError, match="heading"):
         subject_right({"pelvis": R}, "pelvis_imu:w")
+
+
+def test_turning_axis_and_vertical_check_by_hand():
+    from pipeline.calibration.heading import check_vertical, turning_axis
+    from pipeline.rotations import rot_x, rot_z
+
+    yaw = np.linspace(0, 2 * np.pi, 400)
+    sway = 0.1 * np.sin(7 * yaw)  # pelvis list oscillating while turning round
+    # a y-up world: the pelvis turns about y
+    R = rot_y(yaw) @ rot_z(sway)
+    line, largest = turning_axis(R)
+    assert abs(line @ [0, 1, 0]) > 0.99 and largest > 3.0
+    check_vertical(R)  # passes silently
+    # the same motion in a z-up world (as Xsens records it): refused with the fix, both signs
+    Rz_up = rot_x(np.pi / 2) @ R
+    with pytest.raises(InputError, match=r"z axis.*-1\.5708 0\.0000 0\.0000 \(if z points up"):
+        check_vertical(Rz_up)
+    with pytest.raises(InputError, match=r"z axis.*-1\.5708 0\.0000 0\.0000 \(if z points up"):
+        check_vertical(rot_x(np.pi / 2) @ rot_y(-yaw))  # turning the other way round
+    # too little turning: not checked, with a note
+    notes: list[str] = []
+    check_vertical(rot_y(0.1 * np.sin(yaw)), notes=notes)
+    assert notes and "not checked" in notes[0]

@@ -180,3 +180,17 @@ def test_disagreeing_heading_cues_are_reported(tmp_path):
     rotations["right_tibia"] = F @ (rel[0] @ np.swapaxes(rel[0].T @ rel, 1, 2))
     anatomical_right(rotations, notes=notes)
     assert notes and "disagree" in notes[0]
+
+
+def test_subject_on_its_side_never_passes_silently(tmp_path, capsys):
+    """The tutorial walking trial (Xsens, z-up) without --sensor-to-model: the pelvis turns about
+    the recording's z, so the run is refused with the rotation that fixes it, nothing written."""
+    sto = OPENSIM / "xsens_walking_orientations.sto"
+    if not sto.is_file():
+        pytest.skip("needs ../shared/data/opensim")
+    out = tmp_path / "walk"
+    assert main(["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.8",
+                 "--out", str(out)]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "lie on its side" in err and "--sensor-to-model -1.5708 0.0000 0.0000" in err
+    assert not any(out.iterdir())

@@ -16,16 +16,18 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.rotations import angle_between, axis_angle, normalize, rot_y
+from pipeline.rotations import angle_between, axis_angle, normalize, rot_y, rotation_aligning
 
 __all__ = [
     "HEADINGS",
     "UP",
     "anatomical_right",
+    "check_vertical",
     "dominant_axis",
     "heading_rotation",
     "pelvis_axis_right",
     "subject_right",
+    "turning_axis",
 ]
 
 UP = np.array([0.0, 1.0, 0.0])
@@ -49,6 +51,79 @@ def dominant_axis(
     if np.linalg.norm(v) == 0:
         return None, 0.0
     return R_ref[0] @ normalize(v), float(np.max(angle[ok]))
+
+
+def turning_axis(
+    R: np.ndarray, min_turn: float = np.radians(60.0), top: float = 0.2
+) -> tuple[np.ndarray | None, float]:
+    """The line (unit vector, sign arbitrary, world frame) a segment turns about over a trial.
+
+    With ``C(t) = R(t) R(0)^T`` the world-frame rotation since t0 (axis ``a_t``, angle
+    ``theta_t``), the line is the principal eigenvector of ``sum theta_t a_t a_t^T`` over the
+    ``top`` fraction of frames with the largest angle (sign-free, so a half turn's ambiguous axis
+    sign does not matter). For the pelvis of a walking subject the large rotations are the turns,
+    about the vertical. Returns ``(None, max angle)`` when the segment turns less than
+    ``min_turn`` rad: the motion then does not define the vertical.
+    """
+    change = R @ np.swapaxes(R[0], 0, 1)[None]
+    axis, angle = axis_angle(change)
+    ok = np.isfinite(angle) & (angle > 0)
+    largest = float(np.max(angle[ok])) if ok.any() else 0.0
+    if ok.sum() < 10 or largest < min_turn:
+        return None, largest
+    sel = ok & (angle >= np.quantile(angle[ok], 1.0 - top))
+    scatter = np.einsum("n,ni,nj->ij", angle[sel], axis[sel], axis[sel])
+    return normalize(np.linalg.eigh(scatter)[1][:, -1]), largest
+
+
+def check_vertical(
+    pelvis: np.ndarray,
+    notes: list[str] | None = None,
+    tolerance: float = np.radians(30.0),
+    applied: np.ndarray | None = None,
+) -> None:
+    """Refuse a recording whose pelvis turns about an axis that is not the model's up (y).
+
+    A subject who walks and turns turns about the vertical; when that line is more than
+    ``tolerance`` from y, the world is not y-up (e.g. an Xsens z-up world given without
+    ``--sensor-to-model``) and the subject would be laid on its side. The message names the
+    rotation that fixes it; whether the recording's vertical points up or down cannot be told
+    from orientations alone, so both signs are given, as complete ``--sensor-to-model`` values
+    (including the rotation ``applied`` already; angles within 3 deg of a quarter turn are
+    rounded to it). When the pelvis turns too little the check is skipped, with a note.
+    """
+    line, largest = turning_axis(pelvis)
+    if line is None:
+        if notes is not None:
+            notes.append(
+                f"the world's vertical was not checked: the pelvis turns at most "
+                f"{np.degrees(largest):.0f} deg (check that --sensor-to-model makes y point up)"
+            )
+        return
+    tilt = float(np.degrees(np.arccos(min(1.0, abs(float(line @ UP))))))
+    if tilt <= np.degrees(tolerance):
+        return
+    from scipy.spatial.transform import Rotation
+
+    fixes = []
+    W = np.eye(3) if applied is None else np.asarray(applied, dtype=float)
+    own = W.T @ line  # the line in the recording's own frame: point it along +axis
+    k = int(np.argmax(np.abs(own)))
+    line = line if own[k] > 0 else -line
+    for sign in (1.0, -1.0):
+        R = rotation_aligning(sign * line, UP) @ W
+        angles = Rotation.from_matrix(R).as_euler("xyz")  # space-fixed X-Y-Z, as OpenSense
+        quarter = np.round(angles / (np.pi / 2)) * (np.pi / 2)
+        angles = np.where(np.abs(angles - quarter) < np.radians(3.0), quarter, angles) + 0.0
+        fixes.append(" ".join(f"{v:.4f}" for v in angles))
+    axis_name = "xyz"[k]
+    raise InputError(
+        f"the pelvis turns about the recording's {axis_name} axis ({tilt:.0f} deg from the "
+        "model's up, y): the world is not y-up and the subject would lie on its side; give "
+        f"--sensor-to-model {fixes[0]} (if {axis_name} points up, e.g. Xsens, OpenSense) or "
+        f"{fixes[1]} (if it points down, e.g. NED)",
+        field="sensor_to_model",
+    )
 
 
 def anatomical_right(
