@@ -173,3 +173,20 @@ def test_full_disk_leaves_nothing_half_written(capsys, tmp_path):
         assert not any(p.is_file() for p in tiny.rglob("*"))  # nothing half-written
     finally:
         subprocess.run(["umount", str(tiny)], check=True)
+
+
+def test_read_only_output_folder_is_a_one_line_error(capsys, tmp_path):
+    """A real read-only filesystem (a tmpfs mounted ro; root ignores permission bits)."""
+    import subprocess
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=1m", "tmpfs", str(ro)],
+                      capture_output=True).returncode != 0:  # fmt: skip
+        pytest.skip("cannot mount a tmpfs here (needs root)")
+    try:
+        assert main(["simulate", "--out", str(ro / "sim"), "--duration-s", "1"]) == 2
+        _no_traceback_one_line(capsys, str(ro / "sim"), "Read-only file system")
+        assert not any(ro.iterdir())
+    finally:
+        subprocess.run(["umount", str(ro)], check=True)
