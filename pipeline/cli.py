@@ -95,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         metavar="NAME=ID",
         help="for an Xsens folder: OpenSense sensor name = Xsens sensor id, e.g. "
-        "pelvis_imu=00B421AF femur_r_imu=00B4227B",
+        "pelvis_imu=00B421AF femur_r_imu=00B4227B (default: none; a .sto needs no map)",
     )
     _add_anthropometrics(p)
     p.add_argument(
@@ -171,6 +171,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--grpc-port", type=int, default=9876,
                    help="port serving the recording's data with --web (default 9876)")  # fmt: skip
     p.set_defaults(func=_cmd_view)
+    for sp in sub.choices.values():  # every option's help says whether it has a default
+        for action in sp._actions:
+            if action.required and action.option_strings and "required" not in action.help:
+                action.help += " (required)"
     return parser
 
 

@@ -190,3 +190,19 @@ def test_read_only_output_folder_is_a_one_line_error(capsys, tmp_path):
         assert not any(ro.iterdir())
     finally:
         subprocess.run(["umount", str(ro)], check=True)
+
+
+def test_every_option_states_its_default_or_that_it_is_required():
+    import argparse
+
+    from pipeline.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    missing = [
+        (name, a.option_strings)
+        for name, sp in sub.choices.items()
+        for a in sp._actions
+        if a.option_strings and a.dest != "help"
+        and not any(w in (a.help or "") for w in ("default", "required"))
+    ]  # fmt: skip
+    assert missing == []
