@@ -261,3 +261,17 @@ def test_real_imc_hinge_residual_reduced(wang_subjects, sid):
     assert r.residual_rms_after <= r.residual_rms_closed_form
     assert r.residual_rms_after < 6 * DEG and r.excitation > 0.1
     assert r.seconds < 1.0
+
+
+def test_parameter_layout_is_named_and_partitions_the_vectors():
+    from pipeline.calibration import aor_ipopt as a
+
+    def covered(slices, n):
+        idx = sorted(i for s in slices for i in range(n)[s])
+        return idx == list(range(n))
+
+    assert covered([a.X_CORRECTION_FEMUR, a.X_CORRECTION_TIBIA, a.X_AXIS_FEMUR, a.X_AXIS_TIBIA],
+                   a.NX)  # fmt: skip
+    assert list(range(a.NX)[a.X_AXES]) == [*range(a.NX)[a.X_AXIS_FEMUR],
+                                           *range(a.NX)[a.X_AXIS_TIBIA]]  # fmt: skip
+    assert covered([a.P_R0F, a.P_R0T, a.P_AF, a.P_AT, a.P_TF, a.P_TT], a.NP_GEOMETRY)

@@ -171,3 +171,15 @@ def test_observability_is_typed_and_serialises_to_the_cli_layout(hinge):
     layout = obs.as_dict()
     assert list(layout) == ["undetermined", "expected", "axes", "positions", "message"]
     assert layout["expected"] == ["position along the hinge axis"]
+
+
+def test_subproblem_is_typed(hinge):
+    from pipeline.calibration.solvers import Subproblem, subproblem
+
+    _, d = hinge
+    axes, positions = subproblem(d, "axes"), subproblem(d, "positions")
+    assert isinstance(axes, Subproblem) and axes.lo.shape == axes.hi.shape == (4,)
+    assert list(axes.wrap) == [False, True, False, True] and not positions.wrap.any()
+    x = 0.5 * (positions.lo + positions.hi)
+    assert positions.population_cost(x[None]).shape == (1,)
+    assert positions.jacobian(x).shape == (positions.residual(x).size, 6)

@@ -10,6 +10,7 @@ from _helpers import MIRROR, asymmetric_subject
 from pipeline.errors import InputError
 from pipeline.model import (
     Skeleton,
+    SubjectGeometry,
     build_urdf,
     imu_frame_names,
     joint_names,
@@ -334,3 +335,17 @@ def test_pinocchio_check_failure_is_an_input_error(monkeypatch):
     monkeypatch.setattr(builder, "joint_names", lambda knee, legs: ["no_such_joint"])
     with pytest.raises(InputError, match="expected"):
         builder.urdf_text(builder.SubjectGeometry.default(1.75, "m", "right"), legs=("right",))
+
+
+def test_the_model_is_built_in_memory(tmp_path, monkeypatch):
+    """Skeleton.build once made a temporary folder with mkdtemp and never deleted it."""
+    import tempfile
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    tempfile.tempdir = None  # re-read TMPDIR
+    try:
+        sk = Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="hinge")
+        assert sk.source is None and "<robot" in sk.urdf
+        assert list(tmp_path.iterdir()) == []  # nothing written, nothing left behind
+    finally:
+        tempfile.tempdir = None

@@ -194,3 +194,14 @@ def test_subject_on_its_side_never_passes_silently(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "lie on its side" in err and "--sensor-to-model -1.5708 0.0000 0.0000" in err
     assert not any(out.iterdir())
+
+
+def test_process_recording_writes_nothing(tmp_path, monkeypatch):
+    """The pipeline once wrote its URDF twice on the way; files are now the commands' job."""
+    _, _, trial, _ = _walk(tmp_path / "walk", n=200)
+    work = tmp_path / "cwd"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    monkeypatch.setenv("TMPDIR", str(work))
+    run = process_recording(trial, Measures("m", 1.75), knee="free")
+    assert list(work.iterdir()) == [] and "<robot" in run.skeleton.urdf
