@@ -263,9 +263,27 @@ def _cmd_view(args) -> int:
     return run_view(args.rrd, web=args.web, port=args.port, grpc_port=args.grpc_port)
 
 
+class Terminated(Exception):
+    """SIGTERM received: unwinds like Ctrl-C so that partial outputs are removed."""
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    import signal
+
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return _run(args)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args) -> int:
     try:
         return int(args.func(args) or 0)
     except (InputError, FileNotFoundError) as exc:
@@ -280,8 +298,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        print("interrupted: no output was written", file=sys.stderr)
         return 130
+    except Terminated:
+        print("terminated: no output was written", file=sys.stderr)
+        return 143
 
 
 if __name__ == "__main__":

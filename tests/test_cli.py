@@ -206,3 +206,34 @@ def test_every_option_states_its_default_or_that_it_is_required():
         and not any(w in (a.help or "") for w in ("default", "required"))
     ]  # fmt: skip
     assert missing == []
+
+
+@pytest.mark.slow
+def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path):
+    """A real SIGTERM at several moments of `pipeline ik`: either every output exists (the run
+    finished) or none does (exit 143), never a half-written set."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    sto = Path(__file__).resolve().parents[2] / "shared/data/opensim/xsens_walking_orientations.sto"
+    if not sto.is_file():
+        pytest.skip("needs ../shared/data/opensim")
+    outcomes = set()
+    for k, delay in enumerate((0.8, 1.4, 2.0, 2.6, 3.2)):
+        out = tmp_path / f"run{k}"
+        cmd = [sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex", "m",
+               "--height-m", "1.8", "--sensor-to-model", "-1.5708", "0", "0", "--out", str(out)]
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+        files = sorted(p.name for p in out.glob("*")) if out.exists() else []
+        if proc.returncode == 0:
+            assert len(files) == 5, files  # .mot, .csv, .urdf, .rrd, summary
+            outcomes.add("finished")
+        else:
+            assert files == [], (proc.returncode, files, err)
+            outcomes.add("interrupted")
+    assert "interrupted" in outcomes
