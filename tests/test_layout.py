@@ -135,9 +135,17 @@ def test_help_loads_no_domain_code():
 @pytest.mark.slow
 def test_wheel_installs_and_scales_a_model(tmp_path):
     """A non-editable install: the wheel alone (shipped tables inside) scales a model."""
+    import shutil
+
+    src = tmp_path / "src"  # build from a copy: setuptools leaves build/ in the source tree
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
+    for name in ("pipeline", "models"):
+        shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
     wheels = tmp_path / "wheels"
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels),
-                    str(ROOT)], check=True, capture_output=True, timeout=600)  # fmt: skip
+                    str(src)], check=True, capture_output=True, timeout=600)  # fmt: skip
     (wheel,) = wheels.glob("imu_skeleton_pipeline-*.whl")
     target = tmp_path / "site"
     install = [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target)]
