@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS
-from pipeline.errors import InputError
+from pipeline.errors import InputError, QualityError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS
 
@@ -116,6 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--knee", choices=KNEE_MODES, default=DEFAULT_KNEE,
                    help=f"knee model (default {DEFAULT_KNEE})")  # fmt: skip
+    p.add_argument("--strict", action="store_true",
+                   help="implausible results (e.g. a large orientation residual) exit with code 3 "
+                   "and write nothing (default: they are flagged in the summary and on stderr)")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     p.set_defaults(func=_cmd_ik)
 
@@ -223,6 +226,7 @@ def _cmd_ik(args) -> int:
         sensor_to_model=args.sensor_to_model,
         heading=args.heading,
         xsens_map=_pairs(args.xsens_map, "--xsens-map"),
+        strict=args.strict,
     )
     print(summary)
     return 0
@@ -286,6 +290,11 @@ def main(argv: list[str] | None = None) -> int:
 def _run(args) -> int:
     try:
         return int(args.func(args) or 0)
+    except QualityError as exc:
+        if args.debug:
+            raise
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
     except (InputError, FileNotFoundError) as exc:
         if args.debug:
             raise

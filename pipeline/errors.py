@@ -30,3 +30,12 @@ class InputError(ValueError):
             parts.append(f"field {field}")
         parts.append(message)
         super().__init__(": ".join(parts))
+
+
+class QualityError(InputError):
+    """A run whose results are implausible (``--strict``): the CLI exits with code 3 and writes
+    no outputs. ``flags`` lists what was implausible, each with its likely cause."""
+
+    def __init__(self, flags: list[str], *, file: str | Path | None = None) -> None:
+        self.flags = list(flags)
+        super().__init__("implausible results (--strict): " + " | ".join(self.flags), file=file)

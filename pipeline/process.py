@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pipeline.analysis.landmarks import joint_angles, landmark_trajectories
+from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
 from pipeline.calibration.placement import placements_from_pose
 from pipeline.errors import InputError
@@ -67,7 +68,8 @@ class IKRun:
     the IMU frames), ``q`` its configurations; ``joint_angles`` ISB angles (rad) and the pelvis'
     ZXY angles, each continuous (unwrapped: no jump of 2 pi between samples, so a range may
     exceed [-pi, pi] when the subject turns round); ``landmarks`` (N, 3) m, pelvis at the origin;
-    ``heading_right`` the subject's right at t0 (world); ``residual_rms`` (N,) rad; ``seconds_ik``
+    ``heading_right`` the subject's right at t0 (world); ``flags`` implausible results
+    (:mod:`pipeline.analysis.quality`); ``residual_rms`` (N,) rad; ``seconds_ik``
     the solve time.
     """
 
@@ -81,6 +83,7 @@ class IKRun:
     skeleton: Skeleton
     seconds_ik: float
     notes: list[str] = field(default_factory=list)
+    flags: list[str] = field(default_factory=list)
 
 
 def process_recording(
@@ -132,8 +135,9 @@ def process_recording(
     # continuous angles: a subject turning round must not make pelvis_rotation jump by 360 deg
     angles = {name: unwrap_angles(a) for name, a in angles.items()}
     landmarks = landmark_trajectories(sk, result.q)
+    flags = quality_flags(sk, result.q, result.residual_rms, notes)
     return IKRun(trial.time, result.q, angles, landmarks, right, heading, result.residual_rms,
-                 sk, seconds, notes)  # fmt: skip
+                 sk, seconds, notes, flags)  # fmt: skip
 
 
 def check_sensor_to_model(angles: tuple[float, float, float]) -> tuple[float, float, float]:

@@ -8,10 +8,14 @@ The public names below load their module on first use (:mod:`pipeline._lazy`).
 from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
+    "AT_LIMIT_SHARE": "quality",
+    "AT_LIMIT_TOL": "quality",
     "frame_trajectories": "landmarks",
     "jcs_angles": "landmarks",
     "joint_angles": "landmarks",
     "landmark_trajectories": "landmarks",
+    "quality_flags": "quality",
+    "RESIDUAL_BOUND_DEG": "quality",
     "wang_trajectories": "landmarks",
 }
 __all__ = sorted(_EXPORTS)

@@ -11,6 +11,8 @@ The public names below load their module on first use (:mod:`pipeline._lazy`).
 from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
+    "AGREEMENT_DEG": "calibrate",
+    "AGREEMENT_M": "calibrate",
     "anatomical_right": "heading",
     "angular_acceleration": "joint_constraints",
     "aor_correction_ipopt": "aor_ipopt",
@@ -23,6 +25,7 @@ _EXPORTS = {
     "calibrate_ipopt": "ipopt",
     "CalibrationResult": "solvers",
     "check_loss": "losses",
+    "check_vertical": "heading",
     "consistent_axis_signs": "joint_constraints",
     "correction_rotations": "aor",
     "DEFAULT_METHOD": "calibrate",
@@ -80,7 +83,9 @@ _EXPORTS = {
     "subproblem": "solvers",
     "thigh_frame": "segment_frames",
     "tilt_error": "attitude",
+    "turning_axis": "heading",
     "UP": "heading",
+    "verify": "calibrate",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -8,11 +8,12 @@ calibrated IMU frames), ``<name>.rrd`` (rerun) and ``<name>_summary.md``.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from pipeline.errors import InputError
+from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import read_orientations_sto
@@ -62,8 +63,13 @@ def run_ik(
     heading: str = "anatomical",
     rerun: bool = True,
     xsens_map: dict[str, str] | None = None,
+    strict: bool = False,
 ) -> str:
-    """``pipeline ik``: read, calibrate, IK, write `.mot`, landmarks `.csv`, URDF, `.rrd`."""
+    """``pipeline ik``: read, calibrate, IK, write `.mot`, landmarks `.csv`, URDF, `.rrd`.
+
+    Implausible results (:mod:`pipeline.analysis.quality`) open the summary and go to stderr;
+    with ``strict`` they raise :class:`~pipeline.errors.QualityError` and nothing is written.
+    """
     sto, out_dir = Path(sto), Path(out_dir)
     trial = load_orientations(sto, xsens_map)
     name = sto.stem if sto.suffix else sto.name
@@ -71,6 +77,10 @@ def run_ik(
     with output_set() as out:
         run = process_recording(trial, measures, knee=knee, sensor_to_model=sensor_to_model,
                                 heading=heading)
+        if run.flags and strict:
+            raise QualityError(run.flags, file=sto)
+        for flag in run.flags:
+            print(f"warning: {flag}", file=sys.stderr)
         run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
         write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
         rows = []
@@ -102,6 +112,7 @@ def _summary(sto: Path, run: IKRun, measures: Measures) -> str:
     lines = [
         f"# IK of {sto.name}",
         "",
+        *(f"**WARNING: {flag}**\n" for flag in run.flags),
         f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf",
         f"- {len(run.time)} frames, {run.time[-1] - run.time[0]:.2f} s; IK {run.seconds_ik:.2f} s "
         f"({fps:.0f} frames/s)",

@@ -1,0 +1,59 @@
+"""Quality gate of an IK run: implausible results flagged with their likely cause.
+
+* **Residual:** the median orientation residual (the RMS over the sensors of the angle between
+  each measured and modelled sensor orientation) above :data:`RESIDUAL_BOUND_DEG`: the sensors'
+  orientations do not fit one skeleton. On the real OpenSense walking trial the median is 1.5 deg
+  with the file's ``w, x, y, z`` order and 21.7 deg with the quaternions read as ``x, y, z, w``.
+  Likely causes: the quaternion order, the sensor-to-segment mapping, ``--sensor-to-model``.
+* **Joint limits:** a joint at one of its limits for more than :data:`AT_LIMIT_SHARE` of the
+  frames: the IK pushes against the model (a mis-mounted sensor, a wrong heading, or a knee
+  model that cannot follow the data).
+* **Heading:** the hip and knee flexion axes disagree (see
+  :func:`pipeline.calibration.heading.anatomical_right`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.model.skeleton import Skeleton
+
+__all__ = ["AT_LIMIT_SHARE", "AT_LIMIT_TOL", "RESIDUAL_BOUND_DEG", "quality_flags"]
+
+RESIDUAL_BOUND_DEG = 5.0
+AT_LIMIT_SHARE = 0.5
+AT_LIMIT_TOL = 1e-3  # rad from the limit counts as at the limit
+
+
+def quality_flags(
+    skeleton: Skeleton, q: np.ndarray, residual_rms: np.ndarray, notes: list[str] = ()
+) -> list[str]:
+    """The flags of the module docstring, one line each (empty when the run looks plausible)."""
+    flags = []
+    res = np.degrees(np.nanmedian(residual_rms)) if np.isfinite(residual_rms).any() else np.nan
+    if not res <= RESIDUAL_BOUND_DEG:
+        flags.append(
+            f"median orientation residual {res:.1f} deg (plausible: below "
+            f"{RESIDUAL_BOUND_DEG:g} deg): the sensors' orientations do not fit one skeleton; "
+            "check the quaternion order (w, x, y, z), the sensor-to-segment mapping and "
+            "--sensor-to-model"
+        )
+    ok = np.isfinite(q).all(axis=1)
+    at_limit = []
+    for joint in skeleton.joint_names:
+        jm = skeleton.model.joints[skeleton.model.getJointId(joint)]
+        if jm.nq != 1 or not ok.any():
+            continue
+        i = jm.idx_q
+        lo, hi = skeleton.lower_limits[i], skeleton.upper_limits[i]
+        share = float(np.mean((q[ok, i] <= lo + AT_LIMIT_TOL) | (q[ok, i] >= hi - AT_LIMIT_TOL)))
+        if share > AT_LIMIT_SHARE:
+            at_limit.append(f"{joint} ({100 * share:.0f}% of frames)")
+    if at_limit:
+        flags.append(
+            "joints at their limits for a long share of the trial: " + ", ".join(at_limit)
+            + "; likely a mis-mounted or mis-mapped sensor, a wrong heading, or a knee model "
+            "that cannot follow the data (try --knee free)"
+        )  # fmt: skip
+    flags += [n for n in notes if "disagree" in n]
+    return flags

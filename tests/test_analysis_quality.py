@@ -1,0 +1,75 @@
+"""pipeline.analysis.quality: the quality gate, by hand and on the real walking trial with its
+quaternions in the wrong order."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.analysis.quality import AT_LIMIT_SHARE, RESIDUAL_BOUND_DEG, quality_flags
+from pipeline.cli import main
+from pipeline.model import Skeleton, SubjectGeometry
+
+WALK = Path(__file__).resolve().parents[2] / "shared/data/opensim/xsens_walking_orientations.sto"
+
+
+@pytest.fixture(scope="module")
+def leg():
+    return Skeleton.build(SubjectGeometry.default(1.75, "m", "right"), knee="free", legs=("right",))
+
+
+def test_flags_by_hand(leg):
+    n = 100
+    mid = 0.5 * (leg.lower_limits + leg.upper_limits)
+    q = np.tile(mid, (n, 1))
+    small = np.full(n, np.radians(1.0))
+    assert quality_flags(leg, q, small) == []
+    big = np.full(n, np.radians(RESIDUAL_BOUND_DEG + 1.0))
+    (flag,) = quality_flags(leg, q, big)
+    assert "quaternion order" in flag and f"{RESIDUAL_BOUND_DEG + 1:.1f} deg" in flag
+    i = leg.q_index("right_knee_Z")
+    q[: int(n * (AT_LIMIT_SHARE + 0.1)), i] = leg.upper_limits[i]
+    (flag,) = quality_flags(leg, q, small)
+    assert "right_knee_Z (60% of frames)" in flag
+    notes = ["the hip and knee flexion axes disagree by up to 80 deg: ..."]
+    assert quality_flags(leg, mid[None], small[:1], notes) == notes  # disagreeing heading cues
+
+
+def _reordered(tmp_path: Path) -> Path:
+    """The walking file with every quaternion written x, y, z, w (a common export mistake)."""
+    lines = WALK.read_text().split("\n")
+    start = lines.index("endheader") + 2
+    out = lines[:start]
+    for line in lines[start:]:
+        if not line.strip():
+            out.append(line)
+            continue
+        cells = line.split("\t")
+        quats = [",".join(np.roll(c.split(","), -1)) for c in cells[1:]]
+        out.append("\t".join([cells[0], *quats]))
+    path = tmp_path / "xyzw.sto"
+    path.write_text("\n".join(out))
+    return path
+
+
+@pytest.mark.dataset
+@pytest.mark.skipif(not WALK.is_file(), reason="needs ../shared/data/opensim")
+def test_wrong_quaternion_order_is_flagged_first_and_strict_refuses(tmp_path, capsys):
+    sto = _reordered(tmp_path)
+    base = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.8",
+            "--sensor-to-model", "-1.5708", "0", "0"]  # fmt: skip
+    assert main([*base, "--out", str(tmp_path / "flagged")]) == 0
+    captured = capsys.readouterr()
+    assert "warning: median orientation residual" in captured.err
+    summary = (tmp_path / "flagged" / "xyzw_summary.md").read_text().splitlines()
+    assert summary[2].startswith("**WARNING: median orientation residual")  # first thing
+    assert main([*base, "--strict", "--out", str(tmp_path / "strict")]) == 3
+    assert "quaternion order" in capsys.readouterr().err
+    assert not any((tmp_path / "strict").iterdir())
+    # the file as written passes without a flag
+    assert main(["ik", "--orientations", str(WALK), "--sex", "m", "--height-m", "1.8",
+                 "--sensor-to-model", "-1.5708", "0", "0", "--strict",
+                 "--out", str(tmp_path / "ok")]) == 0  # fmt: skip
+    assert "warning" not in capsys.readouterr().err
