@@ -165,3 +165,15 @@ def test_hinge_ik_alone_corrects_as_well_as_the_closed_form(out):
         none = _group(rows, correction="none", **kw)
         hinge = _group(rows, correction="hinge_ik", **kw)
         assert hinge < 0.7 * none and hinge < _group(rows, correction="average", **kw)
+
+
+def test_report_shows_its_figures(out):
+    from pipeline.reproduce.wang2023.figures import FIGURES
+
+    report = (out / "report.md").read_text()
+    for name in FIGURES:
+        data = (out / name).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000, name
+        assert f"]({name})" in report
+    # the verdict opens the report, the tables follow as an appendix
+    assert report.index("## Verdict") < report.index("# Appendix") < report.index("## Table IV")

@@ -239,7 +239,10 @@ def subjects_section(stage: OmcStage) -> str:
 
 
 def render_report(
-    stage: OmcStage, imc_stage: ImcStage | None = None, xsens_stage: XsensStage | None = None
+    stage: OmcStage,
+    imc_stage: ImcStage | None = None,
+    xsens_stage: XsensStage | None = None,
+    figures: tuple[str, ...] = (),
 ) -> str:
     parts = [
         "# Wang et al. 2023 reproduction",
@@ -248,6 +251,7 @@ def render_report(
         "IEEE TNSRE 31 (2023), doi:10.1109/TNSRE.2023.3285924.",
         "",
         verdict_section(stage, imc_stage),
+        *(f"![{name.removesuffix('.png').removeprefix('fig_')}]({name})\n" for name in figures),
         "# Appendix: the tables",
         "",
         subjects_section(stage),

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_dir, output_set
+from pipeline.reproduce.wang2023.figures import imc_figures
 from pipeline.reproduce.wang2023.imc import imc_tables, run_imc_stage
 from pipeline.reproduce.wang2023.optical import omc_tables, run_omc_stage
 from pipeline.reproduce.wang2023.report import render_report
@@ -46,10 +47,15 @@ def reproduce_wang2023(
     if imc and (data_dir / "xsens").is_dir():
         xsens_stage = run_xsens_stage(data_dir, omc_stage=stage)
         files.update(xsens_tables(xsens_stage))
-    files["report.md"] = render_report(stage, imc_stage, xsens_stage)
+    figures = {} if imc_stage is None else imc_figures(imc_stage)
+    files["report.md"] = render_report(stage, imc_stage, xsens_stage, figures=tuple(figures))
     output_dir(out_dir)
     with output_set() as out:
         for name, text in files.items():
             with out.open(out_dir / name) as fh:
                 fh.write(text)
-    return f"wrote {', '.join(sorted(files))} to {out_dir} ({len(stage.results)} subjects)"
+        for name, png in figures.items():
+            with out.open(out_dir / name, "wb") as fh:
+                fh.write(png)
+    names = sorted([*files, *figures])
+    return f"wrote {', '.join(names)} to {out_dir} ({len(stage.results)} subjects)"

@@ -1,0 +1,92 @@
+"""Figures of the Wang 2023 reproduction (PNG, matplotlib), shown in ``report.md``.
+
+* ``fig_table4.png``: Table IV as grouped bars, mean ± SD over subjects of each landmark's RMS
+  error, per correction method, for both tibia inputs (regression landmark positions), with the
+  paper's means as markers where the paper has the configuration;
+* ``fig_malleoli_per_subject.png``: each subject's malleolus error (mean of MM and LM) per
+  correction method, on the uncorrected tibia input: who improves with which method.
+
+matplotlib is imported here only (the Agg backend: no display needed).
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage
+from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV
+
+__all__ = ["FIGURES", "imc_figures"]
+
+FIGURES = ("fig_table4.png", "fig_malleoli_per_subject.png")
+
+
+def _rms(stage: ImcStage, **kw: str) -> np.ndarray:
+    return np.array([r["rms_mm"] for r in stage.trajectory_rows
+                     if all(r[k] == v for k, v in kw.items())], dtype=float)  # fmt: skip
+
+
+def _png(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight", metadata={"Software": None})
+    return buf.getvalue()
+
+
+def imc_figures(stage: ImcStage) -> dict[str, bytes]:
+    """File name -> PNG bytes of the module docstring's figures."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = {}
+    methods = list(stage.corrections)
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.2), sharey=True)
+    width = 0.8 / len(methods)
+    x = np.arange(len(LANDMARKS))
+    for ax, tibia_input in zip(axes, ("stored", "uncorrected"), strict=True):
+        for k, method in enumerate(methods):
+            vals = [_rms(stage, tibia_input=tibia_input, positions="regression",
+                         correction=method, landmark=n) for n in LANDMARKS]  # fmt: skip
+            mean = [np.nanmean(v) for v in vals]
+            sd = [np.nanstd(v, ddof=1) if np.isfinite(v).sum() > 1 else 0.0 for v in vals]
+            ax.bar(x + (k - (len(methods) - 1) / 2) * width, mean, width, yerr=sd, capsize=2,
+                   label=method)  # fmt: skip
+        if tibia_input == "stored":
+            for k, method in enumerate(methods):
+                for sex, marker in (("m", "v"), ("f", "^")):
+                    paper = PAPER_TABLE_IV.get(("regression", method, sex))
+                    if paper is None:
+                        continue
+                    means = [float(c.split("±")[0]) for c in paper]
+                    ax.plot(x + (k - (len(methods) - 1) / 2) * width, means, marker, color="k",
+                            ms=4, label=f"paper ({sex})" if k == 0 else None)  # fmt: skip
+        ax.set_xticks(x, LANDMARKS)
+        ax.set_title(f"tibia input: {tibia_input} (regression positions)")
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].set_ylabel("RMS error (mm), mean ± SD over subjects")
+    axes[0].legend(fontsize=7, ncol=2, title="correction; black: paper's means", title_fontsize=7)
+    out["fig_table4.png"] = _png(fig)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 4.2))
+    subjects = sorted({r["subject_id"] for r in stage.trajectory_rows})
+    for method in methods:
+        per = []
+        for sid in subjects:
+            v = np.concatenate([_rms(stage, tibia_input="uncorrected", positions="regression",
+                                     correction=method, landmark=n, subject_id=sid)
+                                for n in ("MM", "LM")])  # fmt: skip
+            per.append(np.nanmean(v) if v.size else np.nan)
+        ax.plot(range(len(subjects)), per, "o-", ms=4, lw=1, label=method)
+    ax.set_xticks(range(len(subjects)), [str(s) for s in subjects])
+    ax.set_xlabel("subject")
+    ax.set_ylabel("malleolus RMS error (mm, mean of MM and LM)")
+    ax.set_title("per subject, uncorrected tibia input, regression positions")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=3)
+    out["fig_malleoli_per_subject.png"] = _png(fig)
+    plt.close(fig)
+    return out
