@@ -20,9 +20,11 @@ from scipy.spatial.transform import Rotation
 __all__ = [
     "angle_between",
     "axis_angle",
+    "euler_xyz_fixed_from_matrix",
     "euler_zyx_from_matrix",
     "exp3",
     "log3",
+    "matrix_from_euler_xyz_fixed",
     "matrix_from_euler_zyx",
     "matrix_from_quat",
     "normalize",
@@ -213,6 +215,20 @@ def rotation_aligning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             perp = np.cross(a_hat, [0.0, 1.0, 0.0])
         return exp3(normalize(perp) * np.pi)
     return exp3(axis / s * angle)
+
+
+def matrix_from_euler_xyz_fixed(angles: np.ndarray) -> np.ndarray:
+    """Space-fixed X-Y-Z angles ``(a, b, c)``: ``R = Rz(c) @ Ry(b) @ Rx(a)`` (OpenSense's
+    ``sensor_to_opensim_rotations``). Radians, ``(3,)`` or ``(N, 3)``."""
+    e = np.asarray(angles, dtype=float)
+    return rot_z(e[..., 2]) @ rot_y(e[..., 1]) @ rot_x(e[..., 0])
+
+
+def euler_xyz_fixed_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`matrix_from_euler_xyz_fixed`: ``(a, b, c)``, ``b`` in [-pi/2, pi/2]."""
+    m, single = _stack(np.asarray(R, dtype=float), 2)
+    out = Rotation.from_matrix(m).as_euler("xyz")  # lowercase: extrinsic (space-fixed)
+    return out[0] if single else out
 
 
 def matrix_from_euler_zxy(euler: np.ndarray) -> np.ndarray:

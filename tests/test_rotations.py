@@ -106,3 +106,14 @@ def test_unwrap_angles_by_hand():
     np.testing.assert_allclose(np.degrees(out[[0, 1, 2, 3, 5]]), [170, 179, 181, 190, 200])
     assert np.isnan(out[4]) and np.isnan(a[4])
     np.testing.assert_array_equal(rot.unwrap_angles(np.array([0.1])), [0.1])
+
+
+def test_space_fixed_xyz_by_hand():
+    # OpenSense's Xsens setting (-pi/2, 0, 0) is Rx(-90 deg): it takes z (up) to y
+    R = rot.matrix_from_euler_xyz_fixed([-np.pi / 2, 0, 0])
+    np.testing.assert_allclose(R @ [0, 0, 1], [0, 1, 0], atol=1e-15)
+    a = np.array([0.3, -0.4, 1.1])
+    np.testing.assert_allclose(rot.matrix_from_euler_xyz_fixed(a),
+                               rot.rot_z(1.1) @ rot.rot_y(-0.4) @ rot.rot_x(0.3))  # fmt: skip
+    back = rot.euler_xyz_fixed_from_matrix(rot.matrix_from_euler_xyz_fixed(a))
+    np.testing.assert_allclose(back, a)

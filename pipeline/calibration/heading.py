@@ -16,7 +16,14 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.rotations import angle_between, axis_angle, normalize, rot_y, rotation_aligning
+from pipeline.rotations import (
+    angle_between,
+    axis_angle,
+    euler_xyz_fixed_from_matrix,
+    normalize,
+    rot_y,
+    rotation_aligning,
+)
 
 __all__ = [
     "HEADINGS",
@@ -103,8 +110,6 @@ def check_vertical(
     tilt = float(np.degrees(np.arccos(min(1.0, abs(float(line @ UP))))))
     if tilt <= np.degrees(tolerance):
         return
-    from scipy.spatial.transform import Rotation
-
     fixes = []
     W = np.eye(3) if applied is None else np.asarray(applied, dtype=float)
     own = W.T @ line  # the line in the recording's own frame: point it along +axis
@@ -112,7 +117,7 @@ def check_vertical(
     line = line if own[k] > 0 else -line
     for sign in (1.0, -1.0):
         R = rotation_aligning(sign * line, UP) @ W
-        angles = Rotation.from_matrix(R).as_euler("xyz")  # space-fixed X-Y-Z, as OpenSense
+        angles = euler_xyz_fixed_from_matrix(R)  # space-fixed X-Y-Z, as OpenSense
         quarter = np.round(angles / (np.pi / 2)) * (np.pi / 2)
         angles = np.where(np.abs(angles - quarter) < np.radians(3.0), quarter, angles) + 0.0
         fixes.append(" ".join(f"{v:.4f}" for v in angles))

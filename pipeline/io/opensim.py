@@ -43,7 +43,7 @@ from pipeline.io.notes import Notes
 from pipeline.io.recording import Recording
 from pipeline.io.sto_header import declared_rate, labels_and_rows, split_header
 from pipeline.io.text import parse_table, read_text_lines
-from pipeline.rotations import matrix_from_quat, quat_from_matrix, rot_x, rot_y, rot_z
+from pipeline.rotations import matrix_from_euler_xyz_fixed, matrix_from_quat, quat_from_matrix
 
 __all__ = [
     "SENSOR_TO_SEGMENT",
@@ -157,8 +157,7 @@ def sensor_to_opensim_matrix(rotations_xyz: Iterable[float]) -> np.ndarray:
     OpenSense builds a space-fixed X-Y-Z sequence: ``R = Rz(c) Ry(b) Rx(a)`` for
     ``(a, b, c)``; e.g. ``(-pi/2, 0, 0)`` takes an Xsens z-up world to OpenSim's y-up world.
     """
-    a, b, c = (float(v) for v in rotations_xyz)
-    return rot_z(c) @ rot_y(b) @ rot_x(a)
+    return matrix_from_euler_xyz_fixed([float(v) for v in rotations_xyz])
 
 
 def rotate_world(trial: Recording, R: np.ndarray) -> Recording:
