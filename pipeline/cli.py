@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS
+from pipeline.calibration.conventions import DEFAULT_METHOD, JOINTS, METHODS
 from pipeline.errors import InputError, QualityError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS

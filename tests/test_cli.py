@@ -108,7 +108,8 @@ def test_cli_defaults_are_the_librarys():
     ``--method ipopt`` vs ``calibrate``'s gn): now both read one constant."""
     import inspect
 
-    from pipeline.calibration.calibrate import DEFAULT_METHOD, calibrate
+    from pipeline.calibration.calibrate import calibrate
+    from pipeline.calibration.conventions import DEFAULT_METHOD
     from pipeline.cli import build_parser
     from pipeline.model.builder import build_urdf, urdf_text
     from pipeline.model.conventions import DEFAULT_KNEE

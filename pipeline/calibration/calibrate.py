@@ -14,28 +14,24 @@ within :data:`AGREEMENT_DEG`, joint positions within :data:`AGREEMENT_M` (both a
 projection). A swarm that stopped before converging, or a cost with several minima, is then
 reported as undetermined with the disagreement, never returned as a trustworthy result.
 
-The solvers are imported when :func:`calibrate` runs (CasADi only for ``'ipopt'``), so that this
-module's names (:data:`METHODS`, :data:`DEFAULT_METHOD`) cost nothing to import.
+CasADi is imported only when ``'ipopt'`` runs; the names of the methods live in
+:mod:`pipeline.calibration.conventions`.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import dataclasses
 
+import numpy as np
+
+from pipeline.calibration.conventions import DEFAULT_METHOD, JOINTS, METHODS
+from pipeline.calibration.joint_constraints import JointData
+from pipeline.calibration.solvers import CalibrationResult, calibrate_classic
 from pipeline.errors import InputError
+from pipeline.rotations import angle_between
 
-if TYPE_CHECKING:  # the solvers load SciPy and, for IPOPT, CasADi: only when calibrating
-    import numpy as np
+__all__ = ["AGREEMENT_DEG", "AGREEMENT_M", "calibrate", "verify"]
 
-    from pipeline.calibration.joint_constraints import JointData
-    from pipeline.calibration.solvers import CalibrationResult
-
-__all__ = ["AGREEMENT_DEG", "AGREEMENT_M", "DEFAULT_METHOD", "JOINTS", "METHODS", "calibrate",
-           "verify"]  # fmt: skip
-
-METHODS = ("gn", "dwpso", "gwo", "ipopt")
-DEFAULT_METHOD = "ipopt"
-JOINTS = ("hinge", "spherical")
 AGREEMENT_DEG = 1.0  # axes of two independent starts must agree within this (deg)
 AGREEMENT_M = 0.005  # and joint positions within this (m)
 
@@ -75,8 +71,6 @@ def _solve(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationRes
         from pipeline.calibration.ipopt import calibrate_ipopt  # CasADi only when needed
 
         return calibrate_ipopt(data, joint, seed=seed, quat_1=quat_1, quat_2=quat_2, **options)
-    from pipeline.calibration.solvers import calibrate_classic
-
     return calibrate_classic(data, joint, method, seed=seed, quat_1=quat_1, quat_2=quat_2,
                              **options)  # fmt: skip
 
@@ -85,12 +79,6 @@ def verify(result: CalibrationResult, second: CalibrationResult) -> CalibrationR
     """``result`` with the agreement of an independent start recorded in its observability: when
     the axes differ by more than :data:`AGREEMENT_DEG` or the positions by more than
     :data:`AGREEMENT_M`, the disagreement is added to the undetermined directions."""
-    import dataclasses
-
-    import numpy as np  # noqa: F811  (this module imports nothing heavy at load time)
-
-    from pipeline.rotations import angle_between
-
     problems = []
     axis_deg = 0.0
     if result.axis_1 is not None and second.axis_1 is not None:

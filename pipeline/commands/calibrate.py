@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.calibration.calibrate import DEFAULT_METHOD, JOINTS, METHODS, calibrate
+from pipeline.calibration.calibrate import calibrate
+from pipeline.calibration.conventions import DEFAULT_METHOD, JOINTS, METHODS
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.calibration.observability import Observability
 from pipeline.errors import InputError
