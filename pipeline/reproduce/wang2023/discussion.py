@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.reproduce.wang2023.imc import ImcStage
+from pipeline.reproduce.wang2023.imc import ImcStage, rms_values
 
 __all__ = ["imc_discussion"]
 
 
 def _group_mean(rows: list[dict], **kw: object) -> float:
-    sel = [r["rms_mm"] for r in rows if all(r[k] == v for k, v in kw.items())]
-    return float(np.mean(sel)) if sel else float("nan")
+    sel = rms_values(rows, **kw)
+    return float(np.mean(sel)) if sel.size else float("nan")
 
 
 def imc_discussion(stage: ImcStage) -> str:

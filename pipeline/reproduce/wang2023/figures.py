@@ -15,17 +15,12 @@ import io
 
 import numpy as np
 
-from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage
-from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV
+from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage, rms_values
+from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, paper_mean
 
 __all__ = ["FIGURES", "imc_figures"]
 
 FIGURES = ("fig_table4.png", "fig_malleoli_per_subject.png")
-
-
-def _rms(stage: ImcStage, **kw: str) -> np.ndarray:
-    return np.array([r["rms_mm"] for r in stage.trajectory_rows
-                     if all(r[k] == v for k, v in kw.items())], dtype=float)  # fmt: skip
 
 
 def _png(fig) -> bytes:
@@ -43,13 +38,14 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
 
     out = {}
     methods = list(stage.corrections)
+    rows = stage.trajectory_rows
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.2), sharey=True)
     width = 0.8 / len(methods)
     x = np.arange(len(LANDMARKS))
     for ax, tibia_input in zip(axes, ("stored", "uncorrected"), strict=True):
         for k, method in enumerate(methods):
-            vals = [_rms(stage, tibia_input=tibia_input, positions="regression",
-                         correction=method, landmark=n) for n in LANDMARKS]  # fmt: skip
+            vals = [rms_values(rows, tibia_input=tibia_input, positions="regression",
+                               correction=method, landmark=n) for n in LANDMARKS]  # fmt: skip
             mean = [np.nanmean(v) for v in vals]
             sd = [np.nanstd(v, ddof=1) if np.isfinite(v).sum() > 1 else 0.0 for v in vals]
             ax.bar(x + (k - (len(methods) - 1) / 2) * width, mean, width, yerr=sd, capsize=2,
@@ -60,7 +56,7 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
                     paper = PAPER_TABLE_IV.get(("regression", method, sex))
                     if paper is None:
                         continue
-                    means = [float(c.split("±")[0]) for c in paper]
+                    means = [paper_mean(c) for c in paper]
                     ax.plot(x + (k - (len(methods) - 1) / 2) * width, means, marker, color="k",
                             ms=4, label=f"paper ({sex})" if k == 0 else None)  # fmt: skip
         ax.set_xticks(x, LANDMARKS)
@@ -76,8 +72,8 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
     for method in methods:
         per = []
         for sid in subjects:
-            v = np.concatenate([_rms(stage, tibia_input="uncorrected", positions="regression",
-                                     correction=method, landmark=n, subject_id=sid)
+            v = np.concatenate([rms_values(rows, tibia_input="uncorrected", positions="regression",
+                                           correction=method, landmark=n, subject_id=sid)
                                 for n in ("MM", "LM")])  # fmt: skip
             per.append(np.nanmean(v) if v.size else np.nan)
         ax.plot(range(len(subjects)), per, "o-", ms=4, lw=1, label=method)

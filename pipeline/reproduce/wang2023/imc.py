@@ -270,6 +270,16 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
     )
 
 
+def select_rows(rows: list[dict], **match: object) -> list[dict]:
+    """The rows of ``trajectory_rows`` / ``orientation_rows`` whose columns equal ``match``."""
+    return [r for r in rows if all(r[k] == v for k, v in match.items())]
+
+
+def rms_values(rows: list[dict], **match: object) -> np.ndarray:
+    """The ``rms_mm`` of :func:`select_rows` (mm)."""
+    return np.array([r["rms_mm"] for r in select_rows(rows, **match)], dtype=float)
+
+
 def imc_tables(stage: ImcStage) -> dict[str, str]:
     return {
         "trajectory_errors.csv": csv_text(stage.trajectory_rows, TRAJECTORY_COLUMNS),

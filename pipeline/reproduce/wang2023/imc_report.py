@@ -5,9 +5,15 @@ from __future__ import annotations
 
 from pipeline.io.tables import markdown_table, mean_sd
 from pipeline.reproduce.wang2023.discussion import imc_discussion
-from pipeline.reproduce.wang2023.imc import LANDMARKS, POSITIONS, TIBIA_INPUTS, ImcStage
+from pipeline.reproduce.wang2023.imc import (
+    LANDMARKS,
+    POSITIONS,
+    TIBIA_INPUTS,
+    ImcStage,
+    select_rows,
+)
 
-__all__ = ["PAPER_TABLE_IV", "PAPER_TABLE_V", "imc_report_sections"]
+__all__ = ["PAPER_TABLE_IV", "PAPER_TABLE_V", "imc_report_sections", "paper_mean"]
 
 
 # Paper's Table IV (RMS mm, mean±SD; EFM, EFL, MM, LM) and Table V (deg; femur Z Y X, tibia Z Y X)
@@ -31,8 +37,9 @@ PAPER_TABLE_V = {
 }
 
 
-def _select(rows, **kw):
-    return [r for r in rows if all(r[k] == v for k, v in kw.items())]
+def paper_mean(cell: str) -> float:
+    """The mean of a ``'mean±SD'`` cell of the paper's tables."""
+    return float(cell.split("±")[0])
 
 
 def table4_section(stage: ImcStage) -> str:
@@ -41,7 +48,7 @@ def table4_section(stage: ImcStage) -> str:
         for positions in POSITIONS:
             for correction in stage.corrections:
                 for sex in ("m", "f"):
-                    sel = _select(stage.trajectory_rows, tibia_input=tibia_input,
+                    sel = select_rows(stage.trajectory_rows, tibia_input=tibia_input,
                                   positions=positions, correction=correction, sex=sex)  # fmt: skip
                     ours = [mean_sd([r["rms_mm"] for r in sel if r["landmark"] == n])
                             for n in LANDMARKS]  # fmt: skip
@@ -71,7 +78,7 @@ def table5_section(stage: ImcStage) -> str:
             for correction in stage.corrections:
                 vals = []
                 for segment in ("femur", "tibia"):
-                    sel = _select(stage.orientation_rows, tibia_input=tibia_input,
+                    sel = select_rows(stage.orientation_rows, tibia_input=tibia_input,
                                   correction=correction, segment=segment,
                                   error_frame=error_frame)  # fmt: skip
                     vals += [mean_sd([r[k] for r in sel]) for k in ("z_deg", "y_deg", "x_deg")]

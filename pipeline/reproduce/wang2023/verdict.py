@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage
-from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, PAPER_TABLE_V
+from pipeline.reproduce.wang2023.imc import LANDMARKS, ImcStage, rms_values, select_rows
+from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, PAPER_TABLE_V, paper_mean
 from pipeline.reproduce.wang2023.optical import OmcStage
 
 __all__ = ["TOLERANCE_MM", "table4_agreement", "verdict_section"]
@@ -21,10 +21,6 @@ def _mean(values) -> float:
     return float(v.mean()) if v.size else float("nan")
 
 
-def _paper_mean(cell: str) -> float:
-    return float(cell.split("±")[0])
-
-
 def table4_agreement(stage: ImcStage) -> list[tuple[str, str, str, str, float, float]]:
     """(positions, correction, sex, landmark, ours, paper) for every Table IV cell the paper has,
     ours from the stored tibia input (the paper's input); mean RMS over subjects, mm."""
@@ -33,28 +29,25 @@ def table4_agreement(stage: ImcStage) -> list[tuple[str, str, str, str, float, f
         if correction not in stage.corrections:
             continue
         for name, cell in zip(LANDMARKS, paper, strict=True):
-            ours = _mean(
-                r["rms_mm"] for r in stage.trajectory_rows
-                if r["tibia_input"] == "stored" and r["positions"] == positions
-                and r["correction"] == correction and r["sex"] == sex and r["landmark"] == name
-            )  # fmt: skip
-            out.append((positions, correction, sex, name, ours, _paper_mean(cell)))
+            rms = rms_values(stage.trajectory_rows, tibia_input="stored", positions=positions,
+                             correction=correction, sex=sex, landmark=name)  # fmt: skip
+            ours = _mean(rms)
+            out.append((positions, correction, sex, name, ours, paper_mean(cell)))
     return out
 
 
 def _malleoli(stage: ImcStage, tibia_input: str, correction: str) -> tuple[float, float]:
     return tuple(
-        _mean(r["rms_mm"] for r in stage.trajectory_rows
-              if r["tibia_input"] == tibia_input and r["positions"] == "regression"
-              and r["correction"] == correction and r["landmark"] == name)  # fmt: skip
+        _mean(rms_values(stage.trajectory_rows, tibia_input=tibia_input, positions="regression",
+                         correction=correction, landmark=name))  # fmt: skip
         for name in ("MM", "LM")
     )
 
 
 def _tibia_z(stage: ImcStage, correction: str) -> float:
-    return _mean(float(r["z_deg"]) for r in stage.orientation_rows
-                 if r["tibia_input"] == "stored" and r["correction"] == correction
-                 and r["segment"] == "tibia" and r["error_frame"] == "world")  # fmt: skip
+    rows = select_rows(stage.orientation_rows, tibia_input="stored", correction=correction,
+                       segment="tibia", error_frame="world")  # fmt: skip
+    return _mean(float(r["z_deg"]) for r in rows)
 
 
 def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
@@ -87,7 +80,7 @@ def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
     )  # fmt: skip
     if {"none", "average"} <= set(imc_stage.corrections):
         z0, z1 = _tibia_z(imc_stage, "none"), _tibia_z(imc_stage, "average")
-        p0, p1 = (_paper_mean(PAPER_TABLE_V[c][3]) for c in ("none", "average"))
+        p0, p1 = (paper_mean(PAPER_TABLE_V[c][3]) for c in ("none", "average"))
         lines.append(
             f"- **Table V (orientation errors):** the paper's pattern is that of the world-frame "
             f"error R_imc R_omcᵀ: the tibia's Z error falls from {z0:.1f} to {z1:.1f} deg with the "
