@@ -108,11 +108,9 @@ def _stop(child: subprocess.Popen) -> None:
     """Terminate the viewer's whole process group (then kill what is left after 5 s)."""
     if child.poll() is not None:
         return
+    _signal_group(child, signal.SIGTERM)
     try:
-        os.killpg(child.pid, signal.SIGTERM)
         child.wait(timeout=5)
     except subprocess.TimeoutExpired:
-        os.killpg(child.pid, signal.SIGKILL)
+        _signal_group(child, signal.SIGKILL)
         child.wait()
-    except ProcessLookupError:
-        pass
