@@ -22,6 +22,7 @@ from pipeline._lazy import lazy_exports
 __version__ = "0.1.0"
 
 _EXPORTS = {
+    "IKOptions": "process",
     "IKRun": "process",
     "InputError": "errors",
     "Measures": "model.anthropometry",

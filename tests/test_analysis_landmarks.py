@@ -54,8 +54,10 @@ def isb_configurations(sk: Skeleton, n: int, seed: int) -> tuple[np.ndarray, dic
         for i, jn in enumerate(knee):
             Q[:, sk.q_index(jn)] = ang[:, i]
         truth[f"{side}_knee"] = ang
-        for jn in sk.leg_joints(side, "ankle"):
-            Q[:, sk.q_index(jn)] = rng.uniform(-0.4, 0.4, n)
+        ankle = rng.uniform(-0.4, 0.4, (n, 2))
+        for i, jn in enumerate(sk.leg_joints(side, "ankle")):
+            Q[:, sk.q_index(jn)] = ankle[:, i]
+        truth[f"{side}_ankle"] = ankle  # ankle_Z = dorsiflexion, ankle_X = inversion
     return Q, truth
 
 
@@ -97,13 +99,18 @@ def test_trajectories_follow_wang_eq_15_17(free, side):
 def test_joint_angles_round_trip_zxy_chain(free):
     Q, truth = isb_configurations(free, 300, seed=3)
     ang = joint_angles(free, Q)
-    assert len(ang) == 12
+    assert len(ang) == 16
     for side in ("right", "left"):
         for joint in ("hip", "knee"):
             for i, a in enumerate(ANGLES):
                 np.testing.assert_allclose(
                     ang[f"{side}_{joint}_{a}"], truth[f"{side}_{joint}"][:, i], atol=1e-12
                 )
+        # the 2-DoF ankle: its coordinates are the JCS dorsiflexion and inversion on both sides
+        for i, a in enumerate(("flexion", "inversion")):
+            np.testing.assert_allclose(
+                ang[f"{side}_ankle_{a}"], truth[f"{side}_ankle"][:, i], atol=1e-12
+            )
 
 
 def test_joint_angles_hinge(hinge, tmp_path):
@@ -144,8 +151,16 @@ def test_jcs_angle_signs_by_hand():
     R_d = W @ matrix_from_euler_zxy(np.array([0.4, 0.1, -0.2]))
     out = jcs_angles(np.stack([W, W]), np.stack([R_d, R_d]), "knee", "right")
     np.testing.assert_allclose(out, [[-0.4, 0.1, -0.2]] * 2, atol=1e-12)
+    # ankle: the foot turning about +z (toes up) is dorsiflexion; about +x (lateral edge down,
+    # sole facing medially) inversion, on both legs
+    np.testing.assert_allclose(jcs_angles(I, rot_z(0.2), "ankle", "right"), [0.2, 0, 0],
+                               atol=1e-15)  # fmt: skip
+    np.testing.assert_allclose(jcs_angles(I, rot_x(0.1), "ankle", "right"), [0, 0.1, 0],
+                               atol=1e-15)  # fmt: skip
+    np.testing.assert_allclose(jcs_angles(I, rot_x(-0.1), "ankle", "left"), [0, 0.1, 0],
+                               atol=1e-15)  # fmt: skip
     with pytest.raises(InputError):
-        jcs_angles(I, I, "ankle", "right")
+        jcs_angles(I, I, "elbow", "right")
 
 
 def test_3000_frames_all_landmarks(free):

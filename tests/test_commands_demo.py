@@ -47,13 +47,17 @@ def test_ik_recovers_the_simulated_kinematics(result):
     for key in ("right_hip_flexion", "right_hip_adduction", "right_knee_flexion",
                 "left_hip_flexion", "left_knee_flexion"):  # fmt: skip
         assert result.angle_rms_deg[key] < 1.0, key
-    # the remaining knee rotation/adduction error is the simulated hinge's neutral offset
+    # the simulated hinge's neutral pose is not the JCS zero (adduction 2.3, rotation -9.6 deg):
+    # a standing calibration cannot see that; the default AoR correction (Wang eq 9-13) recovers
+    # the adduction and half the rotation (the twist about the AoR is not observable), measured
+    # without it: 2.26 and 9.52 deg, malleoli 12 and 18 mm
     _, adduction, rotation = result.knee_neutral_offset_deg
-    assert abs(result.angle_rms_deg["right_knee_rotation"] - abs(rotation)) < 1.0
-    assert abs(result.angle_rms_deg["right_knee_adduction"] - abs(adduction)) < 1.0
+    assert result.angle_rms_deg["right_knee_adduction"] < 0.5 * abs(adduction)
+    assert result.angle_rms_deg["right_knee_rotation"] < 0.6 * abs(rotation)
     for name in ("right_EFM", "right_EFL", "right_KJC"):
         assert result.landmark_rms_m[name] < 0.005, name
-    assert result.landmark_rms_m["right_MM"] < 0.03
+    assert result.landmark_rms_m["right_MM"] < 0.008
+    assert result.landmark_rms_m["right_LM"] < 0.008
 
 
 def test_recording_shows_the_moving_model(result):

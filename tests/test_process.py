@@ -93,15 +93,76 @@ def test_still_subject_has_no_anatomical_heading(tmp_path):
         anatomical_right(rotations)
 
 
-def test_missing_pelvis_sensor_is_refused(tmp_path):
+def _subset(trial, names):
+    return trial.with_sensors({k: v for k, v in trial.sensors.items() if k in names})
+
+
+@pytest.mark.parametrize(
+    "names, joints",
+    [
+        (("femur_r_imu", "tibia_r_imu"), ["right_knee"]),  # knee only: the rehabilitation set
+        (("pelvis_imu", "femur_r_imu", "tibia_r_imu"), ["right_hip", "right_knee"]),  # one leg
+        (("femur_r_imu", "tibia_r_imu", "femur_l_imu", "tibia_l_imu"),
+         ["right_knee", "left_knee"]),  # both legs, no pelvis
+    ],
+)
+def test_any_sensor_set_solves_and_reports_only_the_joints_it_observes(tmp_path, names, joints):
+    sk, Q, trial, _ = _walk(tmp_path, n=400)
+    from pipeline.analysis.landmarks import joint_angles, landmark_trajectories
+
+    truth = joint_angles(sk, Q)
+    run = process_recording(_subset(trial, names), Measures("m", 1.75), correction="none")
+    assert run.sensors.joints == tuple(joints)
+    expected = {f"{j}_{a}" for j in joints for a in ("flexion", "adduction", "rotation")}
+    if "pelvis_imu" in names:
+        expected |= {"pelvis_tilt", "pelvis_list", "pelvis_rotation"}
+    assert set(run.joint_angles) == expected
+    for key in expected - {"pelvis_tilt", "pelvis_list", "pelvis_rotation"}:
+        err = np.degrees(np.abs(run.joint_angles[key] - truth[key]))
+        assert err.max() < 3.0, (key, err.max())
+    # landmarks of the instrumented legs only; hip-centred without a pelvis sensor
+    legs = {j.split("_")[0] for j in joints}
+    assert {n.split("_")[0] for n in run.landmarks} == legs
+    true_lm = landmark_trajectories(sk, Q)
+    for side in legs:
+        for lm in ("KJC", "MM"):
+            got = run.landmarks[f"{side}_{lm}"]
+            if "pelvis_imu" in names:
+                ref = got - run.landmarks[f"{side}_HJC"]
+            else:
+                np.testing.assert_allclose(run.landmarks[f"{side}_HJC"], 0.0, atol=1e-12)
+                ref = got
+            want = true_lm[f"{side}_{lm}"] - true_lm[f"{side}_HJC"]
+            # truth and estimate share the world up to the heading, found within a few degrees
+            assert np.abs(np.linalg.norm(ref, axis=1) - np.linalg.norm(want, axis=1)).max() < 1e-3
+
+
+def test_a_set_that_observes_no_joint_is_refused_naming_what_is_needed(tmp_path, capsys):
     _, _, trial, _ = _walk(tmp_path, n=200)
-    sensors = {k: v for k, v in trial.sensors.items() if k != "pelvis_imu"}
-    path = tmp_path / "nopelvis.sto"
-    write_orientations_sto(path, trial.with_sensors(sensors))
+    path = tmp_path / "thighs.sto"
+    write_orientations_sto(path, _subset(trial, ("femur_r_imu", "femur_l_imu")))
     code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
                  "--out", str(tmp_path / "o")])  # fmt: skip
     assert code == 2
-    assert not (tmp_path / "o" / "nopelvis_ik.mot").exists()
+    err = capsys.readouterr().err
+    assert "observe no joint" in err and "femur_r_imu + tibia_r_imu" in err and "thighs.sto" in err
+    assert not (tmp_path / "o" / "thighs_ik.mot").exists()
+
+
+def test_knee_only_cli_writes_the_knee_columns_and_that_legs_landmarks(tmp_path):
+    _, _, trial, _ = _walk(tmp_path, n=300)
+    path = tmp_path / "knee.sto"
+    write_orientations_sto(path, _subset(trial, ("femur_r_imu", "tibia_r_imu")))
+    out = tmp_path / "o"
+    assert main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
+                 "--no-rerun", "--out", str(out)]) == 0  # fmt: skip
+    mot = read_mot(out / "knee_ik.mot")
+    assert set(mot.columns) == {"knee_angle_r", "knee_adduction_r", "knee_rotation_r"}
+    header = (out / "knee_landmarks.csv").read_text().splitlines()[0].split(",")
+    assert header[0] == "time" and all(h.startswith("right_") for h in header[1:])
+    assert "right_MM_x" in header and "right_HJC_x" in header
+    summary = (out / "knee_summary.md").read_text()
+    assert "sensors observe: right_knee" in summary and "no pelvis sensor" in summary
 
 
 @pytest.mark.dataset

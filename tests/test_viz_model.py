@@ -267,7 +267,8 @@ def test_default_layout_3d_view_and_one_plot_per_joint(motion):
 def test_angle_colours_and_translucent_meshes(motion):
     path = motion[0]
     for joint in ("right_hip", "left_knee"):
-        for angle, rgb in ANGLE_COLORS.items():
+        for angle in ("flexion", "adduction", "rotation"):
+            rgb = ANGLE_COLORS[angle]
             style = _rows(path, f"/plots/{joint}/{angle}", static=True)
             assert style["SeriesLines:names"] == [[angle]]
             r, g, b = rgb

@@ -12,6 +12,8 @@ decomposition of the distal segment's rotation relative to the proximal one,
 * hip: flexion ``a``, adduction ``L b``, internal rotation ``L c``;
 * knee: flexion ``-a`` (the tibia turns about -z when it flexes), adduction (varus) ``L b``,
   tibial internal rotation ``L c``;
+* ankle (tibia -> foot): dorsiflexion ``a``, inversion ``L b`` (the model's ankle has no third
+  rotation, so ``c`` is not reported);
 
 with ``L = +1`` for the right leg and ``-1`` for the left leg, whose segment frames are mirrored
 (z still to the subject's right): mirroring maps ``Rz(a) Rx(b) Ry(c)`` to ``Rz(a) Rx(-b) Ry(-c)``,
@@ -38,7 +40,10 @@ __all__ = [
     "wang_trajectories",
 ]
 
-_JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia")}
+_JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"), "ankle": ("tibia", "foot")}
+_ANGLE_NAMES = {"hip": ("flexion", "adduction", "rotation"),
+                "knee": ("flexion", "adduction", "rotation"),
+                "ankle": ("flexion", "inversion", "rotation")}  # fmt: skip
 
 
 def _check_q(skeleton: Skeleton, Q: np.ndarray) -> np.ndarray:
@@ -100,7 +105,8 @@ def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: s
     ``-a`` of the Z-X-Y decomposition); see the module docstring for the signs.
     """
     if joint not in _JOINTS:
-        raise InputError(f"expected joint 'hip' or 'knee', got {joint!r}", field="joint")
+        raise InputError(f"expected joint 'hip', 'knee' or 'ankle', got {joint!r}",
+                         field="joint")  # fmt: skip
     if side not in ("right", "left"):
         raise InputError(f"expected side 'right' or 'left', got {side!r}", field="side")
     Rp, Rd = np.asarray(R_proximal, dtype=float), np.asarray(R_distal, dtype=float)
@@ -112,21 +118,22 @@ def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: s
 
 
 def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
-    """ISB hip and knee angles over ``Q``: ``'<side>_<joint>_<angle>'`` -> ``(N,)`` radians.
+    """ISB hip, knee and ankle angles over ``Q``: ``'<side>_<joint>_<angle>'`` -> ``(N,)`` rad.
 
     Keys: ``right_hip_flexion``, ``right_hip_adduction``, ``right_hip_rotation``,
-    ``right_knee_flexion``, ``right_knee_adduction``, ``right_knee_rotation`` (+ ``left_*``);
+    ``right_knee_flexion``, ``right_knee_adduction``, ``right_knee_rotation``,
+    ``right_ankle_flexion`` (dorsiflexion), ``right_ankle_inversion`` (+ ``left_*``);
     rotation = internal rotation. Computed from the segment frames (not read from q), so a hinge
     knee reports its JCS angles including the reference rotation between the segments.
     """
-    segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia")]
+    segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia", "foot")]
     traj = frame_trajectories(skeleton, Q, segs)
     out: dict[str, np.ndarray] = {}
     for side in skeleton.legs:
         for joint, (prox, dist) in _JOINTS.items():
             p = prox if prox == "pelvis" else f"{side}_{prox}"
             ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
-            for i, name in enumerate(("flexion", "adduction", "rotation")):
+            for i, name in enumerate(_ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
                 out[f"{side}_{joint}_{name}"] = ang[:, i]
     return out
 

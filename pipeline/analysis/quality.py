@@ -26,9 +26,16 @@ AT_LIMIT_TOL = 1e-3  # rad from the limit counts as at the limit
 
 
 def quality_flags(
-    skeleton: Skeleton, q: np.ndarray, residual_rms: np.ndarray, notes: list[str] = ()
+    skeleton: Skeleton,
+    q: np.ndarray,
+    residual_rms: np.ndarray,
+    notes: list[str] = (),
+    joints: list[str] | None = None,
 ) -> list[str]:
-    """The flags of the module docstring, one line each (empty when the run looks plausible)."""
+    """The flags of the module docstring, one line each (empty when the run looks plausible).
+
+    ``joints``: the joints whose limits are checked (default all; unobserved joints held at a
+    fixed value are better left out)."""
     flags = []
     res = np.degrees(np.nanmedian(residual_rms)) if np.isfinite(residual_rms).any() else np.nan
     if not res <= RESIDUAL_BOUND_DEG:
@@ -40,7 +47,7 @@ def quality_flags(
         )
     ok = np.isfinite(q).all(axis=1)
     at_limit = []
-    for joint in skeleton.joint_names:
+    for joint in skeleton.joint_names if joints is None else joints:
         jm = skeleton.model.joints[skeleton.model.getJointId(joint)]
         if jm.nq != 1 or not ok.any():
             continue

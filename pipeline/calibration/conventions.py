@@ -1,11 +1,31 @@
-"""Names of the joint-constraint calibration, importable at no cost (the CLI's choices come
-from here): the joints, the methods and the default one (see
-:mod:`pipeline.calibration.calibrate` for what each method is)."""
+"""Names of the calibration, importable at no cost (the CLI's choices come from here): the
+joint-constraint joints, methods and default method (:mod:`pipeline.calibration.calibrate`), the
+knee-AoR orientation corrections (:mod:`pipeline.calibration.correction`) and the calibration
+poses (:func:`pipeline.calibration.placement.pose_rotations`)."""
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_METHOD", "JOINTS", "METHODS"]
+__all__ = [
+    "CALIBRATION_POSES",
+    "CORRECTIONS",
+    "DEFAULT_CALIBRATION_POSE",
+    "DEFAULT_CORRECTION",
+    "DEFAULT_METHOD",
+    "JOINTS",
+    "METHODS",
+]
 
 METHODS = ("gn", "dwpso", "gwo", "ipopt")
 DEFAULT_METHOD = "ipopt"
 JOINTS = ("hinge", "spherical")
+
+#: Knee-AoR orientation corrections: none, Wang eq 9-13 (closed form), the whole-trial IPOPT NLP.
+CORRECTIONS = ("none", "aor", "aor-ipopt")
+#: The correction used when none is asked for: the closed form. On the Wang dataset's
+#: ``uncorrected`` IMC input it halves the malleolus errors (mean MM/LM 105/109 mm without it,
+#: 67/72 mm with it; the IPOPT version 64/68 mm costs CasADi), see ``results/wang2023``.
+DEFAULT_CORRECTION = "aor"
+#: Poses the first sample (or a static trial) may show: the model's neutral standing pose,
+#: lying on the back with the same joint angles, or sitting (hips and knees flexed 90 deg).
+CALIBRATION_POSES = ("standing", "supine", "seated")
+DEFAULT_CALIBRATION_POSE = "standing"

@@ -1,12 +1,15 @@
 """IMU placement on its segment: the sensor-to-segment rotation (and position) of each IMU frame.
 
 * :func:`placements_from_pose`: from a calibration pose in which every segment's world orientation
-  is known up to the heading. Standing: the model's neutral pose turned by the heading ``H`` about
-  the vertical; each IMU's rotation in its segment is ``R_seg,imu = (H R_seg^0)^T R_s(t0)`` with
-  ``R_seg^0`` the segment's orientation in the neutral pose (the identity for the free knee; a
-  hinge about a tilted AoR turns the tibia and foot by the rotation aligning the tibial AoR onto
-  the femoral). Positions are not observable from orientations: the model's default IMU positions
-  are kept.
+  is known up to the heading (:func:`pose_rotations`). Standing: the model's neutral pose turned
+  by the heading ``H`` about the vertical; supine: the same joint angles lying on the back;
+  seated: hips and knees flexed 90 deg. Each IMU's rotation in its segment is
+  ``R_seg,imu = R_seg^T R_s`` with ``R_seg`` the segment's world orientation in the pose (in the
+  neutral pose the identity times ``H`` for the free knee; a hinge about a tilted AoR turns the
+  tibia and foot by the rotation aligning the tibial AoR onto the femoral) and ``R_s`` the
+  sensor's orientation then (the first sample, or the mean of a static trial,
+  :func:`mean_rotation`). Positions are not observable from orientations: the model's default IMU
+  positions are kept.
 * :func:`imu_placements_from_calibration`: thigh and shank IMU frames from a joint-constraint
   hinge calibration (Hu 2021 eq 4-6, 16): what the data determine and what must be assumed.
 """
@@ -18,43 +21,92 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.calibration.conventions import CALIBRATION_POSES
 from pipeline.errors import InputError
 from pipeline.model.builder import default_imu_placements
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import normalize, rotation_aligning_with_twist
+from pipeline.rotations import normalize, project_to_so3, rot_z, rotation_aligning_with_twist
 
-__all__ = ["PlacementEstimate", "imu_placements_from_calibration", "placements_from_pose"]
+__all__ = [
+    "PlacementEstimate",
+    "imu_placements_from_calibration",
+    "mean_rotation",
+    "placements_from_pose",
+    "pose_configuration",
+    "pose_rotations",
+]
+
+
+def pose_configuration(skeleton: Skeleton, pose: str) -> np.ndarray:
+    """The joint configuration of a calibration pose (module docstring) on ``skeleton``.
+
+    ``standing`` and ``supine``: the neutral configuration (``q = 0``); ``seated``: hip flexion
+    and knee flexion of 90 deg on every leg (the root, if any, is left at its neutral value).
+    """
+    if pose not in CALIBRATION_POSES:
+        raise InputError(f"expected a calibration pose in {CALIBRATION_POSES}, got {pose!r}",
+                         field="calibration_pose")  # fmt: skip
+    q = skeleton.neutral()
+    if pose == "seated":
+        knee = "knee_Z" if skeleton.knee == "free" else "knee"
+        for side in skeleton.legs:
+            q[skeleton.q_index(f"{side}_hip_Z")] = np.pi / 2
+            q[skeleton.q_index(f"{side}_{knee}")] = np.pi / 2
+    return q
+
+
+def pose_rotations(skeleton: Skeleton, pose: str, heading: np.ndarray) -> dict[str, np.ndarray]:
+    """Segment name -> world orientation (3x3) of every segment in a calibration pose.
+
+    ``R_seg = H B R_seg^0(q_pose)`` with ``H`` the heading (rotation about the vertical y),
+    ``R_seg^0`` the segment's orientation relative to the pelvis in the pose's configuration
+    (:func:`pose_configuration`) and ``B`` the body's attitude: the identity standing or seated,
+    ``Rz(+90 deg)`` supine (the body turned about its right axis so that anterior, x, points up
+    and the head, y, points to -x of the heading frame).
+    """
+    skeleton.forward(pose_configuration(skeleton, pose))
+    B = rot_z(np.pi / 2) if pose == "supine" else np.eye(3)
+    root = np.asarray(heading, dtype=float) @ B
+    return {seg: root @ skeleton.frame_rotation(seg) for seg in skeleton.segment_frames}
 
 
 def placements_from_pose(
-    neutral: Skeleton,
+    pose: Mapping[str, np.ndarray],
     geometry: SubjectGeometry,
-    rotations: Mapping[str, np.ndarray],
-    heading: np.ndarray,
-    sample: int = 0,
+    sensors: Mapping[str, np.ndarray],
+    legs: Sequence[str] = ("right", "left"),
 ) -> dict[str, np.ndarray]:
-    """IMU frame -> 4x4 placement in its segment from the calibration pose (module docstring).
+    """IMU frame -> 4x4 placement in its segment from one calibration pose (module docstring).
 
-    ``neutral``: the subject's model (any IMU frames); ``rotations``: segment name -> (N, 3, 3)
-    world orientations of the sensor on that segment; ``heading``: the 3x3 rotation ``H`` about
-    the vertical; ``sample``: the index of the calibration pose. Segments the model lacks are
-    left out; positions are the model's defaults (:func:`default_imu_placements`).
+    ``pose``: segment name -> its world orientation in the pose (:func:`pose_rotations`);
+    ``sensors``: segment name -> the world orientation (3x3) of the sensor on that segment at that
+    moment. ``R_seg,imu = R_seg^T R_s``; positions are the model's defaults
+    (:func:`default_imu_placements`). Segments missing from ``pose`` are left out.
     """
-    neutral.forward(neutral.neutral())
     defaults: dict[str, np.ndarray] = {}
-    for side in neutral.legs:
+    for side in legs:
         defaults.update(default_imu_placements(geometry.for_side(side)))
     placements = {}
-    for seg, R in rotations.items():
+    for seg, R in sensors.items():
         frame = f"{seg}_imu"
-        if not neutral.has_frame(seg) or frame not in defaults:
+        if seg not in pose or frame not in defaults:
             continue
         T = np.eye(4)
-        T[:3, :3] = (heading @ neutral.frame_rotation(seg)).T @ R[sample]
+        T[:3, :3] = np.asarray(pose[seg]).T @ np.asarray(R, dtype=float)
         T[:3, 3] = defaults[frame][:3, 3]
         placements[frame] = T
     return placements
+
+
+def mean_rotation(R: np.ndarray) -> np.ndarray:
+    """Chordal L2 mean of rotations ``(N, 3, 3)`` (NaN rows skipped): the rotation nearest to
+    their arithmetic mean (SVD projection), the standard average of a still sensor's samples."""
+    R = np.asarray(R, dtype=float)
+    ok = np.all(np.isfinite(R), axis=(1, 2))
+    if not ok.any():
+        raise InputError("expected at least one finite orientation sample", field="orientations")
+    return project_to_so3(R[ok].mean(axis=0))
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,10 @@
-"""``pipeline ik``: a recording of IMU orientations in, joint angles and landmarks out.
+"""``pipeline ik``: a recording of orientations in, joint angles and landmarks out.
 
 Reads an OpenSim ``.sto`` (or a folder of Xsens MT ``.txt`` exports), runs
 :func:`pipeline.process.process_recording` and writes, all or nothing: ``<name>_ik.mot``
 (OpenSim coordinate names, degrees), ``<name>_landmarks.csv`` (m), ``<name>.urdf`` (with the
-calibrated IMU frames), ``<name>.rrd`` (rerun) and ``<name>_summary.md``.
+calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md`` and ``<name>_config.toml``
+(the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``).
 """
 
 from __future__ import annotations
@@ -15,119 +16,212 @@ import numpy as np
 
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
+from pipeline.io.config import SUBJECT_KEYS, config_text, read_config
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
 from pipeline.io.tables import csv_text
 from pipeline.io.xsens import read_xsens_trial
 from pipeline.model.anthropometry import Measures
-from pipeline.model.conventions import DEFAULT_KNEE
-from pipeline.process import IKRun, mot_columns, process_recording
+from pipeline.process.options import IKOptions
+from pipeline.process.run import IKRun, mot_columns, process_recording
 
-__all__ = ["load_orientations", "run_ik"]
+__all__ = ["load_orientations", "resolve_ik", "run_ik"]
 
 
 def load_orientations(
-    path: str | Path, xsens_map: dict[str, str] | None = None
+    path: str | Path, sensor_map: dict[str, str] | None = None
 ) -> Recording:
     """An OpenSim ``.sto`` file, or a folder of Xsens MT ``.txt`` exports (one per sensor).
 
-    For a folder, ``xsens_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's
+    For a folder, ``sensor_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's
     ``myIMUMappings.xml``), e.g. ``{"pelvis_imu": "00B421AF", ...}``; files are found as
     ``<prefix><id>.txt`` with the common prefix of the export (``MT_012005D6_009-001_``).
     """
     path = Path(path)
     if not path.is_dir():
         return read_orientations_sto(path)
-    if not xsens_map:
+    if not sensor_map:
         raise InputError(
-            "a folder of Xsens .txt files needs --xsens-map NAME=ID ... (e.g. "
+            "a folder of Xsens .txt files needs --sensor-map NAME=ID ... (e.g. "
             "pelvis_imu=00B421AF femur_r_imu=00B4227B)",
             file=path,
         )
-    first_id = next(iter(xsens_map.values()))
+    first_id = next(iter(sensor_map.values()))
     matches = sorted(path.glob(f"*{first_id}.txt"))
     if not matches:
-        raise InputError(f"no file ending in {first_id}.txt", file=path, field="xsens_map")
+        raise InputError(f"no file ending in {first_id}.txt", file=path, field="sensor_map")
     prefix = matches[0].name[: -len(f"{first_id}.txt")]
-    return read_xsens_trial(path, {sid: name for name, sid in xsens_map.items()}, prefix=prefix)
+    return read_xsens_trial(path, {sid: name for name, sid in sensor_map.items()}, prefix=prefix)
+
+
+def resolve_ik(
+    config: str | Path | None, flags: dict[str, object], sensor_map: dict[str, str] | None = None
+) -> tuple[Path, Path, Measures, IKOptions]:
+    """``(orientations, out_dir, measures, options)`` from a configuration file (optional) and
+    the flags given on the command line, which override it (``None`` = not given)."""
+    cfg = read_config(config) if config is not None else None
+    subject = dict(cfg.subject) if cfg else {}
+    ik = dict(cfg.ik) if cfg else {}
+    sensors = dict(cfg.sensors) if cfg else {}
+    for key, value in flags.items():
+        if value is None:
+            continue
+        (subject if key in SUBJECT_KEYS else ik)[key] = value
+    sensors.update(sensor_map or {})
+    where = cfg.source if cfg else None
+    for key in ("orientations", "out"):
+        if key not in ik:
+            raise InputError(f"--{key} is required (or [ik] {key} in the configuration file)",
+                             file=where)  # fmt: skip
+    for key in ("sex", "height_m"):
+        if key not in subject:
+            flag = "--" + key.replace("_", "-")
+            raise InputError(f"{flag} is required (or [subject] {key} in the configuration file)",
+                             file=where)  # fmt: skip
+    orientations, out = Path(ik.pop("orientations")), Path(ik.pop("out"))
+    try:
+        measures = Measures(**subject)
+        if ik.get("sensor_to_model") is not None:
+            ik["sensor_to_model"] = tuple(ik["sensor_to_model"])
+        for key in ("knee_axis_femur", "knee_axis_tibia"):
+            if ik.get(key) is not None:
+                ik[key] = tuple(ik[key])
+        options = IKOptions(**ik, sensor_map=sensors)
+    except InputError as exc:
+        if exc.file is None and where is not None:
+            raise InputError(exc.message, file=where, field=exc.field) from None
+        raise
+    return orientations, out, measures, options
 
 
 def run_ik(
-    sto: str | Path,
+    orientations: str | Path,
     measures: Measures,
     out_dir: str | Path,
-    *,
-    knee: str = DEFAULT_KNEE,
-    sensor_to_model: tuple[float, float, float] | None = None,
-    heading: str = "anatomical",
-    rerun: bool = True,
-    xsens_map: dict[str, str] | None = None,
-    strict: bool = False,
+    options: IKOptions | None = None,
+    **changes: object,
 ) -> str:
-    """``pipeline ik``: read, calibrate, IK, write `.mot`, landmarks `.csv`, URDF, `.rrd`.
+    """``pipeline ik``: read, calibrate, correct, IK; write the files of the module docstring.
 
-    Implausible results (:mod:`pipeline.analysis.quality`) open the summary and go to stderr;
-    with ``strict`` they raise :class:`~pipeline.errors.QualityError` and nothing is written.
+    ``options`` (default :class:`IKOptions`) with fields overridden by keyword. Implausible
+    results (:mod:`pipeline.analysis.quality`) open the summary and go to stderr; with
+    ``strict`` they raise :class:`~pipeline.errors.QualityError` and nothing is written.
     """
-    sto, out_dir = Path(sto), Path(out_dir)
-    trial = load_orientations(sto, xsens_map)
-    name = sto.stem if sto.suffix else sto.name
+    opts = (options or IKOptions()).replace(**changes)
+    orientations, out_dir = Path(orientations), Path(out_dir)
+    folder = orientations.is_dir()
+    trial = load_orientations(orientations, opts.sensor_map)
+    static = None
+    if opts.static_trial is not None:
+        static = load_orientations(opts.static_trial, opts.sensor_map)
+    # a folder's reader has applied the map already
+    run_opts = opts.replace(sensor_map={}) if folder else opts
+    name = orientations.stem if orientations.suffix else orientations.name
     output_dir(out_dir)
     with output_set() as out:
-        run = process_recording(trial, measures, knee=knee, sensor_to_model=sensor_to_model,
-                                heading=heading)
-        if run.flags and strict:
-            raise QualityError(run.flags, file=sto)
+        run = process_recording(trial, measures, run_opts, static=static)
+        if run.flags and opts.strict:
+            raise QualityError(run.flags, file=orientations)
         for flag in run.flags:
             print(f"warning: {flag}", file=sys.stderr)
         run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
         write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
-        rows = []
-        for k, t in enumerate(run.time):
-            row = {"time": float(t)}
-            for lm, xyz in run.landmarks.items():
-                row.update({f"{lm}_{a}": float(xyz[k, i]) for i, a in enumerate("xyz")})
-            rows.append(row)
-        columns = ["time"] + [f"{lm}_{a}" for lm in run.landmarks for a in "xyz"]
         with out.open(out_dir / f"{name}_landmarks.csv") as fh:
-            fh.write(csv_text(rows, columns))
-        if rerun:
+            fh.write(_landmarks_csv(run))
+        if opts.rerun:
             _log(run, out.path(out_dir / f"{name}.rrd"), name)
-        summary = _summary(sto, run, measures)
+        summary = _summary(orientations, run, measures)
         with out.open(out_dir / f"{name}_summary.md") as fh:
             fh.write(summary)
+        with out.open(out_dir / f"{name}_config.toml") as fh:
+            fh.write(_config(measures, opts, orientations, name))
     return summary
+
+
+def _config(measures: Measures, opts: IKOptions, orientations: Path, name: str) -> str:
+    from pipeline import __version__
+
+    header = (f"pipeline ik configuration of {name} (pipeline {__version__}); to reproduce:\n"
+              f"pipeline ik --config {name}_config.toml --out DIR")  # fmt: skip
+    return config_text(measures, opts, orientations=orientations, header=header)
+
+
+def _landmarks_csv(run: IKRun) -> str:
+    rows = []
+    for k, t in enumerate(run.time):
+        row = {"time": float(t)}
+        for lm, xyz in run.landmarks.items():
+            row.update({f"{lm}_{a}": float(xyz[k, i]) for i, a in enumerate("xyz")})
+        rows.append(row)
+    columns = ["time"] + [f"{lm}_{a}" for lm in run.landmarks for a in "xyz"]
+    return csv_text(rows, columns)
 
 
 def _log(run: IKRun, path: Path, name: str) -> None:
     from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
 
-    log_motion(path, run.time - run.time[0], run.skeleton, run.q, recording_name=name)
+    angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
+    log_motion(path, run.time - run.time[0], run.skeleton, run.q, recording_name=name,
+               landmarks=list(run.landmarks) or False, joint_angles=angles)  # fmt: skip
 
 
-def _summary(sto: Path, run: IKRun, measures: Measures) -> str:
-    name = sto.stem if sto.suffix else sto.name
+def _summary(source: Path, run: IKRun, measures: Measures) -> str:
+    name = source.stem if source.suffix else source.name
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
+    o = run.options
+    what = "segment orientations" if o.segment_orientations else "sensor orientations"
+    pose = f"{o.calibration_pose} pose " + (f"from {Path(o.static_trial).name}" if o.static_trial
+                                             else "at the first sample")  # fmt: skip
     lines = [
-        f"# IK of {sto.name}",
+        f"# IK of {source.name}",
         "",
         *(f"**WARNING: {flag}**\n" for flag in run.flags),
-        f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf",
+        f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf "
+        f"(knee {o.knee})",
+        f"- sensors observe: {', '.join(run.sensors.joints)}; input: {what}; calibration: {pose}",
         f"- {len(run.time)} frames, {run.time[-1] - run.time[0]:.2f} s; IK {run.seconds_ik:.2f} s "
         f"({fps:.0f} frames/s)",
-        f"- heading: {run.heading_method}; subject's right at t0 (world): "
+        f"- heading: {run.heading_method}; subject's right at the calibration pose (world): "
         + "("
         + ", ".join(f"{v:.3f}" for v in run.heading_right)
         + ")",
         f"- orientation residual RMS: median {np.degrees(np.nanmedian(run.residual_rms)):.2f} deg, "
         f"95th percentile {np.degrees(np.nanpercentile(run.residual_rms, 95)):.2f} deg",
-        "",
-        "| angle | min (deg) | max (deg) |",
-        "|---|---|---|",
+        f"- knee AoR correction: {o.correction}",
     ]
+    if run.corrections:
+        lines += _correction_table(run)
+    if not any(j.endswith("_ankle") for j in run.sensors.joints):
+        lines.append("- no foot sensors: the ankle is held neutral and not reported")
+    lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]
     for k, v in run.joint_angles.items():
         lines.append(f"| {k} | {np.degrees(np.nanmin(v)):.1f} | {np.degrees(np.nanmax(v)):.1f} |")
     if run.notes:
         lines += ["", "Notes:", ""] + [f"- {n}" for n in run.notes]
     return "\n".join(lines) + "\n"
+
+
+def _correction_table(run: IKRun) -> list[str]:
+    def vec(v) -> str:
+        return "-" if v is None else "(" + ", ".join(f"{x:.3f}" for x in v) + ")"
+
+    def rot(rv) -> str:
+        angle = float(np.degrees(np.linalg.norm(rv)))
+        axis = rv / np.linalg.norm(rv) if angle > 0 else np.zeros(3)
+        return f"{angle:.1f} deg about {vec(axis)}"
+
+    lines = ["", "| knee | AoR seen (femur; tibia frame) | reference AoR | femur correction | "
+             "tibia correction | hinge residual before -> after (deg) |",
+             "|---|---|---|---|---|---|"]  # fmt: skip
+    for side, c in run.corrections.items():
+        seen = f"{vec(c.measured_femur_axis)}; {vec(c.measured_tibia_axis)}"
+        ref = f"{vec(c.reference_femur_axis)}; {vec(c.reference_tibia_axis)}"
+        if c.applied:
+            fem, tib = rot(c.femur_axis_angle), rot(c.tibia_axis_angle)
+        else:
+            fem = tib = f"not applied: {c.reason}"
+        lines.append(f"| {side} | {seen} | {ref} | {fem} | {tib} | "
+                     f"{np.degrees(c.hinge_residual_before):.1f} -> "
+                     f"{np.degrees(c.hinge_residual_after):.1f} |")  # fmt: skip
+    return lines + [""]

@@ -16,6 +16,7 @@ _EXPORTS = {
     "joint_box": "bounds",
     "orientation_residuals": "solver",
     "OrientationTask": "problem",
+    "remove_limits": "bounds",
     "setup_ik": "problem",
     "solve_frame": "solver",
     "solve_ik": "solver",

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
-__all__ = ["UNBOUNDED", "box_margin", "box_step", "joint_box"]
+__all__ = ["UNBOUNDED", "box_margin", "box_step", "joint_box", "remove_limits"]
 
 UNBOUNDED = 1e30
 """Limits at or beyond this magnitude mean "no limit" (pinocchio's default is +-DBL_MAX)."""
@@ -53,6 +53,20 @@ def joint_box(
                 hi[a] = hi_q if abs(hi_q) < UNBOUNDED else np.inf
                 qidx[a] = iq
     return lo, hi, qidx
+
+
+def remove_limits(model: pin.Model, joints: list[str]) -> None:
+    """Remove the position limits of the named 1-DoF joints of ``model`` (in place), e.g. the
+    hips of a leg model whose pelvis orientation is not measured: the hip then carries the
+    thigh's whole orientation, which no anatomical range bounds."""
+    lo, hi = model.lowerPositionLimit.copy(), model.upperPositionLimit.copy()
+    for name in joints:
+        if not model.existJointName(name):
+            raise KeyError(name)
+        j = model.joints[model.getJointId(name)]
+        lo[j.idx_q : j.idx_q + j.nq] = -np.inf
+        hi[j.idx_q : j.idx_q + j.nq] = np.inf
+    model.lowerPositionLimit, model.upperPositionLimit = lo, hi
 
 
 def box_margin(qb: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:

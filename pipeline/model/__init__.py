@@ -32,6 +32,7 @@ _EXPORTS = {
     "knee_axis": "skeleton",
     "KNEE_MODES": "conventions",
     "landmark_frame_names": "builder",
+    "LANDMARK_SEGMENT": "conventions",
     "LandmarkPositions": "anthropometry",
     "LANDMARKS": "conventions",
     "leg_visuals": "meshes",

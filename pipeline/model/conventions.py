@@ -8,10 +8,13 @@ about the knee AoR).
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_KNEE", "KNEE_MODES", "LANDMARKS", "SEGMENTS"]
+__all__ = ["DEFAULT_KNEE", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT", "SEGMENTS"]
 
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
 DEFAULT_KNEE = "free"
 LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
 SEGMENTS = ("femur", "tibia", "foot")
+#: The segment each landmark is fixed in.
+LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femur",
+                    "AJC": "tibia", "MM": "tibia", "LM": "tibia"}  # fmt: skip

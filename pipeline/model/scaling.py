@@ -82,6 +82,7 @@ def geometry_from_measures(
     knee_axis_tibia: np.ndarray | None = None,
     table: RegressionTable | None = None,
     body_mass_kg: float | None = None,
+    foot_length_m: float | None = None,
 ) -> tuple[SubjectGeometry, LandmarkPositions]:
     """Right-leg :class:`SubjectGeometry` from the regression equations (Wang eq 14).
 
@@ -98,6 +99,7 @@ def geometry_from_measures(
         knee_axis_femur=aor.femur_axis if knee_axis_femur is None else knee_axis_femur,
         knee_axis_tibia=aor.tibia_axis if knee_axis_tibia is None else knee_axis_tibia,
         body_mass_kg=body_mass_kg,
+        foot_length_m=foot_length_m,
     )
     return geometry, landmarks
 

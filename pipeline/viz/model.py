@@ -61,7 +61,8 @@ __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_m
 
 BONE_COLOR = (227, 218, 201, 150)
 BONE_LINE_COLOR = (90, 90, 90)
-ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "rotation": (30, 160, 70)}
+ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "inversion": (220, 50, 50),
+                "rotation": (30, 160, 70)}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -226,7 +227,7 @@ def log_motion(
     *,
     landmarks: bool | Sequence[str] = True,
     imu_frames: bool | Sequence[str] = True,
-    joint_angles: bool = True,
+    joint_angles: bool | Sequence[str] = True,
     bones: bool = True,
     meshes: bool = True,
     reference_landmarks: Mapping[str, np.ndarray] | None = None,
@@ -275,7 +276,10 @@ def log_motion(
         p[~ok] = np.nan
     angles = {}
     if joint_angles:
+        wanted = None if joint_angles is True else set(joint_angles)
         for key, y in isb_joint_angles(skeleton, Q_fk).items():
+            if wanted is not None and key not in wanted:
+                continue
             joint, angle = key.rsplit("_", 1)
             angles[f"plots/{joint}/{angle}"] = np.where(ok, y, np.nan)
     truth = {}
@@ -291,10 +295,11 @@ def log_motion(
     camera = _camera(traj, list(segments.values()), ground, vertical)
     plots = []
     for side in skeleton.legs:
-        for joint in ("hip", "knee"):
+        for joint in ("hip", "knee", "ankle"):
             if any(k.startswith(f"plots/{side}_{joint}/") for k in angles):
                 plots.append((f"{side} {joint} (deg)", f"/plots/{side}_{joint}"))
-    plots.sort(key=lambda view: view[0].split()[1])  # hips above knees, right before left
+    order = {"hip": 0, "knee": 1, "ankle": 2}
+    plots.sort(key=lambda view: order[view[0].split()[1]])  # hip, knee, ankle; right first
     if scalars:
         plots.append(("other", [f"/{entity}" for entity in scalars]))
     blueprint = _blueprint(plots, up_axis, camera=camera, ground=ground)

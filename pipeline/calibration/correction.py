@@ -1,0 +1,155 @@
+"""The knee-AoR orientation correction of one leg, as ``pipeline ik`` applies it (Wang 2023 §II.B).
+
+Given the femur and tibia segment orientations ``ê_F(t), ê_T(t)`` a recording implies (sensor
+orientations times the inverse of their placements) and a reference knee AoR ``(a_F, a_T)`` (the
+population mean of the subject's sex, or the user's own), the correction is a constant rotation of
+each segment frame in itself, ``e = ê R_co`` (eq 13):
+
+* ``'aor'``: the closed form, eq 9-12 (:func:`pipeline.calibration.aor.correction_rotations` on
+  :func:`pipeline.calibration.aor.knee_aor` of the recording, eq 1-8);
+* ``'aor-ipopt'``: the whole-trial NLP (:func:`pipeline.calibration.aor_ipopt.aor_correction_ipopt`,
+  CasADi/IPOPT; imported only when asked for).
+
+A sensor ``s`` placed on its segment with rotation ``P`` (``R_s = ê P``) then has the placement
+``P' = R_coᵀ P``, so the correction is a change of the IMU frames of the model and the IK is
+unchanged (:func:`corrected_placement`).
+
+What is reported (:class:`KneeCorrection`): the AoR the recording shows (eq 1-8, in the femoral and
+tibial frames), each correction as an axis and angle, and the hinge residual about the reference
+axis before and after: per sample the angle between the reference axis carried to the world by
+the femur and by the tibia, ``∠(e_F a_F, e_T a_T)`` (0 for a knee that turns exactly about the
+reference axis), RMS over the samples. A motion too small to define an axis is not corrected: the
+result says so (``applied = False`` and ``reason``) instead of raising.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.calibration.aor import correction_rotations, knee_aor
+from pipeline.calibration.conventions import CORRECTIONS
+from pipeline.errors import InputError
+from pipeline.rotations import angle_between, axis_angle
+
+__all__ = ["KneeCorrection", "correct_knee", "corrected_placement", "knee_hinge_residual"]
+
+
+@dataclass(frozen=True)
+class KneeCorrection:
+    """The correction of one leg (module docstring); angles in radians, axes unit vectors.
+
+    ``femur_rotation``/``tibia_rotation``: ``R_co`` of each segment (3x3, identity when not
+    applied); ``femur_axis_angle``/``tibia_axis_angle``: their rotation vectors (axis times angle,
+    segment frame); ``measured_*_axis``: the AoR of the recording (None when it could not be
+    estimated); ``reference_*_axis``: the axis corrected towards; ``hinge_residual_before`` /
+    ``_after``: RMS hinge residual about the reference axis (rad).
+    """
+
+    side: str
+    method: str
+    applied: bool
+    reason: str
+    femur_rotation: np.ndarray
+    tibia_rotation: np.ndarray
+    measured_femur_axis: np.ndarray | None
+    measured_tibia_axis: np.ndarray | None
+    reference_femur_axis: np.ndarray
+    reference_tibia_axis: np.ndarray
+    n_pairs: int
+    hinge_residual_before: float
+    hinge_residual_after: float
+
+    @property
+    def femur_axis_angle(self) -> np.ndarray:
+        axis, angle = axis_angle(self.femur_rotation)
+        return np.nan_to_num(axis * angle)
+
+    @property
+    def tibia_axis_angle(self) -> np.ndarray:
+        axis, angle = axis_angle(self.tibia_rotation)
+        return np.nan_to_num(axis * angle)
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain numbers (degrees for angles) for reports and configuration files."""
+
+        def vec(v):
+            return None if v is None else [float(x) for x in v]
+
+        return {
+            "side": self.side,
+            "method": self.method,
+            "applied": self.applied,
+            "reason": self.reason,
+            "femur_axis_angle_deg": vec(np.degrees(self.femur_axis_angle)),
+            "tibia_axis_angle_deg": vec(np.degrees(self.tibia_axis_angle)),
+            "measured_femur_axis": vec(self.measured_femur_axis),
+            "measured_tibia_axis": vec(self.measured_tibia_axis),
+            "reference_femur_axis": vec(self.reference_femur_axis),
+            "reference_tibia_axis": vec(self.reference_tibia_axis),
+            "n_pairs": self.n_pairs,
+            "hinge_residual_before_deg": float(np.degrees(self.hinge_residual_before)),
+            "hinge_residual_after_deg": float(np.degrees(self.hinge_residual_after)),
+        }
+
+
+def knee_hinge_residual(
+    femur_R: np.ndarray, tibia_R: np.ndarray, femur_axis: np.ndarray, tibia_axis: np.ndarray
+) -> float:
+    """RMS over the finite samples of ``∠(e_F a_F, e_T a_T)`` (rad; module docstring)."""
+    a = np.asarray(femur_R, dtype=float) @ np.asarray(femur_axis, dtype=float)
+    b = np.asarray(tibia_R, dtype=float) @ np.asarray(tibia_axis, dtype=float)
+    ang = angle_between(a, b)
+    ang = ang[np.isfinite(ang)]
+    return float(np.sqrt(np.mean(ang**2))) if ang.size else float("nan")
+
+
+def correct_knee(
+    femur_R: np.ndarray,
+    tibia_R: np.ndarray,
+    reference_femur_axis: np.ndarray,
+    reference_tibia_axis: np.ndarray,
+    *,
+    method: str = "aor",
+    side: str = "right",
+    rate_hz: float = 100.0,
+) -> KneeCorrection:
+    """Correct one leg's femur and tibia orientations ``(N, 3, 3)`` towards the reference AoR.
+
+    ``method`` is ``'aor'`` or ``'aor-ipopt'`` (module docstring); both start from the AoR the
+    recording shows (eq 1-8 with :func:`knee_aor`'s defaults, as the Wang reproduction). When the
+    knee moves too little for eq 1-8 the leg is left uncorrected and ``reason`` says why.
+    """
+    if method not in CORRECTIONS or method == "none":
+        raise InputError(f"expected a correction in {CORRECTIONS[1:]}, got {method!r}",
+                         field="correction")  # fmt: skip
+    F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
+    a_F = np.asarray(reference_femur_axis, dtype=float)
+    a_T = np.asarray(reference_tibia_axis, dtype=float)
+    before = knee_hinge_residual(F, T, a_F, a_T)
+    try:
+        measured = knee_aor(F, T)
+    except InputError as exc:
+        reason = f"the knee AoR could not be estimated: {exc}"
+        I3 = np.eye(3)
+        return KneeCorrection(side, method, False, reason, I3, I3, None, None, a_F, a_T, 0,
+                              before, before)  # fmt: skip
+    if method == "aor-ipopt":
+        from pipeline.calibration.aor_ipopt import aor_correction_ipopt  # CasADi: only here
+
+        res = aor_correction_ipopt(F, T, a_F, a_T, rate_hz=rate_hz, start=measured)
+        C_F, C_T = res.R_co_femur, res.R_co_tibia
+    else:
+        C_F, C_T = correction_rotations(measured, a_F, a_T)
+    after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
+    return KneeCorrection(side, method, True, "", C_F, C_T, measured.femur_axis,
+                          measured.tibia_axis, a_F, a_T, measured.n_pairs, before,
+                          after)  # fmt: skip
+
+
+def corrected_placement(placement: np.ndarray, R_co: np.ndarray) -> np.ndarray:
+    """``P' = R_coᵀ P`` (rotation part of a 4x4 IMU placement; the position is kept)."""
+    T = np.array(placement, dtype=float)
+    T[:3, :3] = np.asarray(R_co, dtype=float).T @ T[:3, :3]
+    return T

@@ -1,0 +1,26 @@
+"""The recording-to-results pipeline (stages 1-4 on one recording): :func:`process_recording`
+takes a recording, the subject's measures and :class:`IKOptions`, and returns an :class:`IKRun`
+(joint angles, landmarks, residuals, the calibration applied). The API, ``pipeline ik``, the demo
+and the Wang reproduction all call it; it writes nothing.
+
+The public names below load their module on first use (:mod:`pipeline._lazy`).
+"""
+
+from pipeline._lazy import lazy_exports
+
+_EXPORTS = {
+    "apply_sensor_map": "sensors",
+    "check_sensor_to_model": "options",
+    "IKOptions": "options",
+    "IKRun": "run",
+    "JOINT_SEGMENTS": "sensors",
+    "known_segments": "sensors",
+    "mot_columns": "run",
+    "MOT_NAMES": "run",
+    "process_recording": "run",
+    "SENSOR_ALIASES": "sensors",
+    "sensor_set": "sensors",
+    "SensorSet": "sensors",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,308 @@
+"""From a recording of orientations to joint angles and landmark trajectories.
+
+:func:`process_recording` is the pipeline that the Python API, ``pipeline ik``, the demo and the
+Wang reproduction share; it writes nothing (outputs are the commands' job). On our scaled Pinocchio
+model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang et al. 2023:
+
+1. **Sensors** (:mod:`pipeline.process.sensors`): the recording's names mapped to ours; the
+   joints the sensors observe (hip, knee, ankle of each leg); any set observing one joint works.
+2. **World.** Orientations ``R_s(t)`` are pre-multiplied by a fixed ``sensor_to_model`` rotation
+   (OpenSense's ``sensor_to_opensim_rotations``, space-fixed XYZ angles; ``-pi/2 0 0`` for Xsens'
+   z-up world) so that the world's y axis points up.
+3. **Heading** (:mod:`pipeline.calibration.heading`): the subject's right at the calibration pose,
+   from hip and knee flexion by default or from an axis of the pelvis sensor (OpenSense's way).
+4. **Calibration pose** (:mod:`pipeline.calibration.placement`): the first sample (or the mean of a
+   static trial) shows a standing, supine or seated pose; each sensor's rotation on its segment
+   follows from it. With ``segment_orientations`` the recording holds segment frames and the
+   placements are the identity.
+5. **Correction** (:mod:`pipeline.calibration.correction`): per leg with a knee, the segment
+   orientations implied by step 4 are corrected towards the reference knee AoR (Wang eq 9-13 or
+   the IPOPT version); the correction becomes part of the sensor placements.
+6. **IK.** Weighted orientation IK of all sensor frames (:func:`pipeline.ik.solve_ik`) with a
+   spherical pelvis root. Without a pelvis sensor the pelvis is held in its calibration-pose
+   orientation and the hips are free of limits (their angles are then not observed and not
+   reported). ISB joint angles of the observed joints and the landmark trajectories follow (pelvis
+   at the origin; each leg's hip centre at the origin when there is no pelvis sensor: translations
+   are not observable from orientations).
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipeline.analysis.landmarks import frame_trajectories, joint_angles, landmark_trajectories
+from pipeline.analysis.quality import quality_flags
+from pipeline.calibration.correction import KneeCorrection, correct_knee, corrected_placement
+from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
+from pipeline.calibration.placement import (
+    mean_rotation,
+    placements_from_pose,
+    pose_configuration,
+    pose_rotations,
+)
+from pipeline.errors import InputError
+from pipeline.ik.bounds import remove_limits
+from pipeline.ik.solver import solve_ik
+from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
+from pipeline.io.recording import Recording
+from pipeline.model.anthropometry import Measures
+from pipeline.model.conventions import LANDMARK_SEGMENT
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.model.skeleton import Skeleton
+from pipeline.process.options import IKOptions
+from pipeline.process.sensors import SensorSet, apply_sensor_map, known_segments, sensor_set
+from pipeline.rotations import (
+    euler_zxy_from_matrix,
+    matrix_from_quat,
+    quat_xyzw_from_matrix,
+    unwrap_angles,
+)
+
+__all__ = ["MOT_NAMES", "IKRun", "mot_columns", "process_recording"]
+
+#: OpenSim coordinate names (Rajagopal 2015: knee flexion and ankle dorsiflexion positive,
+#: subtalar inversion positive) for our ISB angles.
+MOT_NAMES = {
+    "hip_flexion": "hip_flexion",
+    "hip_adduction": "hip_adduction",
+    "hip_rotation": "hip_rotation",
+    "knee_flexion": "knee_angle",
+    "knee_adduction": "knee_adduction",
+    "knee_rotation": "knee_rotation",
+    "ankle_flexion": "ankle_angle",
+    "ankle_inversion": "subtalar_angle",
+}
+_PELVIS_ANGLES = ("pelvis_tilt", "pelvis_list", "pelvis_rotation")
+
+
+@dataclass
+class IKRun:
+    """Everything :func:`process_recording` produced (SI units, radians).
+
+    ``joint_angles``: ISB angles of the observed joints (``right_knee_flexion``, ...; ankle:
+    ``_flexion`` = dorsiflexion, ``_inversion``) and, with a pelvis sensor, the pelvis' ZXY angles,
+    each continuous (unwrapped: no jump of 2 pi between samples). ``landmarks``: name -> (N, 3) m
+    of the observed segments (pelvis at the origin, or each leg's hip centre without a pelvis
+    sensor). ``skeleton``: the calibrated subject model (spherical pelvis root; its IMU frames
+    carry the placements and corrections applied), ``q`` its configurations. ``placements``: IMU
+    frame -> 4x4 placement in its segment (the calibration applied); ``corrections``: side ->
+    :class:`~pipeline.calibration.correction.KneeCorrection`; ``sensors``: what the sensors
+    observe; ``heading_right``: the subject's right at the calibration pose (world);
+    ``residual_rms`` (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`);
+    ``options``: the options used.
+    """
+
+    time: np.ndarray
+    q: np.ndarray
+    joint_angles: dict[str, np.ndarray]
+    landmarks: dict[str, np.ndarray]
+    heading_right: np.ndarray
+    heading_method: str
+    residual_rms: np.ndarray
+    skeleton: Skeleton
+    seconds_ik: float
+    notes: list[str] = field(default_factory=list)
+    flags: list[str] = field(default_factory=list)
+    options: IKOptions = field(default_factory=IKOptions)
+    sensors: SensorSet | None = None
+    placements: dict[str, np.ndarray] = field(default_factory=dict)
+    corrections: dict[str, KneeCorrection] = field(default_factory=dict)
+
+    def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
+        """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
+        segments that carry a sensor)."""
+        names = sorted(self.sensors.segments) if names is None else names
+        return {n: R for n, (R, _) in frame_trajectories(self.skeleton, self.q, names).items()}
+
+
+def process_recording(
+    trial: Recording,
+    measures: Measures,
+    options: IKOptions | None = None,
+    *,
+    static: Recording | None = None,
+    **changes: object,
+) -> IKRun:
+    """Steps 1-6 of the module docstring on a read recording; nothing is written.
+
+    ``options`` (default :class:`IKOptions`) with any of its fields overridden by keyword, e.g.
+    ``process_recording(rec, Measures("m", 1.8), correction="none", knee="hinge")``. ``static``:
+    the static recording that gives the calibration pose (read by the caller; the options'
+    ``static_trial`` only names it).
+    """
+    opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
+    notes = list(trial.notes)
+    world = np.eye(3)
+    trial = apply_sensor_map(trial, opts.sensor_map)
+    if static is not None:
+        static = apply_sensor_map(static, opts.sensor_map)
+        notes += [f"static trial: {n}" for n in static.notes]
+    if opts.sensor_to_model is not None:
+        world = sensor_to_opensim_matrix(opts.sensor_to_model)
+        trial = rotate_world(trial, world)
+        static = rotate_world(static, world) if static is not None else None
+    rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()
+                 if seg != "torso"}  # fmt: skip
+    sensors = sensor_set(set(rotations), source=trial.source)
+    ignored = sorted(set(trial.sensor_names) - set(known_segments(trial)))
+    if ignored:
+        notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
+    unused = sorted(s for s in rotations if _side(s) not in sensors.legs and s != "pelvis")
+    if unused:
+        notes.append(f"segments whose sensor observes no joint, ignored: {unused}")
+    rotations = {s: R for s, R in rotations.items() if s == "pelvis" or _side(s) in sensors.legs}
+    if sensors.pelvis:
+        check_vertical(rotations["pelvis"], notes=notes, applied=world)
+    else:
+        notes.append("no pelvis sensor: hip and pelvis angles are not observed; landmarks are "
+                     "relative to each leg's hip centre")  # fmt: skip
+    if opts.heading != "anatomical" and not sensors.pelvis:
+        raise InputError(f"heading {opts.heading!r} needs a pelvis sensor (pelvis_imu)",
+                         file=trial.source, field="heading")  # fmt: skip
+    right = subject_right(rotations, opts.heading, notes=notes)
+    H = heading_rotation(right)
+
+    axes = {}
+    if opts.knee_axis_femur is not None:
+        axes = dict(knee_axis_femur=np.array(opts.knee_axis_femur),
+                    knee_axis_tibia=np.array(opts.knee_axis_tibia))  # fmt: skip
+    geometry, _ = geometry_from_measures(measures, foot_length_m=opts.foot_length_m, **axes)
+    legs = sensors.legs
+    # the model's segment orientations in the calibration pose (free knee: the heading; a hinge
+    # about a tilted AoR turns the tibia and foot by the aligning rotation)
+    pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
+    pose = pose_rotations(pose_model, opts.calibration_pose, H)
+    if opts.segment_orientations:
+        at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
+    elif static is not None:
+        at_pose, pose = _static_pose(static, rotations, right, pose_model, opts, notes)
+    else:
+        at_pose = {seg: R[0] for seg, R in rotations.items()}
+    placements = placements_from_pose(pose, geometry, at_pose, legs)
+
+    corrections = {}
+    if opts.correction != "none":
+        for side in legs:
+            if not sensors.observes(side, "knee"):
+                continue
+            fem, tib = f"{side}_femur", f"{side}_tibia"
+            S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
+            S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
+            g = geometry.for_side(side)
+            c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
+                             method=opts.correction, side=side, rate_hz=trial.rate_hz)  # fmt: skip
+            corrections[side] = c
+            if not c.applied:
+                notes.append(f"{side} knee not corrected: {c.reason}")
+                continue
+            placements[f"{fem}_imu"] = corrected_placement(placements[f"{fem}_imu"],
+                                                           c.femur_rotation)  # fmt: skip
+            placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
+                                                           c.tibia_rotation)  # fmt: skip
+
+    targets = {f"{seg}_imu": R for seg, R in rotations.items()}
+    t0 = _time.perf_counter()
+    if sensors.pelvis:
+        sk = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements,
+                            root="spherical")  # fmt: skip
+        q0 = _pose_q(sk, opts.calibration_pose, pose["pelvis"])
+        result = solve_ik(sk.model, targets, q0=q0, limits=opts.joint_limits)
+        Q = result.q
+    else:
+        # the pelvis held in its calibration-pose orientation; the hips absorb the thighs'
+        # whole orientation, so they must not be limited
+        fixed = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements)
+        remove_limits(fixed.model, [f"{s}_hip_{a}" for s in legs for a in "ZXY"])
+        q0 = _pose_q(fixed, opts.calibration_pose, None)
+        result = solve_ik(fixed.model, targets, q0=q0, root=pose["pelvis"],
+                          limits=opts.joint_limits)  # fmt: skip
+        sk = fixed.with_root("spherical")
+        root = np.tile(quat_xyzw_from_matrix(pose["pelvis"]), (len(result.q), 1))
+        Q = np.hstack([root, result.q])
+    seconds = _time.perf_counter() - t0
+    if not np.all(result.converged):
+        notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
+    angles = {k: v for k, v in joint_angles(sk, Q).items() if _observed(k, sensors)}
+    if sensors.pelvis:
+        pelvis_world = rotations["pelvis"] @ placements["pelvis_imu"][:3, :3].T
+        zxy = euler_zxy_from_matrix(np.einsum("ij,njk->nik", H.T, pelvis_world))
+        angles.update(zip(_PELVIS_ANGLES, zxy.T, strict=True))
+    # continuous angles: a subject turning round must not make pelvis_rotation jump by 360 deg
+    angles = {name: unwrap_angles(a) for name, a in angles.items()}
+    landmarks = _landmarks(sk, Q, sensors)
+    flags = quality_flags(sk, Q, result.residual_rms, notes,
+                          joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
+    return IKRun(trial.time, Q, angles, landmarks, right, opts.heading, result.residual_rms,
+                 sk, seconds, notes, flags, opts, sensors, placements, corrections)  # fmt: skip
+
+
+def _side(segment: str) -> str:
+    return segment.split("_", 1)[0]
+
+
+def _observed(name: str, sensors: SensorSet) -> bool:
+    """Whether an angle (``right_knee_flexion``) or joint (``right_knee_Z``) is observed."""
+    side, rest = name.split("_", 1)
+    return sensors.observes(side, rest.split("_", 1)[0])
+
+
+def _pose_q(sk: Skeleton, pose: str, pelvis: np.ndarray | None) -> np.ndarray:
+    q = pose_configuration(sk, pose)
+    if pelvis is not None:
+        q[:4] = quat_xyzw_from_matrix(pelvis)
+    return q
+
+
+def _static_pose(static, rotations, right, pose_model, opts, notes):
+    """Sensor orientations (the mean over the static trial) and the pose, whose heading is the
+    motion trial's carried to the static trial through a sensor (pelvis, else a thigh) assumed not
+    to have moved on the body in between, or read from the pelvis sensor (``pelvis_imu:<axis>``)."""
+    still = {seg: matrix_from_quat(q) for seg, q in map_sensors(static).items()}
+    missing = sorted(set(rotations) - set(still))
+    if missing:
+        raise InputError(f"the static trial lacks sensors for {missing}", file=static.source,
+                         field="static_trial")  # fmt: skip
+    at_pose = {seg: mean_rotation(still[seg]) for seg in rotations}
+    if opts.heading == "anatomical":
+        ref = "pelvis" if "pelvis" in rotations else sorted(s for s in rotations if "femur" in s)[0]
+        r = at_pose[ref] @ (rotations[ref][0].T @ right)
+        r = r - np.array([0.0, 1.0, 0.0]) * r[1]
+        if np.linalg.norm(r) < 0.3:
+            raise InputError("the static trial's heading cannot be found (the reference sensor's "
+                             "right points vertically)", file=static.source,
+                             field="static_trial")  # fmt: skip
+        H_static = heading_rotation(r / np.linalg.norm(r))
+    else:
+        H_static = heading_rotation(subject_right(still, opts.heading))
+    notes.append(f"calibration pose ({opts.calibration_pose}) from the static trial: mean of "
+                 f"{static.n_samples} samples")  # fmt: skip
+    return at_pose, pose_rotations(pose_model, opts.calibration_pose, H_static)
+
+
+def _landmarks(sk: Skeleton, Q: np.ndarray, sensors: SensorSet) -> dict[str, np.ndarray]:
+    def segment(frame: str) -> str:
+        side, landmark = frame.split("_", 1)
+        return f"{side}_{LANDMARK_SEGMENT[landmark]}"
+
+    names = [f for f in sk.landmark_frames if segment(f) in sensors.landmark_segments]
+    if not names:
+        return {}
+    hips = [f"{s}_HJC" for s in sensors.legs]
+    traj = landmark_trajectories(sk, Q, names + [h for h in hips if h not in names])
+    if not sensors.pelvis:
+        traj = {n: traj[n] - traj[f"{_side(n)}_HJC"] for n in names}
+    return {n: traj[n] for n in names}
+
+
+def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
+    """OpenSim-style coordinate columns (radians; :func:`write_mot` converts to degrees)."""
+    cols = {k: run.joint_angles[k] for k in _PELVIS_ANGLES if k in run.joint_angles}
+    for side, suffix in (("right", "r"), ("left", "l")):
+        for ours, theirs in MOT_NAMES.items():
+            key = f"{side}_{ours}"
+            if key in run.joint_angles:
+                cols[f"{theirs}_{suffix}"] = run.joint_angles[key]
+    return cols
