@@ -177,3 +177,63 @@ def test_report_shows_its_figures(out):
         assert f"]({name})" in report
     # the verdict opens the report, the tables follow as an appendix
     assert report.index("## Verdict") < report.index("# Appendix") < report.index("## Table IV")
+
+
+def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_errors(out, tmp_path):
+    """One code path: a subject's uncorrected IMC femur and tibia, written to a .sto as a user
+    would have them, through `pipeline ik --correction aor`, give Wang eq 9-13 + 15-17 to 1e-6 m
+    and the RMS errors that `reproduce wang2023` reports for the `average` correction."""
+    from pipeline.analysis.landmarks import wang_trajectories
+    from pipeline.calibration.aor import apply_correction, correction_rotations, knee_aor
+    from pipeline.io.opensim import sensor_to_opensim_matrix, write_orientations_sto
+    from pipeline.model.scaling import population_knee_axis
+    from pipeline.reproduce.wang2023.dataset import load_subject
+    from pipeline.reproduce.wang2023.evaluation import (
+        align, angular_speed, compare_trajectories, estimate_lag, frame_from_femur, unify_frames)
+    from pipeline.reproduce.wang2023.imc import (
+        IMC_SENSOR_TO_MODEL, MAX_LAG, imc_recording, landmark_positions, subject_measures)
+    from pipeline.reproduce.wang2023.omc import process_subject
+
+    sid = 7  # one of the nine subjects whose stored tibia was hand-corrected
+    subject = load_subject(DATA / "raw" / f"rawData{sid:02d}.mat", require_imc=True)
+    r = process_subject(subject.omc)
+    F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
+    sto = tmp_path / "knee.sto"
+    write_orientations_sto(sto, imc_recording(F, T))
+    m = subject_measures(subject, r)
+    args = ["ik", "--orientations", str(sto), "--sex", m.sex, "--height-m", repr(m.height_m),
+            "--shank-lateral-m", repr(m.shank_lateral_m), "--shank-medial-m",
+            repr(m.shank_medial_m), "--knee-width-m", repr(m.knee_width_m), "--ankle-width-m",
+            repr(m.ankle_width_m), "--segment-orientations", "--calibration-pose", "supine",
+            "--sensor-to-model", *map(repr, IMC_SENSOR_TO_MODEL), "--correction", "aor",
+            "--no-joint-limits", "--no-rerun", "--out", str(tmp_path / "o")]  # fmt: skip
+    assert main(args) == 0
+    rows = read(tmp_path / "o" / "knee_landmarks.csv")
+    W = sensor_to_opensim_matrix(IMC_SENSOR_TO_MODEL)
+    ours = {n: np.array([[float(row[f"right_{n}_{a}"]) for a in "xyz"] for row in rows]) @ W
+            for n in ("EFM", "EFL", "KJC", "MM", "LM")}  # back to the IMC world  # fmt: skip
+    # the paper's equations, written out: eq 1-8 AoR, eq 9-13 correction towards the shipped
+    # population AoR of the subject's sex, eq 15-17 trajectories from the regression positions
+    pop = population_knee_axis(m.sex)
+    C_F, C_T = correction_rotations(knee_aor(F, T), pop.femur_axis, pop.tibia_axis)
+    pf, pt = landmark_positions("regression", subject, r)
+    paper = wang_trajectories(apply_correction(F, C_F), apply_correction(T, C_T), pf, pt)
+    for n, xyz in paper.items():
+        assert np.abs(ours[n] - xyz).max() < 1e-6, n
+    # the errors against the optical data, as the reproduction computes them
+    omc = {n: subject.omc.landmarks[n] - r.hjc for n in ("EFM", "EFL", "MM", "LM")}
+    omc["KJC"] = 0.5 * (omc["EFM"] + omc["EFL"])
+    lag = estimate_lag(angular_speed(r.femur_R), angular_speed(F), MAX_LAG)
+    omc_F, _ = align(r.femur_R, F, lag)
+    omc_p = {n: align(v, F, lag)[0] for n, v in omc.items()}
+    imc_p = {n: align(r.femur_R, v, lag)[1] for n, v in ours.items()}
+    eF_p = align(r.femur_R, apply_correction(F, C_F), lag)[1]
+    R = unify_frames(frame_from_femur(omc_p["KJC"], omc_F), frame_from_femur(imc_p["KJC"], eF_p))
+    comp = compare_trajectories({n: imc_p[n] for n in ("EFM", "EFL", "MM", "LM")}, omc_p,
+                                R_imc_to_omc=R)  # fmt: skip
+    reported = {row["landmark"]: float(row["rms_mm"]) for row in read(out / "trajectory_errors.csv")
+                if row["subject_id"] == str(sid) and row["tibia_input"] == "uncorrected"
+                and row["positions"] == "regression" and row["correction"] == "average"}  # fmt: skip
+    assert set(reported) == {"EFM", "EFL", "MM", "LM"}
+    for n, value in reported.items():
+        assert abs(1e3 * comp[n].rms - value) < 0.01, (n, 1e3 * comp[n].rms, value)

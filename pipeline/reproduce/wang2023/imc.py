@@ -10,7 +10,11 @@ For each of the 16 IMC subjects and each configuration
   numbers); ``ipopt`` (the AoR correction as an NLP over the whole trial,
   :mod:`pipeline.calibration.aor_ipopt`); ``hinge_ik`` (no constant correction: orientation IK
   on a model whose knee is a hinge about the sex-average AoR, i.e. the AoR constraint at every
-  sample, :func:`hinge_ik_orientations`);
+  sample);
+
+every correction computed by the user's path, ``pipeline ik`` on the IMC femur and tibia as a
+knee-only recording of segment orientations (:func:`user_path_options`,
+:func:`corrected_orientations`);
 * ``positions``: ``regression`` (Table I, smallest-SD equation given h, s_L, s_M, k, a) or ``omc``
   (the subject's own landmark positions in the segment frames),
 
@@ -30,13 +34,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 from tqdm import tqdm
 
-from pipeline.analysis.landmarks import frame_trajectories, wang_trajectories
-from pipeline.calibration.aor import apply_correction, correction_rotations, knee_aor
+from pipeline.analysis.landmarks import wang_trajectories
+from pipeline.calibration.aor import knee_aor
 from pipeline.errors import InputError
 from pipeline.ik.solver import IKResult, solve_ik
+from pipeline.io.opensim import sensor_to_opensim_matrix
+from pipeline.io.recording import Recording
 from pipeline.model.anthropometry import Measures, predict_landmarks
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
+from pipeline.process.options import IKOptions
+from pipeline.process.run import process_recording
 from pipeline.reproduce.wang2023.dataset import IMC_OMC_INDEX_OFFSET
 from pipeline.reproduce.wang2023.evaluation import (
     align,
@@ -49,9 +57,9 @@ from pipeline.reproduce.wang2023.evaluation import (
     unify_frames,
 )
 from pipeline.reproduce.wang2023.optical import OmcStage
+from pipeline.rotations import quat_from_matrix
 
 if TYPE_CHECKING:
-    from pipeline.calibration.aor import PopulationAoR
     from pipeline.ik.solver import IKResult
     from pipeline.reproduce.wang2023.dataset import Subject
     from pipeline.reproduce.wang2023.omc import OmcResult
@@ -83,44 +91,65 @@ def _corrections() -> tuple[str, ...]:
     return ("none", "average", "individual", "reference", "ipopt", "hinge_ik")
 
 
-def hinge_ik_orientations(
-    F: np.ndarray, T: np.ndarray, sex_aor: PopulationAoR, geometry_kw: dict
-) -> tuple[np.ndarray, np.ndarray]:
-    """Femur and tibia orientations of the best hinge-consistent pose at every sample.
+#: The IMC world is the femur's pose at the first sample with ``r = Rx(+90 deg)`` (dataset
+#: README): the supine subject's anterior axis is its x axis. ``Rz(+90 deg)`` (space-fixed XYZ
+#: angles ``0 0 pi/2``, ``--sensor-to-model``) makes that axis the model's up, y.
+IMC_SENSOR_TO_MODEL = (0.0, 0.0, float(np.pi / 2))
 
-    Orientation IK (:func:`pipeline.ik.solver.solve_ik`, equal weights, no limits) on a one-leg
-    model whose knee is a hinge about the population AoR of the subject's sex (``sex_aor``): the AoR
-    constraint applied frame by frame instead of one constant correction (Wang eq 9-13). The
-    landmark positions do not enter orientation IK, so the returned frames serve eq 15-17 with any
-    positions.
+
+def user_path_options(correction: str, sex_aor, own_aor, female_aor) -> IKOptions:
+    """The ``pipeline ik`` options that compute one of the reproduction's corrections.
+
+    Every configuration runs the user's path (:func:`pipeline.process.process_recording`) on the
+    IMC femur and tibia as a knee-only recording of segment orientations, supine at the first
+    sample, without joint limits (eq 15-17 have none): ``none`` (no correction), ``average`` /
+    ``individual`` / ``reference`` (``--correction aor`` towards the sex mean, the subject's own
+    OMC AoR, the female mean), ``ipopt`` (``--correction aor-ipopt``, sex mean) and ``hinge_ik``
+    (``--knee hinge`` about the sex mean, no constant correction).
     """
+    aor = {"individual": own_aor, "reference": female_aor}.get(correction, sex_aor)
+    method = {"none": "none", "hinge_ik": "none", "ipopt": "aor-ipopt"}.get(correction, "aor")
+    return IKOptions(
+        knee="hinge" if correction == "hinge_ik" else "free", correction=method,
+        knee_axis_femur=tuple(aor.femur_axis), knee_axis_tibia=tuple(aor.tibia_axis),
+        segment_orientations=True, calibration_pose="supine",
+        sensor_to_model=IMC_SENSOR_TO_MODEL, joint_limits=False, rerun=False,
+    )  # fmt: skip
 
-    geometry = SubjectGeometry(knee_axis_femur=sex_aor.femur_axis,
-                               knee_axis_tibia=sex_aor.tibia_axis, **geometry_kw)  # fmt: skip
-    sk = Skeleton.build(geometry, knee="hinge", legs=("right",))
-    ik = solve_ik(sk.model, {"right_femur": F, "right_tibia": T}, limits=False)
-    frames = frame_trajectories(sk, ik.q, ["right_femur", "right_tibia"])
-    return frames["right_femur"][0], frames["right_tibia"][0]
+
+def imc_recording(femur_R: np.ndarray, tibia_R: np.ndarray, rate_hz: float = 100.0) -> Recording:
+    """The IMC femur and tibia as a user's knee-only recording (``femur_r_imu``,
+    ``tibia_r_imu``, quaternions ``w, x, y, z`` in the IMC world)."""
+    n = len(femur_R)
+    quats = {"femur_r_imu": quat_from_matrix(femur_R), "tibia_r_imu": quat_from_matrix(tibia_R)}
+    return Recording.from_orientations(np.arange(n) / rate_hz, rate_hz, quats)
 
 
-def _correction(name: str, F, T, measured, sex_aor, own_aor, female_aor):
-    if name == "none":
-        return np.eye(3), np.eye(3)
-    if name == "ipopt":
-        from pipeline.calibration.aor_ipopt import aor_correction_ipopt  # CasADi: only here
+def corrected_orientations(
+    correction: str, F: np.ndarray, T: np.ndarray, measures: Measures, sex_aor, own_aor,
+    female_aor,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Femur and tibia orientations (IMC world) after ``correction``, by the user's path
+    (:func:`user_path_options`): the solved model's segment frames, rotated back from the model's
+    y-up world."""  # fmt: skip
+    options = user_path_options(correction, sex_aor, own_aor, female_aor)
+    run = process_recording(imc_recording(F, T), measures, options)
+    seg = run.segment_orientations(["right_femur", "right_tibia"])
+    W = sensor_to_opensim_matrix(IMC_SENSOR_TO_MODEL)
+    return W.T @ seg["right_femur"], W.T @ seg["right_tibia"]
 
-        res = aor_correction_ipopt(F, T, sex_aor.femur_axis, sex_aor.tibia_axis)
-        return res.R_co_femur, res.R_co_tibia
-    ref = {"average": sex_aor, "individual": own_aor, "reference": female_aor}[name]
-    return correction_rotations(measured, ref.femur_axis, ref.tibia_axis)
+
+def subject_measures(subject, result) -> Measures:
+    """The subject's measures as a user would give them: sex, height and the four lengths
+    (s_L, s_M, k, a) from its optical landmarks."""
+    d = result.dims
+    return Measures(subject.omc.sex, subject.omc.height_m, d.s_L, d.s_M, d.k, d.a)
 
 
 def landmark_positions(kind: str, subject, result):
     if kind == "omc":
         return result.landmarks_femur, result.landmarks_tibia
-    d = result.dims
-    m = Measures(subject.omc.sex, subject.omc.height_m, d.s_L, d.s_M, d.k, d.a)
-    p = predict_landmarks(m)
+    p = predict_landmarks(subject_measures(subject, result))
     return p.femur, p.tibia
 
 
@@ -153,21 +182,14 @@ def run_imc_stage(
             F = subject.imc.femur_R
             T = subject.imc.tibia_R if tibia_input == "stored" else subject.imc.tibia_R_uncorrected
             try:
-                measured = knee_aor(F, T)
+                knee_aor(F, T)  # the corrections need the AoR the IMC data show (eq 1-8)
             except InputError as exc:
                 notes.append(f"subject {sid} ({tibia_input}): no IMC AoR: {exc}")
                 continue
+            measures = subject_measures(subject, r)
             for correction in corrections:
-                if correction == "hinge_ik":
-                    pf, pt = landmark_positions("regression", subject, r)
-                    kw = dict(sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf,
-                              tibia_landmarks=pt)  # fmt: skip
-                    eF, eT = hinge_ik_orientations(F, T, pop[r.sex], kw)
-                else:
-                    C_F, C_T = _correction(
-                        correction, F, T, measured, pop[r.sex], r.knee_aor, pop["f"]
-                    )
-                    eF, eT = apply_correction(F, C_F), apply_correction(T, C_T)
+                eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
+                                                r.knee_aor, pop["f"])  # fmt: skip
                 _, eF_p = align(r.femur_R, eF, lag)
                 _, eT_p = align(r.femur_R, eT, lag)
                 R_unify = None
@@ -206,7 +228,7 @@ def run_imc_stage(
                                  error_frame=error_frame)
                         )  # fmt: skip
         if rerun_dir is not None:
-            _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop[r.sex])
+            _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes)
 
 
@@ -239,16 +261,17 @@ def subject_motion(
     return sk, solve_ik(sk.model, targets, limits=limits)
 
 
-def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, sex_aor) -> Path:
+def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, pop) -> Path:
     """One .rrd per subject: the moving model (regression geometry, average AoR correction,
     uncorrected tibia), its landmarks beside the optical ones, error arrows and joint angles, all
     in the initial frame of eq 18 (femur up at the first frame)."""
     from pipeline.viz.model import log_motion  # rerun: only with --rerun
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
-    C_F, C_T = correction_rotations(knee_aor(F, T), sex_aor.femur_axis, sex_aor.tibia_axis)
-    _, eF = align(r.femur_R, apply_correction(F, C_F), lag)
-    _, eT = align(r.femur_R, apply_correction(T, C_T), lag)
+    cF, cT = corrected_orientations("average", F, T, subject_measures(subject, r), pop[r.sex],
+                                    r.knee_aor, pop["f"])  # fmt: skip
+    _, eF = align(r.femur_R, cF, lag)
+    _, eT = align(r.femur_R, cT, lag)
     pf, pt = landmark_positions("regression", subject, r)
     traj = wang_trajectories(eF, eT, pf, pt)
     omc_F, _ = align(r.femur_R, F, lag)
