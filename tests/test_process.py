@@ -266,3 +266,92 @@ def test_process_recording_writes_nothing(tmp_path, monkeypatch):
     monkeypatch.setenv("TMPDIR", str(work))
     run = process_recording(trial, Measures("m", 1.75), knee="free")
     assert list(work.iterdir()) == [] and "<robot" in run.skeleton.urdf
+
+
+@pytest.mark.parametrize(
+    "motion, pose, ok",
+    [("supine_hip_flexion", "supine", True), ("supine_hip_flexion", "standing", False),
+     ("still_thigh", "seated", True), ("still_thigh", "standing", False)],
+)
+def test_calibration_pose_places_a_lying_or_seated_subject(motion, pose, ok):
+    """Simulated supine hip flexion and seated knee swings (mis-mounted sensors), each starting
+    from its rest pose: with the right --calibration-pose the thigh points where it truly points;
+    taken as a standing pose the body is stood up."""
+    from pipeline.calibration.placement import pose_configuration
+    from pipeline.io.opensim import sensor_to_opensim_matrix
+    from pipeline.rotations import matrix_from_quat
+    from pipeline.simulate.model import simulate_trial
+
+    z_up = (-np.pi / 2, 0.0, 0.0)
+    trial = simulate_trial(motion=motion, duration_s=8.0, seed=2)
+    # 1 s still in the rest pose first (the motion starts mid-flexion): each sensor rigidly
+    # carried by its segment from its first sample back to the pose's configuration
+    sk, n0 = trial.skeleton, 100
+    rest = pose_configuration(sk, "seated" if motion == "still_thigh" else "supine")
+    rest[:7] = trial.q[0][:7]  # the free-flyer root as at the first sample
+    segs = {"pelvis_imu": "pelvis", "right_femur_imu": "right_femur",
+            "right_tibia_imu": "right_tibia"}  # fmt: skip
+    names = {"pelvis_imu": "pelvis_imu", "right_femur_imu": "femur_r_imu",
+             "right_tibia_imu": "tibia_r_imu"}  # fmt: skip
+    at0 = frame_trajectories(sk, trial.q[:1], list(segs.values()))
+    at_rest = frame_trajectories(sk, rest[None], list(segs.values()))
+    quats = {}
+    for frame, seg in segs.items():
+        R = matrix_from_quat(trial.imus[frame].recording.quat)
+        R_rest = at_rest[seg][0][0] @ at0[seg][0][0].T @ R[0]
+        quats[names[frame]] = np.concatenate([np.tile(quat_from_matrix(R_rest), (n0, 1)),
+                                              trial.imus[frame].recording.quat])  # fmt: skip
+    time = np.arange(n0 + trial.time.size) / 100.0
+    rec = Recording.from_orientations(time, 100.0, quats)
+    run = process_recording(rec, Measures("m", 1.75), correction="none", calibration_pose=pose,
+                            sensor_to_model=z_up)  # fmt: skip
+    W = sensor_to_opensim_matrix(z_up)
+
+    def thigh(lm):
+        v = lm["right_KJC"] - lm["right_HJC"]
+        return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+    true = thigh({k: v @ W.T for k, v in trial.landmarks.items()})
+    est = thigh(run.landmarks)[n0:]
+    err = np.degrees(np.arccos(np.clip(np.sum(est * true, axis=1), -1, 1)))
+    if ok:
+        assert np.median(err) < 5.0
+        assert not run.flags
+        from pipeline.analysis.landmarks import joint_angles
+
+        truth = joint_angles(sk, trial.q)
+        for key in ("right_hip_flexion", "right_knee_flexion"):
+            e = np.degrees(np.abs(run.joint_angles[key][n0:] - truth[key]))
+            assert np.median(e) < 3.0, (key, np.median(e))
+    else:
+        assert np.median(err) > 45.0
+
+
+def test_static_trial_gives_the_calibration_pose_of_a_trial_that_starts_mid_motion(tmp_path):
+    sk, Q, trial, _ = _walk(tmp_path, n=600)
+    from pipeline.analysis.landmarks import joint_angles
+
+    truth = {k: v[150:] for k, v in joint_angles(sk, Q).items()}
+    quats = trial.orientations()
+    still = {k: np.repeat(q[:1], 80, axis=0) for k, q in quats.items()}
+    static = Recording.from_orientations(np.arange(80) / 100.0, 100.0, still)
+    moving = Recording.from_orientations(trial.time[150:], 100.0,
+                                         {k: q[150:] for k, q in quats.items()})  # fmt: skip
+    m = Measures("m", 1.75)
+    with_static = process_recording(moving, m, correction="none", static=static)
+    first_sample = process_recording(moving, m, correction="none")
+    for key in ("right_hip_flexion", "right_knee_flexion", "left_knee_flexion"):
+        err = np.degrees(np.abs(with_static.joint_angles[key] - truth[key]))
+        assert err.max() < 3.0, (key, err.max())
+    # mid-stride is no standing pose: taken as one, the angles are off by the pose's angles
+    err = np.degrees(np.abs(first_sample.joint_angles["right_knee_flexion"] - truth[
+        "right_knee_flexion"]))  # fmt: skip
+    assert err.max() > 10.0
+    assert any("static trial" in n for n in with_static.notes)
+
+
+def test_static_trial_without_a_sensor_of_the_trial_is_refused(tmp_path):
+    _, _, trial, _ = _walk(tmp_path, n=200)
+    static = _subset(trial, ("pelvis_imu", "femur_r_imu"))
+    with pytest.raises(InputError, match="static trial lacks sensors"):
+        process_recording(trial, Measures("m", 1.75), static=static)

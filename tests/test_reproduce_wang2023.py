@@ -189,9 +189,20 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
     from pipeline.model.scaling import population_knee_axis
     from pipeline.reproduce.wang2023.dataset import load_subject
     from pipeline.reproduce.wang2023.evaluation import (
-        align, angular_speed, compare_trajectories, estimate_lag, frame_from_femur, unify_frames)
+        align,
+        angular_speed,
+        compare_trajectories,
+        estimate_lag,
+        frame_from_femur,
+        unify_frames,
+    )
     from pipeline.reproduce.wang2023.imc import (
-        IMC_SENSOR_TO_MODEL, MAX_LAG, imc_recording, landmark_positions, subject_measures)
+        IMC_SENSOR_TO_MODEL,
+        MAX_LAG,
+        imc_recording,
+        landmark_positions,
+        subject_measures,
+    )
     from pipeline.reproduce.wang2023.omc import process_subject
 
     sid = 7  # one of the nine subjects whose stored tibia was hand-corrected
@@ -231,7 +242,8 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
     R = unify_frames(frame_from_femur(omc_p["KJC"], omc_F), frame_from_femur(imc_p["KJC"], eF_p))
     comp = compare_trajectories({n: imc_p[n] for n in ("EFM", "EFL", "MM", "LM")}, omc_p,
                                 R_imc_to_omc=R)  # fmt: skip
-    reported = {row["landmark"]: float(row["rms_mm"]) for row in read(out / "trajectory_errors.csv")
+    table = read(out / "trajectory_errors.csv")
+    reported = {row["landmark"]: float(row["rms_mm"]) for row in table
                 if row["subject_id"] == str(sid) and row["tibia_input"] == "uncorrected"
                 and row["positions"] == "regression" and row["correction"] == "average"}  # fmt: skip
     assert set(reported) == {"EFM", "EFL", "MM", "LM"}

@@ -26,6 +26,7 @@ from pipeline.rotations import (
 )
 
 __all__ = [
+    "FLEXION_RANGE",
     "HEADINGS",
     "UP",
     "anatomical_right",
@@ -131,23 +132,58 @@ def check_vertical(
     )
 
 
+#: Plausible flexion ranges (rad) that orient a flexion axis: a hip rarely extends beyond
+#: -40 deg or flexes beyond 140 deg, a knee neither hyperextends beyond -10 deg nor flexes
+#: beyond 160 deg.
+FLEXION_RANGE = {"hip": (np.radians(-40.0), np.radians(140.0)),
+                 "knee": (np.radians(-10.0), np.radians(160.0))}  # fmt: skip
+
+
+def _range_violation(R_ref, R_mov, line, start, joint, sign):
+    """How far (rad, summed over frames) the flexion ``start + sign * phi(t)`` leaves
+    :data:`FLEXION_RANGE`, ``phi`` the signed rotation about ``line`` (world at t0) since t0."""
+    rel = np.swapaxes(R_ref, 1, 2) @ R_mov
+    axis, angle = axis_angle(rel @ rel[0].T)
+    ok = np.isfinite(angle) & np.all(np.isfinite(axis), axis=-1)  # no axis at zero angle
+    phi = angle[ok] * np.sign(axis[ok] @ (R_ref[0].T @ line))
+    flex = start + sign * phi
+    lo, hi = FLEXION_RANGE[joint]
+    return float(np.sum(np.clip(lo - flex, 0, None) + np.clip(flex - hi, 0, None)))
+
+
 def anatomical_right(
-    rotations: dict[str, np.ndarray], min_excursion: float = 0.35, notes: list[str] | None = None
+    rotations: dict[str, np.ndarray],
+    min_excursion: float = 0.35,
+    notes: list[str] | None = None,
+    start_flexion: tuple[float, float] = (0.0, 0.0),
 ) -> np.ndarray:
     """The subject's right at t0 from hip (+right) and knee (-right) flexion (module doc, step 3).
 
-    Raises :class:`InputError` when the motion is too small to define an axis (less than
-    ``min_excursion`` rad of hip or knee rotation). When a cue points more than 45 deg away from
-    the others' mean (horizontal directions), a note says so: the heading may then be unreliable.
+    ``start_flexion``: the hip and knee flexion at t0 (rad): zero standing or supine, 90 deg
+    seated. Each cue's line is the dominant axis of the relative rotation since t0; its sign is
+    the one whose flexion ``start + phi(t)`` stays within :data:`FLEXION_RANGE` (a seated knee
+    extends from 90 deg, so its largest excursions are extensions), and, when both signs keep
+    it plausible (a hip swinging about the standing pose), the sign of the largest excursions
+    (flexion from standing). Raises :class:`InputError` when the motion is too small to define
+    an axis (less than ``min_excursion`` rad of hip or knee rotation). When a cue points more
+    than 45 deg away from the others' mean (horizontal directions), a note says so: the heading
+    may then be unreliable.
     """
     cues = []
     for side in ("right", "left"):
-        pairs = (("pelvis", f"{side}_femur", 1.0), (f"{side}_femur", f"{side}_tibia", -1.0))
-        for ref, mov, sign in pairs:
+        pairs = (("pelvis", f"{side}_femur", 1.0, "hip", start_flexion[0]),
+                 (f"{side}_femur", f"{side}_tibia", -1.0, "knee", start_flexion[1]))  # fmt: skip
+        for ref, mov, sign, joint, start in pairs:
             if ref in rotations and mov in rotations:
                 axis, excursion = dominant_axis(rotations[ref], rotations[mov])
                 if axis is not None and excursion >= min_excursion:
-                    cues.append(sign * axis)
+                    # flexion = sign * (rotation about right): right = sign * axis keeps the
+                    # largest excursions flexions; check that against the joint's range
+                    args = (rotations[ref], rotations[mov], sign * axis, start, joint, sign)
+                    keep = _range_violation(*args)
+                    flip = _range_violation(rotations[ref], rotations[mov], -sign * axis, start,
+                                            joint, sign)  # fmt: skip
+                    cues.append(-sign * axis if flip < keep else sign * axis)
     if not cues:
         raise InputError(
             "the hips and knees barely move: the subject's right cannot be found from the motion; "
@@ -194,10 +230,12 @@ def pelvis_axis_right(rotations: dict[str, np.ndarray], spec: str) -> np.ndarray
 
 
 def subject_right(rotations: dict[str, np.ndarray], heading: str = "anatomical",
-                  notes: list[str] | None = None) -> np.ndarray:  # fmt: skip
-    """The subject's horizontal right at t0 by the ``heading`` method (one of :data:`HEADINGS`)."""
+                  notes: list[str] | None = None,
+                  start_flexion: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:  # fmt: skip
+    """The subject's horizontal right at t0 by the ``heading`` method (one of :data:`HEADINGS`;
+    ``start_flexion`` as :func:`anatomical_right`)."""
     if heading not in HEADINGS:
         raise InputError(f"expected one of {HEADINGS}, got {heading!r}", field="heading")
     if heading == "anatomical":
-        return anatomical_right(rotations, notes=notes)
+        return anatomical_right(rotations, notes=notes, start_flexion=start_flexion)
     return pelvis_axis_right(rotations, heading)

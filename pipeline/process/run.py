@@ -162,7 +162,16 @@ def process_recording(
     if opts.heading != "anatomical" and not sensors.pelvis:
         raise InputError(f"heading {opts.heading!r} needs a pelvis sensor (pelvis_imu)",
                          file=trial.source, field="heading")  # fmt: skip
-    right = subject_right(rotations, opts.heading, notes=notes)
+    # the calibration pose: the first sample, or the mean of the static trial, put in front of
+    # the motion so that the heading is found from the motion relative to that pose
+    if static is not None:
+        at_pose = _static_orientations(static, rotations, notes, opts.calibration_pose)
+        cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
+    else:
+        at_pose = {seg: R[0] for seg, R in rotations.items()}
+        cue = rotations
+    start = (np.pi / 2, np.pi / 2) if opts.calibration_pose == "seated" else (0.0, 0.0)
+    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start)
     H = heading_rotation(right)
 
     axes = {}
@@ -177,10 +186,6 @@ def process_recording(
     pose = pose_rotations(pose_model, opts.calibration_pose, H)
     if opts.segment_orientations:
         at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
-    elif static is not None:
-        at_pose, pose = _static_pose(static, rotations, right, pose_model, opts, notes)
-    else:
-        at_pose = {seg: R[0] for seg, R in rotations.items()}
     placements = placements_from_pose(pose, geometry, at_pose, legs)
 
     corrections = {}
@@ -256,30 +261,16 @@ def _pose_q(sk: Skeleton, pose: str, pelvis: np.ndarray | None) -> np.ndarray:
     return q
 
 
-def _static_pose(static, rotations, right, pose_model, opts, notes):
-    """Sensor orientations (the mean over the static trial) and the pose, whose heading is the
-    motion trial's carried to the static trial through a sensor (pelvis, else a thigh) assumed not
-    to have moved on the body in between, or read from the pelvis sensor (``pelvis_imu:<axis>``)."""
+def _static_orientations(static, rotations, notes, pose_name):
+    """Each sensor's mean orientation over the static trial (:func:`mean_rotation`)."""
     still = {seg: matrix_from_quat(q) for seg, q in map_sensors(static).items()}
     missing = sorted(set(rotations) - set(still))
     if missing:
         raise InputError(f"the static trial lacks sensors for {missing}", file=static.source,
                          field="static_trial")  # fmt: skip
-    at_pose = {seg: mean_rotation(still[seg]) for seg in rotations}
-    if opts.heading == "anatomical":
-        ref = "pelvis" if "pelvis" in rotations else sorted(s for s in rotations if "femur" in s)[0]
-        r = at_pose[ref] @ (rotations[ref][0].T @ right)
-        r = r - np.array([0.0, 1.0, 0.0]) * r[1]
-        if np.linalg.norm(r) < 0.3:
-            raise InputError("the static trial's heading cannot be found (the reference sensor's "
-                             "right points vertically)", file=static.source,
-                             field="static_trial")  # fmt: skip
-        H_static = heading_rotation(r / np.linalg.norm(r))
-    else:
-        H_static = heading_rotation(subject_right(still, opts.heading))
-    notes.append(f"calibration pose ({opts.calibration_pose}) from the static trial: mean of "
+    notes.append(f"calibration pose ({pose_name}) from the static trial: mean of "
                  f"{static.n_samples} samples")  # fmt: skip
-    return at_pose, pose_rotations(pose_model, opts.calibration_pose, H_static)
+    return {seg: mean_rotation(still[seg]) for seg in rotations}
 
 
 def _landmarks(sk: Skeleton, Q: np.ndarray, sensors: SensorSet) -> dict[str, np.ndarray]:
