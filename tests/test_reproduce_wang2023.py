@@ -243,9 +243,10 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
     comp = compare_trajectories({n: imc_p[n] for n in ("EFM", "EFL", "MM", "LM")}, omc_p,
                                 R_imc_to_omc=R)  # fmt: skip
     table = read(out / "trajectory_errors.csv")
+    want = dict(subject_id=str(sid), tibia_input="uncorrected", positions="regression",
+                correction="average")
     reported = {row["landmark"]: float(row["rms_mm"]) for row in table
-                if row["subject_id"] == str(sid) and row["tibia_input"] == "uncorrected"
-                and row["positions"] == "regression" and row["correction"] == "average"}  # fmt: skip
+                if all(row[k] == v for k, v in want.items())}
     assert set(reported) == {"EFM", "EFL", "MM", "LM"}
     for n, value in reported.items():
         assert abs(1e3 * comp[n].rms - value) < 0.01, (n, 1e3 * comp[n].rms, value)
