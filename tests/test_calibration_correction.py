@@ -1,0 +1,82 @@
+"""pipeline.calibration.correction: the knee-AoR correction of one leg as pipeline ik applies it."""
+
+import numpy as np
+import pytest
+
+from pipeline.calibration.correction import correct_knee, corrected_placement, knee_hinge_residual
+from pipeline.errors import InputError
+from pipeline.rotations import exp3, normalize, rot_x, rot_z
+
+
+def _knee_about(axis_f, axis_t, n=400, seed=0):
+    """Femur and tibia frames of a hip-and-knee flexion whose knee turns exactly about
+    ``axis_f`` (femur) = ``axis_t`` (tibia): T = F R0 Rot(a_t, -theta), R0 a_t = a_f."""
+    from pipeline.rotations import rotation_aligning
+
+    t = np.linspace(0, 8, n)
+    F = rot_z(np.radians(40) * (1 - np.cos(1.5 * t))) @ rot_x(np.radians(5) * np.sin(t))
+    theta = np.radians(45) * (1 - np.cos(1.5 * t + 0.4))
+    R0 = rotation_aligning(axis_t, axis_f)
+    T = F @ R0 @ exp3(-theta[:, None] * np.asarray(axis_t)[None])
+    return F, T
+
+
+def test_correction_carries_the_seen_axis_onto_the_reference_by_hand():
+    """Sensors that are 8 and 6 deg off: the knee turns about z in the true frames, so the
+    mis-rotated frames see it elsewhere; the closed form rotates each frame back so the axis
+    has the reference coordinates (Wang eq 9-13), and the hinge residual about the reference
+    vanishes."""
+    z = np.array([0.0, 0.0, 1.0])
+    F, T = _knee_about(z, z)
+    E_F, E_T = exp3([0.1, 0.08, 0.0]), exp3([0.0, -0.1, 0.03])  # frame errors: F_hat = F E_F
+    c = correct_knee(F @ E_F, T @ E_T, z, z)
+    assert c.applied and c.n_pairs > 10
+    np.testing.assert_allclose(c.measured_femur_axis, E_F.T @ z, atol=1e-6)  # seen: E_F^T z
+    np.testing.assert_allclose(c.femur_rotation @ z, E_F.T @ z, atol=1e-6)  # R_co V = v
+    np.testing.assert_allclose(c.tibia_rotation @ z, E_T.T @ z, atol=1e-6)
+    assert np.degrees(c.hinge_residual_before) > 3.0
+    assert np.degrees(c.hinge_residual_after) < 1e-3
+    # the corrected frames see the reference axis: (F_hat R_co)^T (world axis) = V
+    world = (F @ z)[0]
+    np.testing.assert_allclose(((F @ E_F @ c.femur_rotation)[0]).T @ world, z, atol=1e-6)
+    d = c.as_dict()
+    assert d["applied"] and len(d["femur_axis_angle_deg"]) == 3
+    assert np.linalg.norm(d["femur_axis_angle_deg"]) == pytest.approx(
+        np.degrees(np.arccos(np.clip((E_F.T @ z) @ z, -1, 1))), abs=1e-4)
+
+
+def test_ipopt_method_agrees_with_the_closed_form_on_an_exact_hinge():
+    a = normalize(np.array([-0.15, -0.18, 0.97]))
+    F, T = _knee_about(a, a)
+    E = exp3([0.05, 0.0, -0.06])
+    closed = correct_knee(F @ E, T, a, a)
+    nlp = correct_knee(F @ E, T, a, a, method="aor-ipopt")
+    np.testing.assert_allclose(nlp.femur_rotation @ a, closed.femur_rotation @ a, atol=1e-4)
+    assert np.degrees(nlp.hinge_residual_after) < 0.05
+
+
+def test_a_still_knee_is_left_uncorrected_with_the_reason():
+    F = np.tile(np.eye(3), (200, 1, 1))
+    c = correct_knee(F, F, np.array([0, 0, 1.0]), np.array([0, 0, 1.0]))
+    assert not c.applied and "could not be estimated" in c.reason
+    np.testing.assert_allclose(c.femur_rotation, np.eye(3))
+    with pytest.raises(InputError):
+        correct_knee(F, F, np.array([0, 0, 1.0]), np.array([0, 0, 1.0]), method="none")
+
+
+def test_corrected_placement_keeps_the_sensor_where_it_is():
+    """R_s = e_hat P and e = e_hat R_co give R_s = e P' with P' = R_co^T P (position kept)."""
+    P = np.eye(4)
+    P[:3, :3], P[:3, 3] = exp3([0.3, -1.0, 0.2]), [0.05, -0.2, 0.04]
+    C = exp3([0.1, 0.05, -0.2])
+    e_hat = exp3([0.7, 0.1, 0.3])
+    P2 = corrected_placement(P, C)
+    np.testing.assert_allclose((e_hat @ C) @ P2[:3, :3], e_hat @ P[:3, :3], atol=1e-12)
+    np.testing.assert_allclose(P2[:3, 3], P[:3, 3])
+
+
+def test_hinge_residual_is_the_rms_angle_between_the_carried_axes():
+    F = np.tile(np.eye(3), (4, 1, 1))
+    T = np.stack([rot_x(a) for a in np.radians([0.0, 10.0, 10.0, 0.0])])
+    z = np.array([0.0, 0.0, 1.0])
+    assert np.degrees(knee_hinge_residual(F, T, z, z)) == pytest.approx(np.sqrt(50.0))

@@ -1,0 +1,82 @@
+"""pipeline.commands.ik: the configuration file, its flags layer, and the reproducible run."""
+
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.commands.ik import resolve_ik
+
+OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
+WALK = OPENSIM / "xsens_walking_orientations.sto"
+
+
+@pytest.mark.dataset
+def test_the_written_configuration_reproduces_the_mot_byte_for_byte(tmp_path):
+    if not WALK.exists():
+        pytest.skip("../shared/data/opensim not present")
+    first = tmp_path / "first"
+    assert main(["ik", "--orientations", str(WALK), "--sex", "f", "--height-m", "1.68",
+                 "--knee-width-m", "0.1", "--sensor-to-model", "-1.5708", "0", "0",
+                 "--correction", "aor", "--knee", "hinge", "--no-rerun",
+                 "--out", str(first)]) == 0  # fmt: skip
+    config = first / "xsens_walking_orientations_config.toml"
+    doc = tomllib.loads(config.read_text())
+    assert doc["subject"] == {"sex": "f", "height_m": 1.68, "knee_width_m": 0.1}
+    assert doc["ik"]["orientations"] == str(WALK.resolve())
+    assert doc["ik"]["knee"] == "hinge" and doc["ik"]["correction"] == "aor"
+    assert doc["ik"]["calibration_pose"] == "standing" and doc["ik"]["rerun"] is False
+    second = tmp_path / "second"
+    assert main(["ik", "--config", str(config), "--out", str(second)]) == 0
+    name = "xsens_walking_orientations_ik.mot"
+    assert (second / name).read_bytes() == (first / name).read_bytes()
+    assert (second / config.name).read_text() == config.read_text()
+    # a flag overrides the file
+    third = tmp_path / "third"
+    assert main(["ik", "--config", str(config), "--knee", "free", "--out", str(third)]) == 0
+    assert tomllib.loads((third / config.name).read_text())["ik"]["knee"] == "free"
+    assert (third / name).read_bytes() != (first / name).read_bytes()
+
+
+def test_flags_override_the_file_and_required_values_are_named(tmp_path):
+    cfg = tmp_path / "s.toml"
+    cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
+                   'knee = "hinge"\nout = "res"\n[sensors]\npelvis_imu = "P"\n')  # fmt: skip
+    sto, out, measures, options = resolve_ik(cfg, {"knee": "free", "height_m": 1.7},
+                                             {"femur_r_imu": "T"})  # fmt: skip
+    assert sto == tmp_path / "w.sto" and out == tmp_path / "res"
+    assert measures.height_m == 1.7 and options.knee == "free"
+    assert options.sensor_map == {"pelvis_imu": "P", "femur_r_imu": "T"}
+    cfg.write_text('[ik]\norientations = "w.sto"\nout = "o"\n')
+    with pytest.raises(Exception, match="--sex is required"):
+        resolve_ik(cfg, {})
+    with pytest.raises(Exception, match="--orientations is required"):
+        resolve_ik(None, {"sex": "m", "height_m": 1.8})
+
+
+def test_bad_configuration_exits_2_naming_the_file_and_key(tmp_path, capsys):
+    cfg = tmp_path / "s.toml"
+    cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
+                   'correction = "wang"\n')  # fmt: skip
+    assert main(["ik", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert str(cfg) in err and "field correction" in err and "'aor'" in err
+    cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
+                   'heading_axis = "x"\n')  # fmt: skip
+    assert main(["ik", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    assert "field ik.heading_axis: unknown key" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.dataset
+def test_an_unmatched_sensor_name_is_refused_before_anything_is_written(tmp_path, capsys):
+    if not WALK.exists():
+        pytest.skip("../shared/data/opensim not present")
+    out = tmp_path / "o"
+    code = main(["ik", "--orientations", str(WALK), "--sex", "m", "--height-m", "1.8",
+                 "--sensor-map", "pelvis_imu=hip_sensor", "--out", str(out)])  # fmt: skip
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "field sensors.pelvis_imu" in err and "hip_sensor" in err and WALK.name in err
+    assert not any(out.glob("*")) if out.exists() else True
