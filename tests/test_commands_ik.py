@@ -1,9 +1,9 @@
 """pipeline.commands.ik: the configuration file, its flags layer, and the reproducible run."""
 
-import tomllib
 from pathlib import Path
 
 import pytest
+import tomllib
 
 from pipeline.cli import main
 from pipeline.commands.ik import resolve_ik

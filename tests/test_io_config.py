@@ -1,4 +1,4 @@
-"""pipeline.io.config: the TOML configuration of `pipeline ik`, read with checks and written back."""
+"""pipeline.io.config: the TOML configuration of `pipeline ik`, read with checks, written back."""
 
 import pytest
 
