@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -54,8 +56,20 @@ def test_geometry_derived_dimensions_by_hand():
     # template hip offset (0.023, -0.1, +-0.082) at 1.80 m, scaled by height
     np.testing.assert_allclose(g.right_hip, np.array([0.023, -0.1, 0.082]) * 1.62 / 1.80)
     np.testing.assert_allclose(g.left_hip, np.array([0.023, -0.1, -0.082]) * 1.62 / 1.80)
-    assert g.foot_length_m == pytest.approx(0.1447 * 1.62)
+    assert g.foot_length_m == pytest.approx(0.152 * 1.62)  # Drillis & Contini
     assert np.linalg.norm(g.knee_axis_femur) == pytest.approx(1.0)
+    # foot landmarks by hand: L = 0.24624 m, breadth 0.0891 m, ankle height 0.06318 m; the heel
+    # 23.6 % of L behind the ankle centre, MT1 / MT5 at 72.5 / 63.5 %, sole on the floor
+    L, b, h = 0.152 * 1.62, 0.055 * 1.62, 0.039 * 1.62
+    foot = g.foot_landmarks
+    np.testing.assert_allclose(foot["HEE"], [-0.236 * L, -h, 0.0])
+    np.testing.assert_allclose(foot["TOE"], [0.764 * L, -h, 0.0])
+    np.testing.assert_allclose(foot["MT1"], [(0.725 - 0.236) * L, -h, -b / 2])  # medial
+    np.testing.assert_allclose(foot["MT5"], [(0.635 - 0.236) * L, -h, b / 2])  # lateral
+    left = g.mirrored().foot_landmarks
+    assert left["MT5"][2] == pytest.approx(-b / 2) and left["MT1"][2] == pytest.approx(b / 2)
+    with pytest.raises(InputError, match="foot length"):
+        replace(g, foot_length_m=0.5)
 
 
 def test_mirrored_flips_landmark_z_and_keeps_axes_rightward():

@@ -1,6 +1,7 @@
 """pipeline.process: IK from OpenSim .sto orientations (heading, IMU placement from the
 calibration pose, IK), and ``pipeline ik`` on the real OpenSim files."""
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -177,7 +178,7 @@ def test_real_opensim_files(tmp_path, name, rotation):
     args = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.80",
             "--out", str(tmp_path)]  # fmt: skip
     if rotation:
-        args += ["--sensor-to-model", *rotation]
+        args += ["--sensor-to-model", *rotation, "--foot-length-m", "0.28"]
     assert main(args) == 0
     stem = sto.stem
     for suffix in ("_ik.mot", "_landmarks.csv", ".urdf", ".rrd", "_summary.md"):
@@ -190,6 +191,33 @@ def test_real_opensim_files(tmp_path, name, rotation):
     assert knee.max() > 30 and knee.min() > -1  # the knees flex, and never hyperextend here
     if name.startswith("xsens"):  # a walking trial: textbook gait ranges
         assert 20 < hip.max() < 40 and 55 < knee.max() < 80
+    # the foot sensors drive the ankle: OpenSim's columns, dorsiflexion positive; in gait the
+    # ankle goes from ~20 deg plantarflexion (push-off) to ~15 deg dorsiflexion (late stance)
+    assert {"ankle_angle_r", "subtalar_angle_r", "ankle_angle_l", "subtalar_angle_l"} <= set(
+        mot.columns)  # fmt: skip
+    if name.startswith("xsens"):
+        for side in "rl":
+            a = np.degrees(mot.columns[f"ankle_angle_{side}"])
+            lo, hi = np.percentile(a, [2, 98])
+            assert -25 < lo < -10 and 8 < hi < 20, (side, lo, hi)
+    header = (tmp_path / f"{stem}_landmarks.csv").read_text().splitlines()[0].split(",")
+    assert {f"{s}_{lm}_{a}" for s in ("right", "left") for lm in ("HEE", "MT1", "MT5", "TOE")
+            for a in "xyz"} <= set(header)  # fmt: skip
+    if rotation:  # --foot-length-m: heel to toe tip
+        rows = np.loadtxt(tmp_path / f"{stem}_landmarks.csv", delimiter=",", skiprows=1)
+        col = {h: i for i, h in enumerate(header)}
+        heel = rows[:, [col[f"left_HEE_{a}"] for a in "xyz"]]
+        toe = rows[:, [col[f"left_TOE_{a}"] for a in "xyz"]]
+        np.testing.assert_allclose(np.linalg.norm(toe - heel, axis=1), 0.28, atol=1e-5)  # CSV: um
+    from pipeline.viz.recording import entity_row_counts
+
+    counts = entity_row_counts(tmp_path / f"{stem}.rrd")
+    assert counts["/world/landmarks/right_TOE"] > 0 and counts["/plots/left_ankle/flexion"] > 0
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _helpers import blueprint_views, read_blueprint
+
+    views = blueprint_views(read_blueprint(tmp_path / f"{stem}.rrd"))
+    assert views["right ankle (deg)"][1] == "/plots/right_ankle"
 
 
 def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):

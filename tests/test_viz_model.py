@@ -87,7 +87,7 @@ def test_entity_layout_and_rows(motion):
         assert counts[f"/world/model/{seg}/mesh"] == 0  # static
     for name in sk.landmark_frames:
         assert counts[f"/world/landmarks/{name}"] == N - 1, name
-    assert len(sk.landmark_frames) == 14 and len(sk.imu_frames) == 7
+    assert len(sk.landmark_frames) == 22 and len(sk.imu_frames) == 7
     for name in sk.imu_frames:
         assert counts[f"/world/imus/{name}"] == N - 1, name
     for side in ("right", "left"):

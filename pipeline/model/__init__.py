@@ -23,6 +23,8 @@ _EXPORTS = {
     "example_robot_data_share": "resources",
     "exp3_sym": "casadi_kinematics",
     "FEMUR_LANDMARKS": "anthropometry",
+    "FOOT_FRACTIONS": "geometry",
+    "FOOT_RATIOS": "geometry",
     "frame_ids": "skeleton",
     "geometry_from_measures": "scaling",
     "GROUPS": "anthropometry",

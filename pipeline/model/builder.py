@@ -6,7 +6,7 @@ Kept from the template: pelvis + thigh/shank/foot per leg, its naming style (``<
 Dumas et al. (2007) inertias (scaled). The upper body is dropped. Links are renamed to the
 segment names used downstream: ``pelvis``, ``<side>_femur``, ``<side>_tibia``, ``<side>_foot``.
 The knee is ``<side>_knee`` (hinge, 1 DoF) or ``<side>_knee_Z``, ``_X``, ``_Y`` (free). Fixed
-frames are massless links ``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM}``, ``pelvis_imu`` and
+frames are massless links ``<side>_{HJC,KJC,AJC,EFM,EFL,MM,LM,HEE,MT1,MT5,TOE}``, ``pelvis_imu`` and
 ``<side>_{femur,tibia,foot}_imu``, each attached by a fixed joint named ``<frame>_joint``. The
 left leg's mesh visuals are the sagittal mirror images of the right leg's (see
 :mod:`pipeline.model.meshes`).
@@ -74,7 +74,7 @@ __all__ = [
 
 # Template (human.urdf, right leg, H = 1.80 m) lengths used as scaling references (m).
 _T_THIGH, _T_SHANK = 0.439, 0.44
-_T_FOOT = 0.1497 * TEMPLATE_HEIGHT_M  # Dumas male foot ratio, matches the foot mesh (0.271 m)
+_T_FOOT = 0.271  # heel to toe of the template's foot mesh (0.1506 H at 1.80 m)
 
 # Template inertials (right side): mass, com, (ixx, ixy, ixz, iyy, iyz, izz).
 _INERTIA = {
@@ -253,6 +253,7 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
         "AJC": (tibia, g.ajc_tibia),
         **{k: (femur, v) for k, v in g.femur_landmarks.items()},
         **{k: (tibia, v) for k, v in g.tibia_landmarks.items()},
+        **{k: (foot, v) for k, v in g.foot_landmarks.items()},
     }
     for lm in LANDMARKS:
         parent, p = fixed[lm]

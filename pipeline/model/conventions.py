@@ -1,8 +1,9 @@
 """Names and modes of the subject model, importable at no cost (the CLI's choices come from here).
 
 Segments per leg ``femur``, ``tibia``, ``foot`` (ISB frames, Wu 2002); anatomical landmarks per
-leg ``HJC``, ``KJC``, ``AJC`` (joint centres) and ``EFM``, ``EFL``, ``MM``, ``LM`` (epicondyles,
-malleoli; Wang 2023); knee models ``free`` (Z-X-Y, Wang eq 15-17) and ``hinge`` (one rotation
+leg ``HJC``, ``KJC``, ``AJC`` (joint centres), ``EFM``, ``EFL``, ``MM``, ``LM`` (epicondyles,
+malleoli; Wang 2023) and ``HEE``, ``MT1``, ``MT5``, ``TOE`` (heel, first and fifth metatarsal
+heads, toe tip); knee models ``free`` (Z-X-Y, Wang eq 15-17) and ``hinge`` (one rotation
 about the knee AoR).
 """
 
@@ -13,8 +14,9 @@ __all__ = ["DEFAULT_KNEE", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT", "SEGME
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
 DEFAULT_KNEE = "free"
-LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM")
+LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM", "HEE", "MT1", "MT5", "TOE")
 SEGMENTS = ("femur", "tibia", "foot")
 #: The segment each landmark is fixed in.
 LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femur",
-                    "AJC": "tibia", "MM": "tibia", "LM": "tibia"}  # fmt: skip
+                    "AJC": "tibia", "MM": "tibia", "LM": "tibia",
+                    "HEE": "foot", "MT1": "foot", "MT5": "foot", "TOE": "foot"}  # fmt: skip

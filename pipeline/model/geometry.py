@@ -29,6 +29,8 @@ from pipeline.errors import InputError
 from pipeline.rotations import angle_between
 
 __all__ = [
+    "FOOT_FRACTIONS",
+    "FOOT_RATIOS",
     "TEMPLATE_HEIGHT_M",
     "TEMPLATE_HIP_OFFSET",
     "SubjectGeometry",
@@ -45,8 +47,16 @@ TEMPLATE_HEIGHT_M = 1.80
 TEMPLATE_MASS_KG = 75.0
 #: Right hip centre in the template's pelvis frame (human.urdf, joint ``right_hip_Z``).
 TEMPLATE_HIP_OFFSET = np.array([0.023, -0.1, 0.082])
-#: Dumas et al. (2007) foot length / body height (male, female); 'all' takes the mean.
-_FOOT_RATIO = {"m": 0.1497, "f": 0.1447, "all": 0.1472}
+#: Foot dimensions / body height: length (heel to toe tip) 0.152, breadth (across the metatarsal
+#: heads) 0.055, ankle height (floor to ankle centre) 0.039; Drillis & Contini (1966), as
+#: tabulated by Winter, Biomechanics and Motor Control of Human Movement (4th ed. 2009), Fig. 4.1.
+FOOT_RATIOS = {"length": 0.152, "breadth": 0.055, "ankle_height": 0.039}
+#: Foot landmarks along the foot (fraction of the foot length from the heel): the first and fifth
+#: metatarsal heads at 72.5 % and 63.5 % (the ball-girth proportions of shoe-last design, e.g.
+#: Luximon (ed.), Handbook of Footwear Design and Manufacture, 2013), the toe tip at 100 %; the
+#: ankle centre at 23.6 % (measured on example-robot-data's foot mesh: heel 0.064 m behind the
+#: ankle joint of a 0.271 m foot).
+FOOT_FRACTIONS = {"MT1": 0.725, "MT5": 0.635, "TOE": 1.0, "ankle": 0.236}
 _SIDES = ("right", "left")
 _SEXES = ("m", "f", "all")
 _FEMUR_KEYS = ("EFM", "EFL")
@@ -100,8 +110,8 @@ class SubjectGeometry:
             lateral landmarks have z < 0 there.
         right_hip, left_hip: hip centres in the pelvis frame. Default: the template's
             ``(0.023, -0.1, ±0.082)`` m scaled by ``height_m / 1.80``.
-        foot_length_m: AJC-to-toe length used for the foot mesh and IMU. Default: Dumas et al.
-            (2007) ratio times height (0.1497 H male, 0.1447 H female).
+        foot_length_m: heel-to-toe foot length, for the foot landmarks (:attr:`foot_landmarks`),
+            mesh and IMU. Default: 0.152 H (:data:`FOOT_RATIOS`).
         body_mass_kg: optional; segment masses scale by ``body_mass_kg / 75`` when given, by
             ``(height_m / 1.80) ** 3`` otherwise.
     """
@@ -139,8 +149,12 @@ class SubjectGeometry:
         set_(self, "right_hip", _vec3(self.right_hip, "right_hip"))
         set_(self, "left_hip", _vec3(self.left_hip, "left_hip"))
         if self.foot_length_m is None:
-            set_(self, "foot_length_m", _FOOT_RATIO[self.sex] * h)
+            set_(self, "foot_length_m", FOOT_RATIOS["length"] * h)
         set_(self, "foot_length_m", float(self.foot_length_m))
+        if not 0.10 * h <= self.foot_length_m <= 0.20 * h:
+            raise InputError(f"expected a foot length of 10-20 % of the height, got "
+                             f"{self.foot_length_m:.3f} m for {h:.2f} m",
+                             field="foot_length")  # fmt: skip
         if self.body_mass_kg is not None:
             m = float(self.body_mass_kg)
             if not np.isfinite(m) or not 20.0 <= m <= 250.0:
@@ -164,6 +178,25 @@ class SubjectGeometry:
     def ajc_tibia(self) -> np.ndarray:
         """Ankle joint centre in the tibial frame: (MM + LM) / 2."""
         return 0.5 * (self.tibia_landmarks["MM"] + self.tibia_landmarks["LM"])
+
+    @property
+    def foot_landmarks(self) -> dict[str, np.ndarray]:
+        """``HEE``, ``MT1``, ``MT5``, ``TOE`` in the foot frame (origin AJC; neutral foot, sole on
+        the floor ``y = -h``): heel and toe tip on the foot's long axis, the metatarsal heads
+        half the breadth medial (MT1) and lateral (MT5) of it (:data:`FOOT_FRACTIONS`,
+        :data:`FOOT_RATIOS`; length ``foot_length_m``, breadth and ankle height from the
+        height)."""
+        L, lat = self.foot_length_m, self.lateral_sign
+        b = FOOT_RATIOS["breadth"] * self.height_m
+        y = -FOOT_RATIOS["ankle_height"] * self.height_m
+        x0 = FOOT_FRACTIONS["ankle"] * L  # the ankle centre's distance from the heel
+
+        def at(fraction: float, z: float) -> np.ndarray:
+            return np.array([fraction * L - x0, y, lat * z])
+
+        f = FOOT_FRACTIONS
+        return {"HEE": at(0.0, 0.0), "MT1": at(f["MT1"], -0.5 * b), "MT5": at(f["MT5"], 0.5 * b),
+                "TOE": at(f["TOE"], 0.0)}  # fmt: skip
 
     @property
     def thigh_length(self) -> float:

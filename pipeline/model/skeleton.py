@@ -176,7 +176,8 @@ class Skeleton:
 
     @property
     def landmark_frames(self) -> list[str]:
-        return [f"{s}_{lm}" for s in self.legs for lm in LANDMARKS]
+        names = [f"{s}_{lm}" for s in self.legs for lm in LANDMARKS]
+        return [n for n in names if self.has_frame(n)]  # a URDF from before the foot landmarks
 
     @property
     def imu_frames(self) -> list[str]:
