@@ -115,6 +115,8 @@ def _add_ik_options(p: argparse.ArgumentParser) -> None:
                    help="let the joints leave the model's ranges (default: limited)")
     p.add_argument("--no-rerun", action="store_const", const=False, dest="rerun",
                    help="do not write the .rrd recording (default: written)")
+    p.add_argument("--osim", action="store_const", const=True, help="also write <name>.osim, an "
+                   "OpenSim model whose coordinates are the .mot's columns (default: not written)")
     p.add_argument("--strict", action="store_const", const=True,
                    help="implausible results (e.g. a large orientation residual) exit with code 3 "
                    "and write nothing (default: they are flagged in the summary and on stderr)")
@@ -251,7 +253,8 @@ def _cmd_ik(args) -> int:
     keys = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_medial_m",
             "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
             "segment_orientations", "calibration_pose", "static_trial", "knee", "correction",
-            "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun", "strict")  # fmt: skip
+            "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun", "strict",
+            "osim")  # fmt: skip
     flags = {k: getattr(args, k) for k in keys}
     flags.update({k: str(v) for k, v in flags.items() if isinstance(v, Path)})
     sto, out, measures, options = resolve_ik(args.config, flags,

@@ -3,8 +3,9 @@
 Reads an OpenSim ``.sto`` (or a folder of Xsens MT ``.txt`` exports), runs
 :func:`pipeline.process.process_recording` and writes, all or nothing: ``<name>_ik.mot``
 (OpenSim coordinate names, degrees), ``<name>_landmarks.csv`` (m), ``<name>.urdf`` (with the
-calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md`` and ``<name>_config.toml``
-(the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``).
+calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md``, ``<name>_config.toml``
+(the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``) and, with
+``osim``, ``<name>.osim`` (:mod:`pipeline.model.osim`).
 """
 
 from __future__ import annotations
@@ -131,6 +132,12 @@ def run_ik(
             fh.write(_landmarks_csv(run))
         if opts.rerun:
             _log(run, out.path(out_dir / f"{name}.rrd"), name)
+        if opts.osim:
+            from pipeline.model.osim import osim_text
+
+            with out.open(out_dir / f"{name}.osim") as fh:
+                fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
+                                   name=name))  # fmt: skip
         summary = _summary(orientations, run, measures)
         with out.open(out_dir / f"{name}_summary.md") as fh:
             fh.write(summary)

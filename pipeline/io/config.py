@@ -55,6 +55,7 @@ IK_KEYS: dict[str, tuple[type, ...]] = {
     "joint_limits": (bool,),
     "strict": (bool,),
     "rerun": (bool,),
+    "osim": (bool,),
 }
 _PATHS = ("orientations", "out", "static_trial")
 _TYPE_NAMES = {str: "text", list: "a list of numbers", bool: "true or false", float: "a number",

@@ -58,6 +58,8 @@ class IKOptions:
             unique part of it, e.g. an Xsens id) of the recording's sensor to use for it.
         strict: implausible results raise :class:`~pipeline.errors.QualityError`.
         rerun: write the rerun recording (``pipeline ik`` only).
+        osim: also write the model as an OpenSim ``.osim`` whose coordinates are the ``.mot``'s
+            columns (``pipeline ik`` only).
     """
 
     knee: str = DEFAULT_KNEE
@@ -74,13 +76,14 @@ class IKOptions:
     sensor_map: Mapping[str, str] = field(default_factory=dict)
     strict: bool = False
     rerun: bool = True
+    osim: bool = False
 
     def __post_init__(self) -> None:
         _choice("knee", self.knee, KNEE_MODES)
         _choice("correction", self.correction, CORRECTIONS)
         _choice("calibration_pose", self.calibration_pose, CALIBRATION_POSES)
         _choice("heading", self.heading, HEADINGS)
-        for name in ("segment_orientations", "joint_limits", "strict", "rerun"):
+        for name in ("segment_orientations", "joint_limits", "strict", "rerun", "osim"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"expected true or false, got {getattr(self, name)!r}",
                                  field=name)  # fmt: skip
