@@ -92,7 +92,7 @@ def test_modules_stay_small():
 def test_packages_state_their_stage_and_export_their_public_names():
     import importlib
 
-    for pkg in ("io", "model", "calibration", "ik", "analysis", "simulate", "viz", "commands"):
+    for pkg in ("io", "model", "calibration", "ik", "analysis", "simulate", "viz", "commands", "process"):
         module = importlib.import_module(f"pipeline.{pkg}")
         assert module.__doc__ and len(module.__doc__) > 80, pkg
         assert module.__all__, pkg
