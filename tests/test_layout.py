@@ -92,7 +92,9 @@ def test_modules_stay_small():
 def test_packages_state_their_stage_and_export_their_public_names():
     import importlib
 
-    for pkg in ("io", "model", "calibration", "ik", "analysis", "simulate", "viz", "commands", "process"):
+    packages = ("io", "model", "calibration", "ik", "analysis", "simulate", "viz", "commands",
+                "process")  # fmt: skip
+    for pkg in packages:
         module = importlib.import_module(f"pipeline.{pkg}")
         assert module.__doc__ and len(module.__doc__) > 80, pkg
         assert module.__all__, pkg
