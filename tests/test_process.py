@@ -383,3 +383,10 @@ def test_static_trial_without_a_sensor_of_the_trial_is_refused(tmp_path):
     static = _subset(trial, ("pelvis_imu", "femur_r_imu"))
     with pytest.raises(InputError, match="static trial lacks sensors"):
         process_recording(trial, Measures("m", 1.75), static=static)
+
+
+def test_a_pelvis_sensor_heading_without_a_pelvis_sensor_is_refused(tmp_path):
+    _, _, trial, _ = _walk(tmp_path, n=200)
+    knee = _subset(trial, ("femur_r_imu", "tibia_r_imu"))
+    with pytest.raises(InputError, match="needs a pelvis sensor"):
+        process_recording(knee, Measures("m", 1.75), heading="pelvis_imu:-z")

@@ -10,7 +10,9 @@ __all__ = [
     "CORRECTIONS",
     "DEFAULT_CALIBRATION_POSE",
     "DEFAULT_CORRECTION",
+    "DEFAULT_FILTER",
     "DEFAULT_METHOD",
+    "FILTERS",
     "JOINTS",
     "METHODS",
 ]
@@ -29,3 +31,6 @@ DEFAULT_CORRECTION = "aor"
 #: lying on the back with the same joint angles, or sitting (hips and knees flexed 90 deg).
 CALIBRATION_POSES = ("standing", "supine", "seated")
 DEFAULT_CALIBRATION_POSE = "standing"
+#: Attitude filters for raw signals: VQF (Laidig & Seel 2023, the default) and Hu's PI filter.
+FILTERS = ("vqf", "pi")
+DEFAULT_FILTER = "vqf"
