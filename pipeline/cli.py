@@ -15,7 +15,9 @@ from pipeline.calibration.conventions import (
     CORRECTIONS,
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
+    DEFAULT_FILTER,
     DEFAULT_METHOD,
+    FILTERS,
     JOINTS,
     METHODS,
 )
@@ -70,8 +72,10 @@ def _add_ik_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, help="subject.toml: subject, sensor names and any of "
                    "these options (flags override it); each run writes <name>_config.toml "
                    "(default: none)")
-    p.add_argument("--orientations", type=Path, help="OpenSim .sto quaternions, or a folder of "
-                   "Xsens MT .txt exports (with --sensor-map) (required, here or in --config)")
+    p.add_argument("--orientations", type=Path, help="OpenSim .sto quaternions, a folder of "
+                   "Xsens MT .txt exports (with --sensor-map), or a folder of raw IMU recordings "
+                   "(<sensor>.csv as pipeline simulate writes, Movella DOT .csv, x-IMU3 device "
+                   "folders) (required, here or in --config)")
     for flag in ("--sensor-map", "--xsens-map"):
         p.add_argument(flag, nargs="+", metavar="NAME=ID", dest="sensor_map",
                        help=argparse.SUPPRESS if flag == "--xsens-map" else
@@ -102,6 +106,10 @@ def _add_ik_options(p: argparse.ArgumentParser) -> None:
                    f"sample (or in --static-trial) (default {DEFAULT_CALIBRATION_POSE})")
     p.add_argument("--static-trial", type=Path, help="a separate static recording (same sensors) "
                    "that gives the calibration pose (default: the first sample of the trial)")
+    p.add_argument("--filter", choices=FILTERS, help="attitude filter for raw gyroscope and "
+                   "accelerometer (and magnetometer) signals: VQF or Hu's PI filter; also replaces "
+                   "orientations the recording has (default: the recording's own orientations, "
+                   f"{DEFAULT_FILTER} where it has none)")
     p.add_argument("--knee", choices=KNEE_MODES, help=f"knee model (default {DEFAULT_KNEE})")
     p.add_argument("--correction", choices=CORRECTIONS, help="knee-AoR orientation correction: "
                    "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt) or none "
@@ -179,6 +187,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="simulated motion (default gait)")  # fmt: skip
     p.add_argument("--duration-s", type=float, default=15.0,
                    help="duration in seconds (default 15; at most 600)")  # fmt: skip
+    p.add_argument("--standing-s", type=float, default=0.0,
+                   help="seconds standing still in the neutral pose first (a calibration pose "
+                   "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
     p.add_argument("--seed", type=int, default=0,
                    help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
@@ -194,6 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
     p.add_argument("--out", type=Path, default=Path("out/demo"),
                    help="output directory (default out/demo)")  # fmt: skip
+    p.add_argument("--standing-s", type=float, default=0.0,
+                   help="seconds standing still in the neutral pose first (a calibration pose "
+                   "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulation (default 0)")
     p.set_defaults(func=_cmd_demo)
 
@@ -252,7 +266,8 @@ def _cmd_ik(args) -> int:
 
     keys = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_medial_m",
             "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
-            "segment_orientations", "calibration_pose", "static_trial", "knee", "correction",
+            "segment_orientations", "calibration_pose", "static_trial", "filter", "knee",
+            "correction",
             "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun", "strict",
             "osim")  # fmt: skip
     flags = {k: getattr(args, k) for k in keys}
@@ -275,7 +290,7 @@ def _cmd_calibrate(args) -> int:
 def _cmd_simulate(args) -> int:
     from pipeline.commands.simulate import run_simulation
 
-    print(run_simulation(args.out, args.motion, args.duration_s, args.seed))
+    print(run_simulation(args.out, args.motion, args.duration_s, args.seed, args.standing_s))
     return 0
 
 

@@ -18,6 +18,7 @@ import numpy as np
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.config import SUBJECT_KEYS, config_text, read_config
+from pipeline.io.imu_folder import read_imu_folder
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
@@ -33,15 +34,19 @@ __all__ = ["load_orientations", "resolve_ik", "run_ik"]
 def load_orientations(
     path: str | Path, sensor_map: dict[str, str] | None = None
 ) -> Recording:
-    """An OpenSim ``.sto`` file, or a folder of Xsens MT ``.txt`` exports (one per sensor).
+    """An OpenSim ``.sto`` file, a folder of Xsens MT ``.txt`` exports (one per sensor), or a
+    folder of raw IMU recordings (:func:`pipeline.io.imu_folder.read_imu_folder`: our IMU CSV,
+    Movella DOT ``.csv``, x-IMU3 device folders).
 
-    For a folder, ``sensor_map`` maps OpenSense sensor names to Xsens sensor ids (like OpenSense's
-    ``myIMUMappings.xml``), e.g. ``{"pelvis_imu": "00B421AF", ...}``; files are found as
-    ``<prefix><id>.txt`` with the common prefix of the export (``MT_012005D6_009-001_``).
+    For an Xsens folder, ``sensor_map`` maps OpenSense sensor names to Xsens sensor ids (like
+    OpenSense's ``myIMUMappings.xml``), e.g. ``{"pelvis_imu": "00B421AF", ...}``; files are found
+    as ``<prefix><id>.txt`` with the common prefix of the export (``MT_012005D6_009-001_``).
     """
     path = Path(path)
     if not path.is_dir():
         return read_orientations_sto(path)
+    if not any(path.glob("*.txt")):
+        return read_imu_folder(path, sensor_map)
     if not sensor_map:
         raise InputError(
             "a folder of Xsens .txt files needs --sensor-map NAME=ID ... (e.g. "

@@ -78,7 +78,8 @@ def _truth(trial, files: dict[str, str], sex: str, height_m: float) -> dict:
 
 
 def run_simulation(
-    out_dir: str | Path, motion: str = "gait", duration_s: float = 15.0, seed: int = 0
+    out_dir: str | Path, motion: str = "gait", duration_s: float = 15.0, seed: int = 0,
+    standing_s: float = 0.0,
 ) -> str:
     """Simulate ``motion`` (one of :data:`pipeline.simulate.motions.MOTIONS`) on a
     default scaled subject and write (all or nothing) into ``out_dir``:
@@ -86,7 +87,9 @@ def run_simulation(
     ``<imu frame>.csv`` per sensor (``time,gyr_x..acc_z,quat_w..quat_z``, SI units),
     ``truth.json`` (sensor placements and misalignments, knee axis and joint centres in each
     sensor frame, noise, seed, motion), ``model.urdf``, ``landmarks.csv`` (world positions, m)
-    and ``configuration.csv`` (model q). Returns a summary listing the files.
+    and ``configuration.csv`` (model q). ``standing_s``: the trial starts with that long still
+    in the neutral standing pose (a calibration pose), then moves into the motion. Returns a
+    summary listing the files.
     """
     out = Path(out_dir)
     duration_s = float(duration_s)
@@ -98,7 +101,12 @@ def run_simulation(
     measures = Measures(sex="m", height_m=1.75)
     geometry, _ = geometry_from_measures(measures)
     skeleton = Skeleton.build(geometry, knee="hinge", root="freeflyer")
-    trial = simulate_trial(skeleton, motion, duration_s=duration_s, seed=seed)
+    standing_s = float(standing_s)
+    if not np.isfinite(standing_s) or not 0 <= standing_s < duration_s:
+        raise InputError(f"expected a standing time in [0, {duration_s:g}) s, got {standing_s:g}",
+                         field="standing_s")  # fmt: skip
+    trial = simulate_trial(skeleton, motion, duration_s=duration_s, seed=seed,
+                           standing_s=standing_s)  # fmt: skip
     files = {name: f"{name}.csv" for name in trial.imus}
     truth = _truth(trial, files, measures.sex, measures.height_m)
     lm_names = list(trial.landmarks)

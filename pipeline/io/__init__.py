@@ -12,6 +12,7 @@ from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
     "ACC_COLUMNS": "imu_csv",
+    "align_clocks": "imu_folder",
     "atomic_write": "atomic",
     "C3dMarkers": "c3d",
     "check_acc_units": "checks",
@@ -27,9 +28,11 @@ _EXPORTS = {
     "csv_text": "tables",
     "declared_rate": "sto_header",
     "DEFAULT_MAX_GAP_S": "gaps",
+    "DOT_COLUMNS": "vendor_imu",
     "estimate_rate": "checks",
     "FileLike": "text",
     "fill_gaps": "gaps",
+    "G": "vendor_imu",
     "GYR_COLUMNS": "imu_csv",
     "IK_KEYS": "config",
     "jsonable": "jsonio",
@@ -38,6 +41,7 @@ _EXPORTS = {
     "map_sensors": "opensim",
     "markdown_table": "tables",
     "mean_sd": "tables",
+    "MODEL_FRAME_NAMES": "imu_folder",
     "MotTable": "mot",
     "Notes": "notes",
     "output_dir": "atomic",
@@ -50,9 +54,12 @@ _EXPORTS = {
     "read_c3d": "c3d",
     "read_config": "config",
     "read_imu_csv": "imu_csv",
+    "read_imu_folder": "imu_folder",
     "read_mot": "mot",
+    "read_movella_dot_csv": "vendor_imu",
     "read_orientations_sto": "opensim",
     "read_text_lines": "text",
+    "read_ximu3_folder": "vendor_imu",
     "read_xsens_trial": "xsens",
     "read_xsens_txt": "xsens",
     "Recording": "recording",
@@ -70,6 +77,7 @@ _EXPORTS = {
     "write_mot": "mot",
     "write_orientations_sto": "opensim",
     "write_text_atomic": "atomic",
+    "XIMU3_LABELS": "imu_folder",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

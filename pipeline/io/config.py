@@ -49,6 +49,7 @@ IK_KEYS: dict[str, tuple[type, ...]] = {
     "segment_orientations": (bool,),
     "calibration_pose": (str,),
     "static_trial": (str,),
+    "filter": (str,),
     "sensor_to_model": (list,),
     "heading": (str,),
     "foot_length_m": (float, int),

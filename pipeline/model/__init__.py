@@ -46,6 +46,8 @@ _EXPORTS = {
     "mirror_point": "geometry",
     "models_file": "resources",
     "normalize_sex": "anthropometry",
+    "OSIM_BODIES": "osim",
+    "osim_text": "osim",
     "pelvis_visuals": "meshes",
     "PLAUSIBLE_M": "anthropometry",
     "population_knee_axis": "scaling",

@@ -17,10 +17,12 @@ _EXPORTS = {
     "known_segments": "sensors",
     "mot_columns": "run",
     "MOT_NAMES": "run",
+    "orientations_from_signals": "signals",
     "process_recording": "run",
     "SENSOR_ALIASES": "sensors",
     "sensor_set": "sensors",
     "SensorSet": "sensors",
+    "Z_UP_TO_Y_UP": "signals",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -18,6 +18,7 @@ from pipeline.calibration.conventions import (
     CORRECTIONS,
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
+    FILTERS,
 )
 from pipeline.calibration.heading import HEADINGS
 from pipeline.errors import InputError
@@ -48,6 +49,8 @@ class IKOptions:
             ``'supine'`` or ``'seated'``.
         static_trial: path of a separate static recording that gives the calibration pose (the
             mean orientation of each sensor over it); None: the first sample of the trial.
+        filter: the attitude filter for raw signals, ``'vqf'`` or ``'pi'``; None: the
+            recording's own orientations, VQF where it has none (:mod:`pipeline.process.signals`).
         sensor_to_model: fixed world rotation (rad, space-fixed XYZ, OpenSense's
             ``sensor_to_opensim_rotations``) making the world's y axis point up; None: y-up.
         heading: ``'anatomical'`` or ``'pelvis_imu:<axis>'``
@@ -69,6 +72,7 @@ class IKOptions:
     segment_orientations: bool = False
     calibration_pose: str = DEFAULT_CALIBRATION_POSE
     static_trial: str | None = None
+    filter: str | None = None
     sensor_to_model: tuple[float, float, float] | None = None
     heading: str = "anatomical"
     foot_length_m: float | None = None
@@ -83,6 +87,8 @@ class IKOptions:
         _choice("correction", self.correction, CORRECTIONS)
         _choice("calibration_pose", self.calibration_pose, CALIBRATION_POSES)
         _choice("heading", self.heading, HEADINGS)
+        if self.filter is not None:
+            _choice("filter", self.filter, FILTERS)
         for name in ("segment_orientations", "joint_limits", "strict", "rerun", "osim"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"expected true or false, got {getattr(self, name)!r}",

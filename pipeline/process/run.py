@@ -54,6 +54,7 @@ from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process.options import IKOptions
 from pipeline.process.sensors import SensorSet, apply_sensor_map, known_segments, sensor_set
+from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
 from pipeline.rotations import (
     euler_zxy_from_matrix,
     matrix_from_quat,
@@ -137,11 +138,20 @@ def process_recording(
     notes = list(trial.notes)
     world = np.eye(3)
     trial = apply_sensor_map(trial, opts.sensor_map)
+    trial, filtered = orientations_from_signals(trial, opts.filter, notes)
     if static is not None:
         static = apply_sensor_map(static, opts.sensor_map)
         notes += [f"static trial: {n}" for n in static.notes]
-    if opts.sensor_to_model is not None:
-        world = sensor_to_opensim_matrix(opts.sensor_to_model)
+        static, _ = orientations_from_signals(static, opts.filter if filtered else None, [])
+    to_model = opts.sensor_to_model
+    if filtered:
+        if to_model is not None:
+            raise InputError("--sensor-to-model applies to a recording's own orientations; the "
+                             "filter's world is z up and is turned to y up already",
+                             file=trial.source, field="sensor_to_model")  # fmt: skip
+        to_model = Z_UP_TO_Y_UP
+    if to_model is not None:
+        world = sensor_to_opensim_matrix(to_model)
         trial = rotate_world(trial, world)
         static = rotate_world(static, world) if static is not None else None
     rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()

@@ -20,12 +20,14 @@ _EXPORTS = {
     "MOTIONS": "conventions",
     "point_acceleration": "chain",
     "pose_derivatives": "chain",
+    "RAMP_S": "motions",
     "SensorNoise": "model",
     "simulate_trial": "model",
     "SimulatedImu": "model",
     "SimulatedTrial": "model",
     "Sinusoids": "chain",
     "spherical_trial": "joint_trials",
+    "standing_start": "motions",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

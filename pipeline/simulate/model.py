@@ -34,7 +34,7 @@ from pipeline.io.recording import Recording
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import exp3, normalize, quat_from_matrix
-from pipeline.simulate.motions import joint_trajectories, motion_name
+from pipeline.simulate.motions import joint_trajectories, motion_name, standing_start
 
 __all__ = [
     "GRAVITY",
@@ -184,13 +184,17 @@ def simulate_trial(
     noise: SensorNoise | None = None,
     misalignment_deg: float = 15.0,
     offset_m: float = 0.02,
+    standing_s: float = 0.0,
 ) -> SimulatedTrial:
     """Simulate ``motion`` on ``skeleton`` (reloaded with a free-flyer root if needed; None:
     a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, built in memory).
 
     Each IMU frame of the model gets a true sensor misaligned by a random rotation of
     ``misalignment_deg * U(0.5, 1)`` about a random axis and offset by ``offset_m * U(0.5, 1)``
-    in a random direction. ``noise`` defaults to :class:`SensorNoise` ``()``.
+    in a random direction. ``noise`` defaults to :class:`SensorNoise` ``()``. ``standing_s > 0``
+    starts the trial with that long still in the neutral standing pose, then a smooth transition
+    into the motion (:func:`pipeline.simulate.motions.standing_start`): a calibration pose in the
+    same continuous recording, as a lab records it.
     """
     motion = motion_name(motion)
     if not (np.isfinite(duration_s) and duration_s > 0 and np.isfinite(rate_hz) and rate_hz > 0):
@@ -206,7 +210,10 @@ def simulate_trial(
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
     )
     t = np.arange(n) / rate_hz
-    q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
+    if standing_s > 0:
+        q, v, a = standing_start(skeleton, motion, t, standing_s, r_motion)
+    else:
+        q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
     lo, hi = skeleton.lower_limits[7:], skeleton.upper_limits[7:]
     if np.any(q[:, 7:] < lo - 1e-12) or np.any(q[:, 7:] > hi + 1e-12):
         raise InputError(f"motion {motion!r} leaves the joint limits of the model", field="motion")

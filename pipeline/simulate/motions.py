@@ -33,7 +33,7 @@ from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 from pipeline.simulate.conventions import MOTIONS
 
-__all__ = ["joint_trajectories", "motion_name"]
+__all__ = ["RAMP_S", "joint_trajectories", "motion_name", "standing_start"]
 
 _X, _Y, _Z = np.eye(3)
 _STANDING = rot_x(np.pi / 2)  # pelvis (y up, z right) -> world (z up, subject faces +x)
@@ -200,4 +200,46 @@ def joint_trajectories(
             j = model.joints[model.getJointId(name)]
             fn = fns.get(name[len(side) + 1 :], Sinusoids(0.0))
             q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v] = fn(t)
+    return q, v, a
+
+
+#: Duration (s) of the smooth transition from the standing pose into the motion.
+RAMP_S = 1.5
+
+
+def _ramp(t: np.ndarray, start: float) -> tuple[np.ndarray, ...]:
+    """``s, s', s'', tau``: a quintic smoothstep from 0 (before ``start``) to 1 (after
+    ``start + RAMP_S``), C2, and its integral ``tau = int_0^t s``."""
+    x = np.clip((t - start) / RAMP_S, 0.0, 1.0)
+    inside = (t > start) & (t < start + RAMP_S)
+    s = x**3 * (10 - 15 * x + 6 * x**2)
+    ds = np.where(inside, 30 * x**2 * (1 - x) ** 2 / RAMP_S, 0.0)
+    dds = np.where(inside, 60 * x * (1 - x) * (1 - 2 * x) / RAMP_S**2, 0.0)
+    tau = RAMP_S * x**4 * (2.5 - 3 * x + x**2) + np.clip(t - start - RAMP_S, 0.0, None)
+    return s, ds, dds, tau
+
+
+def standing_start(
+    skeleton: Skeleton, motion: str, time: np.ndarray, standing_s: float,
+    seed: int | np.random.Generator = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``q, v, a`` of ``motion`` preceded by ``standing_s`` s still in the neutral pose (the
+    joints at zero, the pelvis as at the motion's start), then a :data:`RAMP_S` s transition.
+
+    Exact: with the ramp ``s(t)`` and the motion clock ``tau(t) = int s`` (:func:`_ramp`), the
+    root follows the motion at ``tau`` (``v = s v_m(tau)``, ``a = s' v_m + s^2 a_m``; the
+    free-flyer's body-frame velocity and acceleration scale so) and each joint is ``s g(tau)``
+    (``v = s' g + s^2 g'``, ``a = s'' g + 3 s s' g' + s^3 g''``).
+    """  # fmt: skip
+    t = np.asarray(time, dtype=float)
+    s, ds, dds, tau = _ramp(t, float(standing_s))
+    q, v, a = joint_trajectories(skeleton, motion, tau, seed)
+    q, v, a = q.copy(), v.copy(), a.copy()
+    v_root, a_root = v[:, :6], a[:, :6]
+    a[:, :6] = ds[:, None] * v_root + (s**2)[:, None] * a_root
+    v[:, :6] = s[:, None] * v_root
+    g, dg, ddg = q[:, 7:].copy(), v[:, 6:].copy(), a[:, 6:].copy()
+    q[:, 7:] = s[:, None] * g
+    v[:, 6:] = ds[:, None] * g + (s**2)[:, None] * dg
+    a[:, 6:] = dds[:, None] * g + (3 * s * ds)[:, None] * dg + (s**3)[:, None] * ddg
     return q, v, a
