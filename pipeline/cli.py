@@ -29,6 +29,8 @@ EXAMPLES = {
     "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
     "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
     "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
+    "orientations": "pipeline orientations --imu out/sim --filter vqf "
+    "--out out/sim_orientations.sto",
     "calibrate": "pipeline calibrate hinge --imu1 out/sim/right_femur_imu.csv "
     "--imu2 out/sim/right_tibia_imu.csv --method ipopt --json",
     "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
@@ -194,6 +196,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
 
+    p = _sub(sub, "orientations", "raw IMU signals to an OpenSense-compatible orientation .sto")
+    p.add_argument("--imu", type=Path, required=True, help="a folder of raw IMU recordings "
+                   "(<sensor>.csv, Movella DOT .csv, x-IMU3 device folders) or one file (required)")
+    p.add_argument("--filter", choices=FILTERS, default=DEFAULT_FILTER,
+                   help=f"attitude filter (default {DEFAULT_FILTER}; pi: Hu 2021's PI filter)")
+    p.add_argument("--sensor-map", nargs="+", metavar="NAME=ID",
+                   help="our sensor name = a unique part of a file name (default: the names)")
+    p.add_argument("--out", type=Path, required=True, help="output .sto file")
+    p.set_defaults(func=_cmd_orientations)
+
     p = _sub(sub, "reproduce", "reproduce a paper's results on its published data")
     p.add_argument("paper", choices=["wang2023"])
     p.add_argument("--data", type=Path, required=True, help="dataset directory")
@@ -291,6 +303,14 @@ def _cmd_simulate(args) -> int:
     from pipeline.commands.simulate import run_simulation
 
     print(run_simulation(args.out, args.motion, args.duration_s, args.seed, args.standing_s))
+    return 0
+
+
+def _cmd_orientations(args) -> int:
+    from pipeline.commands.orientations import run_orientations
+
+    print(run_orientations(args.imu, args.out, filter=args.filter,
+                           sensor_map=_pairs(args.sensor_map, "--sensor-map")))  # fmt: skip
     return 0
 
 

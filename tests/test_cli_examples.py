@@ -13,7 +13,7 @@ from pipeline.cli import EXAMPLES, build_parser, main
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 # in the order a new user would run them: calibrate reads what simulate wrote
-ORDER = ("scale", "simulate", "calibrate", "ik", "demo", "reproduce")
+ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "demo", "reproduce")
 NEEDS_DATA = {"ik": SHARED / "opensim", "reproduce": SHARED / "wang2023"}
 
 

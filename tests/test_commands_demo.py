@@ -44,20 +44,25 @@ def test_calibration_recovers_the_knee_axis(result):
 
 
 def test_ik_recovers_the_simulated_kinematics(result):
-    for key in ("right_hip_flexion", "right_hip_adduction", "right_knee_flexion",
-                "left_hip_flexion", "left_knee_flexion"):  # fmt: skip
+    """From the raw signals (VQF 9-D): flexion within 1 deg RMS (measured 0.5-0.7), hip
+    adduction within the simulated pelvis' standing tilt (2.1; 1.9 with the simulated
+    orientations)."""
+    for key in ("right_hip_flexion", "right_knee_flexion", "left_hip_flexion",
+                "left_knee_flexion", "right_ankle_flexion"):  # fmt: skip
         assert result.angle_rms_deg[key] < 1.0, key
+    assert result.angle_rms_deg["right_hip_adduction"] < 2.5
     # the simulated hinge's neutral pose is not the JCS zero (adduction 2.3, rotation -9.6 deg):
     # a standing calibration cannot see that; the default AoR correction (Wang eq 9-13) recovers
-    # the adduction and half the rotation (the twist about the AoR is not observable), measured
-    # without it: 2.26 and 9.52 deg, malleoli 12 and 18 mm
+    # the adduction and half the rotation (the twist about the AoR is not observable)
     _, adduction, rotation = result.knee_neutral_offset_deg
     assert result.angle_rms_deg["right_knee_adduction"] < 0.5 * abs(adduction)
     assert result.angle_rms_deg["right_knee_rotation"] < 0.6 * abs(rotation)
+    # relative to the mid-hip point, in the world: the filter's ~1-2 deg segment errors at
+    # 0.4-0.8 m (measured 11-12 mm at the knee, 22-26 mm at the malleoli)
     for name in ("right_EFM", "right_EFL", "right_KJC"):
-        assert result.landmark_rms_m[name] < 0.005, name
-    assert result.landmark_rms_m["right_MM"] < 0.008
-    assert result.landmark_rms_m["right_LM"] < 0.008
+        assert result.landmark_rms_m[name] < 0.02, name
+    assert result.landmark_rms_m["right_MM"] < 0.035
+    assert result.landmark_rms_m["right_LM"] < 0.035
 
 
 def test_recording_shows_the_moving_model(result):

@@ -13,7 +13,7 @@ from pipeline.io.imu_csv import read_imu_csv
 from pipeline.model import Skeleton
 from pipeline.rotations import angle_between
 
-HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,quat_w,quat_x,quat_y,quat_z"
+HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,mag_x,mag_y,mag_z,quat_w,quat_x,quat_y,quat_z"
 
 
 def test_simulate_writes_every_file(sim):

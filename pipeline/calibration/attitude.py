@@ -47,7 +47,14 @@ from pipeline.calibration.conventions import FILTERS
 from pipeline.errors import InputError
 from pipeline.rotations import matrix_from_quat, quat_from_matrix, rotation_aligning
 
-__all__ = ["TUNED", "AttitudeEstimate", "filter_orientations", "mahony_filter", "tilt_error"]
+__all__ = [
+    "TUNED",
+    "AttitudeEstimate",
+    "filter_orientations",
+    "mahony_filter",
+    "rest_bias",
+    "tilt_error",
+]
 
 #: The gains and extensions ``--filter pi`` uses (module docstring; tuned on BROAD).
 TUNED = {"lambda_p": 1.0, "lambda_i": 0.01, "acc_lowpass_s": 3.0, "rest_start": True}
@@ -164,6 +171,19 @@ def tilt_error(quat_est: np.ndarray, quat_true: np.ndarray) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(ve, vt), axis=-1), np.sum(ve * vt, axis=-1))
 
 
+def rest_bias(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray) -> np.ndarray | None:
+    """The gyro bias (rad/s) as the mean gyro over a still start (|gyro| < 0.05 rad/s and
+    | |a| - g | < 0.3 m/s^2 for at least 0.5 s: the calibration pose), or None. Without a
+    magnetometer the vertical component of the bias is unobservable in motion, and each sensor's
+    heading would drift by it (0.005 rad/s is 4 deg in 15 s)."""
+    still = (np.linalg.norm(gyr, axis=1) < 0.05) & (
+        np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)  # fmt: skip
+    n0 = int(np.argmin(still)) if not still.all() else len(still)
+    if n0 < 2 or t[n0 - 1] - t[0] < 0.5:
+        return None
+    return gyr[:n0].mean(axis=0)
+
+
 def filter_orientations(
     time: np.ndarray,
     gyr: np.ndarray,
@@ -176,7 +196,8 @@ def filter_orientations(
 
     ``'vqf'``: VQF (Laidig & Seel 2023; PyPI ``vqf``, its offline variant, which also estimates
     the gyro bias), 9-D (world ENU, heading from the magnetometer) when ``mag`` is given, 6-D
-    otherwise; ``'pi'``: :func:`mahony_filter` with :data:`TUNED` (6-D; a magnetometer is not
+    otherwise; a still start's mean gyro (:func:`rest_bias`) is removed first; ``'pi'``:
+    :func:`mahony_filter` with :data:`TUNED` (6-D; a magnetometer is not
     used). Without a magnetometer each sensor's heading is its own, which the calibration pose
     absorbs into the sensor's placement. Samples must be evenly spaced (``time`` in s, ``gyr``
     rad/s, ``acc`` m/s^2, ``mag`` any unit).
@@ -194,6 +215,9 @@ def filter_orientations(
         return mahony_filter(t, gyr, acc, **TUNED).quat
     from vqf import offlineVQF  # the field's reference filter (compiled)
 
+    bias = rest_bias(t, gyr, acc)
+    if bias is not None:
+        gyr = np.ascontiguousarray(gyr - bias)
     period = float(np.median(np.diff(t)))
     if mag is not None:
         mag = np.ascontiguousarray(mag, dtype=float)

@@ -2,10 +2,11 @@
 
 Header (required columns; order free, extra columns ignored and noted)::
 
-    time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z[,quat_w,quat_x,quat_y,quat_z]
+    time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z[,mag_x,mag_y,mag_z][,quat_w,quat_x,quat_y,quat_z]
 
 ``time`` in s, ``gyr`` in rad/s and ``acc`` (specific force) in m/s^2 in the sensor frame;
-optional ``quat`` = scalar-first orientation of the sensor in its world frame. Empty cells are
+optional ``mag`` (magnetometer, any unit, sensor frame) and ``quat`` = scalar-first orientation
+of the sensor in its world frame. Empty cells are
 missing samples (filled up to ``max_gap_s`` and reported; refused beyond). Gyroscopes in deg/s
 and accelerometers in g are detected from their magnitude and refused with a hint.
 """
@@ -34,6 +35,7 @@ from pipeline.io.text import parse_table, read_text_lines
 __all__ = [
     "ACC_COLUMNS",
     "GYR_COLUMNS",
+    "MAG_COLUMNS",
     "QUAT_COLUMNS",
     "read_imu_csv",
     "write_imu_csv",
@@ -42,6 +44,7 @@ __all__ = [
 GYR_COLUMNS = ("gyr_x", "gyr_y", "gyr_z")
 ACC_COLUMNS = ("acc_x", "acc_y", "acc_z")
 QUAT_COLUMNS = ("quat_w", "quat_x", "quat_y", "quat_z")
+MAG_COLUMNS = ("mag_x", "mag_y", "mag_z")
 
 
 def read_imu_csv(
@@ -81,8 +84,12 @@ def read_imu_csv(
             file=path,
             field="header",
         )
+    has_m = [c in labels for c in MAG_COLUMNS]
+    if any(has_m) and not all(has_m):
+        raise InputError(f"incomplete magnetometer: expected all of {', '.join(MAG_COLUMNS)}",
+                         file=path, field="header")  # fmt: skip
     notes = Notes()
-    extra = [c for c in labels if c not in (*required, *QUAT_COLUMNS)]
+    extra = [c for c in labels if c not in (*required, *QUAT_COLUMNS, *MAG_COLUMNS)]
     if extra:
         notes.add(f"ignored column(s) {', '.join(extra)}", file=path)
     rows = lines[1:]
@@ -105,6 +112,7 @@ def read_imu_csv(
     acc = cols(ACC_COLUMNS, "acc")
     check_gyro_units(gyr, file=path, field="gyr")
     check_acc_units(acc, file=path, field="acc")
+    mag = cols(MAG_COLUMNS, "mag") if all(has_m) else None
     quat = None
     if all(has_q):
         quat = check_quaternions(
@@ -114,7 +122,7 @@ def read_imu_csv(
             field="quat",
             first_line=2,
         )
-    return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, source=path,
+    return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, mag=mag, source=path,
                             notes=notes.as_tuple())  # fmt: skip
 
 
@@ -128,6 +136,9 @@ def write_imu_csv(path: str | Path, rec: Recording) -> Path:
         np.asarray(rec.acc, float),
     ]
     header = ["time", *GYR_COLUMNS, *ACC_COLUMNS]
+    if rec.mag is not None:
+        parts.append(np.asarray(rec.mag, float))
+        header += MAG_COLUMNS
     if rec.quat is not None:
         parts.append(np.asarray(rec.quat, float))
         header += QUAT_COLUMNS

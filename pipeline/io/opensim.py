@@ -123,9 +123,12 @@ def read_orientations_sto(
                                        source=path)  # fmt: skip
 
 
-def write_orientations_sto(path: str | Path, trial: Recording) -> Path:
+def write_orientations_sto(
+    path: str | Path, trial: Recording, header: Mapping[str, str] | None = None
+) -> Path:
     """Write the orientations of a recording as an ``.sto`` that OpenSense reads (atomic; full
-    double precision); sensors without orientations are left out."""
+    double precision); sensors without orientations are left out. ``header``: extra
+    ``key=value`` lines (OpenSim ignores keys it does not know)."""
     path = Path(path)
     quats = trial.orientations()
     names = list(quats)
@@ -134,6 +137,7 @@ def write_orientations_sto(path: str | Path, trial: Recording) -> Path:
         "DataType=Quaternion",
         "version=3",
         "OpenSimVersion=4.2",
+        *(f"{k}={v}" for k, v in (header or {}).items()),
         "endheader",
         "\t".join(["time", *names]),
     ]

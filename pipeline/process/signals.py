@@ -28,15 +28,18 @@ Z_UP_TO_Y_UP = (-float(np.pi) / 2, 0.0, 0.0)
 
 
 def orientations_from_signals(
-    trial: Recording, method: str | None, notes: list[str]
-) -> tuple[Recording, bool]:
+    trial: Recording, method: str | None, notes: list[str], *, every_sensor: bool = False
+) -> tuple[Recording, str | None]:
     """``(recording, filtered)``: the recording with every model sensor's orientation estimated by
-    ``method`` (None: only if no sensor has one, then :data:`DEFAULT_FILTER`); ``filtered`` says
-    whether the orientations are the filter's (world z up)."""
-    names = [n for n in trial.sensor_names if SENSOR_TO_SEGMENT.get(n, "torso") != "torso"]
+    ``method`` (None: only if no sensor has one, then :data:`DEFAULT_FILTER`); ``filtered`` is
+    None for the recording's own orientations, else ``'9-D'`` (every sensor with a magnetometer)
+    or ``'6-D'`` (world z up either way). ``every_sensor``: all sensors, not only those with a
+    segment in the model."""
+    names = [n for n in trial.sensor_names
+             if every_sensor or SENSOR_TO_SEGMENT.get(n, "torso") != "torso"]  # fmt: skip
     have = [n for n in names if trial.sensors[n].quat is not None]
     if method is None and len(have) == len(names):
-        return trial, False
+        return trial, None
     if method is None and have:
         missing = sorted(set(names) - set(have))
         raise InputError(f"sensors {have} have orientations and {missing} do not: give --filter "
@@ -57,4 +60,4 @@ def orientations_from_signals(
     notes.append(f"orientations estimated from the raw signals by {method.upper()}, "
                  f"{' and '.join(sorted(dims))}"
                  + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
-    return trial.with_sensors(sensors), True
+    return trial.with_sensors(sensors), ("9-D" if dims == {"9-D (magnetometer)"} else "6-D")

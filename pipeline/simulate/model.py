@@ -12,7 +12,9 @@ Every angle stays inside the model's joint limits (checked). Signals at each sen
   (``pin.getFrameVelocity``, LOCAL);
 * accelerometer ``acc = R^T (p_ddot - g)`` (specific force, reads ``+9.81`` up at rest), with
   ``R^T p_ddot`` the classical acceleration of the sensor origin in the sensor frame
-  (``pin.getFrameClassicalAcceleration``, LOCAL).
+  (``pin.getFrameClassicalAcceleration``, LOCAL);
+* magnetometer ``mag = R^T m`` with the earth's field :data:`MAGNETIC_FIELD` (uT, no
+  disturbance).
 
 The *true* sensor is the model's IMU frame (``<segment>_imu``) rotated by a random
 sensor-to-segment misalignment and shifted by a random mounting offset: ``R_GS = R_imu M``,
@@ -38,6 +40,7 @@ from pipeline.simulate.motions import joint_trajectories, motion_name, standing_
 
 __all__ = [
     "GRAVITY",
+    "MAGNETIC_FIELD",
     "SensorNoise",
     "SimulatedImu",
     "SimulatedTrial",
@@ -45,6 +48,9 @@ __all__ = [
 ]
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
+#: The earth's magnetic field in the simulator's world (x east, y north, z up; uT): 46 uT,
+#: inclination 62 deg (central Europe).
+MAGNETIC_FIELD = np.array([0.0, 21.6, -40.6])
 _SEGMENT_OF_IMU = {"pelvis_imu": "pelvis"}
 _JOINT_SEGMENTS = {"hip": ("pelvis", "femur", "HJC"), "knee": ("femur", "tibia", "KJC")}
 _JOINT_SEGMENTS["ankle"] = ("tibia", "foot", "AJC")
@@ -52,20 +58,22 @@ _JOINT_SEGMENTS["ankle"] = ("tibia", "foot", "AJC")
 
 @dataclass(frozen=True)
 class SensorNoise:
-    """White noise SDs (``gyro_sd`` rad/s, ``acc_sd`` m/s^2), constant gyro bias SD per axis
-    (``gyro_bias_sd`` rad/s), orientation noise (``orientation_sd_deg`` per axis per sample) and
-    landmark (marker) noise (``landmark_sd_m``). Defaults: consumer MEMS IMUs at 100 Hz, an OMC
+    """White noise SDs (``gyro_sd`` rad/s, ``acc_sd`` m/s^2, ``mag_sd`` uT), constant gyro bias SD
+    per axis (``gyro_bias_sd`` rad/s), orientation noise (``orientation_sd_deg`` per axis per
+    sample) and landmark (marker) noise (``landmark_sd_m``). Defaults: consumer MEMS IMUs at
+    100 Hz, an OMC
     system's sub-millimetre noise."""
 
     gyro_sd: float = 0.01
     acc_sd: float = 0.05
     gyro_bias_sd: float = 0.005
     orientation_sd_deg: float = 0.0
+    mag_sd: float = 0.5
     landmark_sd_m: float = 0.0005
 
     @classmethod
     def none(cls) -> SensorNoise:
-        return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+        return cls(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -206,8 +214,10 @@ def simulate_trial(
     if skeleton is None:
         skeleton = Skeleton.build(SubjectGeometry.default(1.75, "m"), "hinge", root="freeflyer")
     skeleton = skeleton.with_root("freeflyer")
-    r_motion, r_place, r_noise = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
+    # streams by index (spawn's children do not depend on how many are spawned): the
+    # magnetometer's noise has its own, so that adding it changed no other signal
+    r_motion, r_place, r_noise, r_mag = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
     )
     t = np.arange(n) / rate_hz
     if standing_s > 0:
@@ -254,7 +264,8 @@ def simulate_trial(
         R_meas = R[i]
         if noise.orientation_sd_deg > 0:
             R_meas = R[i] @ exp3(r_noise.normal(0.0, np.deg2rad(noise.orientation_sd_deg), (n, 3)))
-        rec = Recording.single(imu, t, gyr=gyr, acc=acc, quat=quat_from_matrix(R_meas),
+        mag = np.einsum("nji,j->ni", R[i], MAGNETIC_FIELD) + r_mag.normal(0.0, noise.mag_sd, (n, 3))
+        rec = Recording.single(imu, t, gyr=gyr, acc=acc, mag=mag, quat=quat_from_matrix(R_meas),
                                rate_hz=rate_hz)  # fmt: skip
         out_imus[imu] = SimulatedImu(
             frame=imu,

@@ -1,0 +1,95 @@
+"""pipeline.process.signals and the raw-signal path of process_recording: orientations from an
+attitude filter, on simulated trials with known truth and on the real x-IMU3 recording."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.analysis.landmarks import joint_angles
+from pipeline.errors import InputError
+from pipeline.io.opensim import SENSOR_TO_SEGMENT
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.model.anthropometry import Measures
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.model.skeleton import Skeleton
+from pipeline.process import process_recording
+from pipeline.process.signals import orientations_from_signals
+from pipeline.simulate.model import simulate_trial
+
+XIMU3 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ximu3_lower_body"
+NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
+M = Measures("m", 1.75)
+
+
+@pytest.fixture(scope="module")
+def walk():
+    geometry, _ = geometry_from_measures(M)
+    model = Skeleton.build(geometry, knee="hinge", root="freeflyer")
+    trial = simulate_trial(model, "gait", duration_s=12.0, seed=3, standing_s=2.0)
+    raw = {NAMES[f]: SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc)
+           for f, i in trial.imus.items()}  # fmt: skip
+    quats = {NAMES[f]: i.recording.quat for f, i in trial.imus.items()}
+    return trial, Recording(trial.time, 100.0, raw), quats
+
+
+@pytest.mark.parametrize("method", ["vqf", "pi"])
+def test_raw_signals_give_the_simulated_joint_angles(walk, method):
+    """Gyro + accelerometer only (15 deg misaligned sensors, noise, gyro bias): the hip and knee
+    flexion of the truth within a few degrees RMS. Measured on this seed: hip 2.0-3.1, knee
+    0.8-2.5 deg (VQF and PI); on seeds 0-2 (scripts/bench_raw_path.py) hip 1.1-2.1, knee 1.2-4.5
+    deg, against 0.1-0.4 and 0.06-0.2 from the simulated orientations: not yet the 2 deg goal."""
+    trial, raw, _ = walk
+    run = process_recording(raw, M, filter=method)
+    assert any(f"by {method.upper()}, 6-D" in n for n in run.notes)
+    truth = joint_angles(trial.skeleton, trial.q)
+    for key, bound in (("right_hip_flexion", 4.0), ("left_hip_flexion", 4.0),
+                       ("right_knee_flexion", 6.0), ("left_knee_flexion", 6.0)):  # fmt: skip
+        e = np.degrees(run.joint_angles[key][200:] - truth[key][200:])
+        assert np.sqrt(np.mean(e**2)) < bound, (key, np.sqrt(np.mean(e**2)))
+    assert not run.flags
+
+
+def test_a_recording_that_mixes_orientations_and_raw_signals_needs_a_filter(walk):
+    _, raw, quats = walk
+    mixed = dict(raw.sensors)
+    mixed["pelvis_imu"] = mixed["pelvis_imu"].replace(quat=quats["pelvis_imu"])
+    rec = raw.with_sensors(mixed)
+    with pytest.raises(InputError, match="give --filter"):
+        orientations_from_signals(rec, None, [])
+    out, filtered = orientations_from_signals(rec, "vqf", notes := [])
+    assert filtered == "6-D" and "replacing the recording's own" in notes[0]
+    with pytest.raises(InputError, match="filter's world is z up"):
+        process_recording(raw, M, sensor_to_model=(-np.pi / 2, 0, 0))
+
+
+def test_a_sensor_without_gyroscope_cannot_be_filtered(walk):
+    _, raw, quats = walk
+    s = dict(raw.sensors)
+    s["pelvis_imu"] = SensorSignals(acc=raw.sensors["pelvis_imu"].acc)
+    with pytest.raises(InputError, match="no gyroscope and accelerometer"):
+        orientations_from_signals(raw.with_sensors(s), "pi", [])
+
+
+@pytest.mark.dataset
+def test_real_ximu3_recording_through_the_raw_path():
+    """No optical truth: plausibility, left-right agreement, and agreement with the vendor's own
+    fusion (the knees flex to ~120-140 deg in this recording)."""
+    if not XIMU3.exists():
+        pytest.skip("../shared/data/ximu3_lower_body not present")
+    from pipeline.io.imu_folder import read_imu_folder
+
+    rec = read_imu_folder(XIMU3)
+    ours = process_recording(rec, Measures("m", 1.8), filter="vqf")
+    vendor = process_recording(rec, Measures("m", 1.8), sensor_to_model=(-np.pi / 2, 0, 0))
+    assert any("9-D" in n for n in ours.notes)
+    for side in ("right", "left"):
+        k_ours = np.degrees(ours.joint_angles[f"{side}_knee_flexion"])
+        k_vendor = np.degrees(vendor.joint_angles[f"{side}_knee_flexion"])
+        assert 110 < k_ours.max() < 160 and k_ours.min() > -1
+        assert np.corrcoef(k_ours, k_vendor)[0, 1] > 0.99
+        assert np.sqrt(np.mean((k_ours - k_vendor) ** 2)) < 5.0
+    right = np.degrees(ours.joint_angles["right_knee_flexion"]).max()
+    left = np.degrees(ours.joint_angles["left_knee_flexion"]).max()
+    assert abs(right - left) < 15.0
+    assert np.degrees(np.nanmedian(ours.residual_rms)) < 6.0
