@@ -11,16 +11,13 @@ import sys
 from pathlib import Path
 
 from pipeline.calibration.conventions import (
-    CALIBRATION_POSES,
-    CORRECTIONS,
-    DEFAULT_CALIBRATION_POSE,
-    DEFAULT_CORRECTION,
     DEFAULT_FILTER,
     DEFAULT_METHOD,
     FILTERS,
     JOINTS,
     METHODS,
 )
+from pipeline.cli_options import add_ik_options
 from pipeline.errors import InputError, QualityError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS
@@ -31,6 +28,7 @@ EXAMPLES = {
     "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
     "orientations": "pipeline orientations --imu out/sim --filter vqf "
     "--out out/sim_orientations.sto",
+    "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",
     "calibrate": "pipeline calibrate hinge --imu1 out/sim/right_femur_imu.csv "
     "--imu2 out/sim/right_tibia_imu.csv --method ipopt --json",
     "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
@@ -68,71 +66,6 @@ def _add_anthropometrics(p: argparse.ArgumentParser, required: bool = True) -> N
     p.add_argument("--ankle-width-m", type=float, help=f"a = |MM - LM| in metres ({absent})")
 
 
-def _add_ik_options(p: argparse.ArgumentParser) -> None:
-    """``pipeline ik``'s flags; every one defaults to None (not given), so that a configuration
-    file's value is overridden only by a flag that was typed (the defaults are IKOptions')."""
-    p.add_argument("--config", type=Path, help="subject.toml: subject, sensor names and any of "
-                   "these options (flags override it); each run writes <name>_config.toml "
-                   "(default: none)")
-    p.add_argument("--orientations", type=Path, help="OpenSim .sto quaternions, a folder of "
-                   "Xsens MT .txt exports (with --sensor-map), or a folder of raw IMU recordings "
-                   "(<sensor>.csv as pipeline simulate writes, Movella DOT .csv, x-IMU3 device "
-                   "folders) (required, here or in --config)")
-    for flag in ("--sensor-map", "--xsens-map"):
-        p.add_argument(flag, nargs="+", metavar="NAME=ID", dest="sensor_map",
-                       help=argparse.SUPPRESS if flag == "--xsens-map" else
-                       "our sensor name = the recording's sensor name, label or device id (a "
-                       "unique part of it), e.g. pelvis_imu=00B421AF femur_r_imu=thigh_R; a "
-                       "folder of Xsens files needs it (default: the names as they are)")
-    p.add_argument("--sex", choices=["m", "f"], help="sex, for the regression equations "
-                   "(required, here or in --config)")
-    p.add_argument("--height-m", type=float, help="body height in metres (required, ditto)")
-    absent = "default: not measured; the equations use the others"
-    p.add_argument("--shank-lateral-m", type=float, help=f"s_L = |EFL - LM| in metres ({absent})")
-    p.add_argument("--shank-medial-m", type=float, help=f"s_M = |EFM - MM| in metres ({absent})")
-    p.add_argument("--knee-width-m", type=float, help=f"k = |EFM - EFL| in metres ({absent})")
-    p.add_argument("--ankle-width-m", type=float, help=f"a = |MM - LM| in metres ({absent})")
-    p.add_argument("--foot-length-m", type=float, help="heel-to-toe foot length in metres "
-                   "(default: 0.152 x height, Drillis & Contini 1966)")
-    p.add_argument("--sensor-to-model", type=float, nargs=3, metavar=("RX", "RY", "RZ"),
-                   help="fixed world rotation (rad, space-fixed XYZ) as OpenSense's "
-                   "sensor_to_opensim_rotations, making the world's y axis point up; default 0 0 0 "
-                   "(already y-up); an Xsens z-up world needs -1.5708 0 0")
-    p.add_argument("--heading", help="how the subject's forward direction is found at the "
-                   "calibration pose: 'anatomical' (from hip and knee flexion, independent of "
-                   "sensor mounting; default) or OpenSense's 'pelvis_imu:-z' style")
-    p.add_argument("--segment-orientations", action="store_const", const=True, help="the "
-                   "orientations are segment frames (ISB), e.g. an Xsens MVN or FOHEART suit "
-                   "export: no sensor placement is estimated (default: sensor orientations)")
-    p.add_argument("--calibration-pose", choices=CALIBRATION_POSES, help="the pose at the first "
-                   f"sample (or in --static-trial) (default {DEFAULT_CALIBRATION_POSE})")
-    p.add_argument("--static-trial", type=Path, help="a separate static recording (same sensors) "
-                   "that gives the calibration pose (default: the first sample of the trial)")
-    p.add_argument("--filter", choices=FILTERS, help="attitude filter for raw gyroscope and "
-                   "accelerometer (and magnetometer) signals: VQF or Hu's PI filter; also replaces "
-                   "orientations the recording has (default: the recording's own orientations, "
-                   f"{DEFAULT_FILTER} where it has none)")
-    p.add_argument("--knee", choices=KNEE_MODES, help=f"knee model (default {DEFAULT_KNEE})")
-    p.add_argument("--correction", choices=CORRECTIONS, help="knee-AoR orientation correction: "
-                   "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt) or none "
-                   f"(default {DEFAULT_CORRECTION})")
-    for seg in ("femur", "tibia"):
-        p.add_argument(f"--knee-axis-{seg}", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                       help=f"the subject's knee AoR in the {seg} frame (pointing right), for "
-                       "the hinge and the correction; default: the population mean of the "
-                       "subject's sex (Wang 2023 dataset)")
-    p.add_argument("--no-joint-limits", action="store_const", const=False, dest="joint_limits",
-                   help="let the joints leave the model's ranges (default: limited)")
-    p.add_argument("--no-rerun", action="store_const", const=False, dest="rerun",
-                   help="do not write the .rrd recording (default: written)")
-    p.add_argument("--osim", action="store_const", const=True, help="also write <name>.osim, an "
-                   "OpenSim model whose coordinates are the .mot's columns (default: not written)")
-    p.add_argument("--strict", action="store_const", const=True,
-                   help="implausible results (e.g. a large orientation residual) exit with code 3 "
-                   "and write nothing (default: they are flagged in the summary and on stderr)")
-    p.add_argument("--out", type=Path, help="output directory (required, here or in --config)")
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pipeline",
@@ -161,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_scale)
 
     p = _sub(sub, "ik", "inverse kinematics from IMU orientations (.sto)")
-    _add_ik_options(p)
+    add_ik_options(p)
     p.set_defaults(func=_cmd_ik)
 
     p = _sub(sub, "calibrate", "joint-constraint calibration of IMU placement (Hu 2021)")
@@ -205,6 +138,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="our sensor name = a unique part of a file name (default: the names)")
     p.add_argument("--out", type=Path, required=True, help="output .sto file")
     p.set_defaults(func=_cmd_orientations)
+
+    p = _sub(sub, "batch", "run pipeline ik on every trial of a manifest, locally or on Dask")
+    p.add_argument("manifest", type=Path, help="CSV: subject,sex,height_m,orientations and any "
+                   "pipeline ik option as a column (e.g. sensor_to_model, knee, correction)")
+    p.add_argument("--out", type=Path, required=True, help="output directory (required)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: one per core; "
+                   "1 runs in this process)")
+    p.add_argument("--scheduler", help="a Dask scheduler, tcp://HOST:PORT, to run on instead "
+                   "(default: local workers)")
+    p.add_argument("--force", action="store_true",
+                   help="redo trials whose outputs are complete (default: skip them)")
+    p.set_defaults(func=_cmd_batch)
 
     p = _sub(sub, "reproduce", "reproduce a paper's results on its published data")
     p.add_argument("paper", choices=["wang2023"])
@@ -311,6 +256,14 @@ def _cmd_orientations(args) -> int:
 
     print(run_orientations(args.imu, args.out, filter=args.filter,
                            sensor_map=_pairs(args.sensor_map, "--sensor-map")))  # fmt: skip
+    return 0
+
+
+def _cmd_batch(args) -> int:
+    from pipeline.commands.batch import run_batch
+
+    print(run_batch(args.manifest, args.out, workers=args.workers, scheduler=args.scheduler,
+                    force=args.force))  # fmt: skip
     return 0
 
 

@@ -13,8 +13,9 @@ from pipeline.cli import EXAMPLES, build_parser, main
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 # in the order a new user would run them: calibrate reads what simulate wrote
-ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "demo", "reproduce")
-NEEDS_DATA = {"ik": SHARED / "opensim", "reproduce": SHARED / "wang2023"}
+ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "batch", "demo", "reproduce")
+NEEDS_DATA = {"ik": SHARED / "opensim", "batch": SHARED / "opensim",
+              "reproduce": SHARED / "wang2023"}  # fmt: skip
 
 
 def test_every_command_has_an_example_in_its_help():

@@ -84,6 +84,7 @@ _EXPORTS = {
     "projection_angles": "aor",
     "reexpress_tibia": "aor",
     "relative_rotations": "hinge_fit",
+    "rest_bias": "attitude",
     "robust_loss": "losses",
     "sample_weights": "hinge_fit",
     "segment_orientation": "segment_frames",

@@ -37,6 +37,7 @@ _EXPORTS = {
     "IK_KEYS": "config",
     "jsonable": "jsonio",
     "labels_and_rows": "sto_header",
+    "MAG_COLUMNS": "imu_csv",
     "make_quaternions_continuous": "checks",
     "map_sensors": "opensim",
     "markdown_table": "tables",

@@ -16,6 +16,7 @@ _EXPORTS = {
     "imu_signals": "chain",
     "joint_trajectories": "motions",
     "JointTrial": "chain",
+    "MAGNETIC_FIELD": "model",
     "motion_name": "motions",
     "MOTIONS": "conventions",
     "point_acceleration": "chain",

@@ -1,0 +1,124 @@
+"""pipeline batch: a manifest of trials through pipeline ik, in process, on local Dask workers
+and on a running Dask cluster; failures, reruns, refusals and a real SIGTERM."""
+
+import csv
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.commands.batch import read_manifest, run_batch
+from pipeline.errors import InputError
+from pipeline.io.opensim import write_orientations_sto
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_process import _walk  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def trials(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("trials")
+    for k in range(3):
+        _, _, trial, _ = _walk(folder, n=400, seed=k)
+        write_orientations_sto(folder / f"walk{k}.sto", trial)
+    return folder
+
+
+def _manifest(folder, rows, header="subject,sex,height_m,orientations,knee,correction"):
+    path = folder / "manifest.csv"
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def _summary(out):
+    with open(out / "batch_summary.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_rows_run_fail_alone_and_a_rerun_skips_what_is_complete(trials, tmp_path):
+    m = _manifest(trials, ["s1,m,1.75,walk0.sto,free,none", "s2,f,1.62,missing.sto,,",
+                           "s1,m,1.75,walk1.sto,hinge,aor"])  # fmt: skip
+    out = tmp_path / "out"
+    text = run_batch(m, out, workers=1, progress=False)
+    assert "2 ok, 1 failed, 0 skipped" in text and "missing.sto" in text
+    rows = _summary(out)
+    assert [r["status"] for r in rows] == ["ok", "failed", "ok"]
+    assert rows[0]["frames"] == "400" and float(rows[0]["residual_median_deg"]) < 5
+    assert "file not found" in rows[1]["message"]
+    assert (out / "s1" / "walk0" / "walk0_ik.mot").is_file()
+    assert (out / "s1" / "walk1" / "walk1_config.toml").read_text().count('knee = "hinge"') == 1
+    again = run_batch(m, out, workers=1, progress=False)
+    assert "0 ok, 1 failed, 2 skipped" in again
+    assert _summary(out)[0]["frames"] == "400"  # the skipped row's figures, read back
+    forced = run_batch(m, out, workers=1, force=True, progress=False)
+    assert "2 ok, 1 failed, 0 skipped" in forced
+
+
+def test_local_dask_workers_and_a_running_cluster(trials, tmp_path):
+    from distributed import LocalCluster
+
+    m = _manifest(trials, [f"s{k},m,1.75,walk{k}.sto,free,aor" for k in range(3)])
+    local = run_batch(m, tmp_path / "local", workers=2, progress=False)
+    assert "on 2 local worker processes" in local and "3 ok" in local
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:  # fmt: skip
+        text = run_batch(m, tmp_path / "cluster", scheduler=cluster.scheduler_address,
+                         progress=False)  # fmt: skip
+    assert f"on the Dask cluster at {cluster.scheduler_address}" in text and "3 ok" in text
+    a = (tmp_path / "local" / "s2" / "walk2" / "walk2_ik.mot").read_bytes()
+    b = (tmp_path / "cluster" / "s2" / "walk2" / "walk2_ik.mot").read_bytes()
+    assert a == b  # the same trial gives the same result wherever it runs
+
+
+@pytest.mark.parametrize(
+    "header, row, match",
+    [
+        ("subject,sex,height_m", "s,m,1.8", "missing column"),
+        ("subject,sex,height_m,orientations,kne", "s,m,1.8,a.sto,free", "unknown column"),
+        ("subject,sex,height_m,orientations,sensor_to_model", "s,m,1.8,a.sto,-90 x 0",
+         "numbers separated by spaces"),
+        ("subject,sex,height_m,orientations,osim", "s,m,1.8,a.sto,maybe", "true or false"),
+        ("subject,sex,height_m,orientations", ",m,1.8,a.sto", "expected a value"),
+    ],
+)
+def test_a_bad_manifest_is_refused_naming_file_column_and_line(tmp_path, header, row, match):
+    m = _manifest(tmp_path, [row], header=header)
+    with pytest.raises(InputError, match=match) as exc:
+        read_manifest(m)
+    assert exc.value.file == str(m)
+
+
+def test_cli_batch_and_its_sigterm_stops_every_worker(trials, tmp_path):
+    import psutil
+
+    m = _manifest(trials, [f"s{k},m,1.75,walk{k % 3}.sto,free,aor" for k in range(12)])
+    out = tmp_path / "out"
+    assert main(["batch", str(m), "--out", str(tmp_path / "small"), "--workers", "1"]) == 0
+    proc = subprocess.Popen([sys.executable, "-m", "pipeline", "batch", str(m), "--out",
+                             str(out), "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    children = []
+    deadline = time.time() + 60
+    while time.time() < deadline and not (out.exists() and any(out.rglob("*_ik.mot"))):
+        children = psutil.Process(proc.pid).children(recursive=True) or children
+        time.sleep(0.2)
+    children = psutil.Process(proc.pid).children(recursive=True) or children
+    assert children, "the workers never started"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    time.sleep(1.0)
+    alive = [c for c in children if c.is_running() and c.status() != psutil.STATUS_ZOMBIE]
+    assert not alive, alive
+    assert not (out / "batch_summary.csv").exists()
+    # every trial folder that exists is complete: outputs are all-or-nothing
+    for folder in (p for p in out.glob("*/*") if p.is_dir()):
+        names = {p.name for p in folder.iterdir()}
+        stem = folder.name
+        assert {f"{stem}_ik.mot", f"{stem}_summary.md", f"{stem}_config.toml"} <= names, names
