@@ -41,6 +41,7 @@ __all__ = [
 ]
 
 _JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"), "ankle": ("tibia", "foot")}
+_CHUNK = 10_000
 _ANGLE_NAMES = {"hip": ("flexion", "adduction", "rotation"),
                 "knee": ("flexion", "adduction", "rotation"),
                 "ankle": ("flexion", "inversion", "rotation")}  # fmt: skip
@@ -127,14 +128,17 @@ def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
     knee reports its JCS angles including the reference rotation between the segments.
     """
     segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia", "foot")]
-    traj = frame_trajectories(skeleton, Q, segs)
+    Q = _check_q(skeleton, Q)
     out: dict[str, np.ndarray] = {}
-    for side in skeleton.legs:
-        for joint, (prox, dist) in _JOINTS.items():
-            p = prox if prox == "pelvis" else f"{side}_{prox}"
-            ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
-            for i, name in enumerate(_ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
-                out[f"{side}_{joint}_{name}"] = ang[:, i]
+    for start in range(0, len(Q), _CHUNK):  # chunks of frames: bounded memory on long trials
+        rows = slice(start, start + _CHUNK)
+        traj = frame_trajectories(skeleton, Q[rows], segs)
+        for side in skeleton.legs:
+            for joint, (prox, dist) in _JOINTS.items():
+                p = prox if prox == "pelvis" else f"{side}_{prox}"
+                ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
+                for i, name in enumerate(_ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
+                    out.setdefault(f"{side}_{joint}_{name}", np.empty(len(Q)))[rows] = ang[:, i]
     return out
 
 

@@ -22,13 +22,13 @@ from pipeline.io.imu_folder import read_imu_folder
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
-from pipeline.io.tables import csv_text
+from pipeline.io.tables import write_array_csv
 from pipeline.io.xsens import read_xsens_trial
 from pipeline.model.anthropometry import Measures
 from pipeline.process.options import IKOptions
 from pipeline.process.run import IKRun, mot_columns, process_recording
 
-__all__ = ["load_orientations", "resolve_ik", "run_ik"]
+__all__ = ["load_orientations", "resolve_ik", "run_ik", "write_landmarks_csv"]
 
 
 def load_orientations(
@@ -134,7 +134,7 @@ def run_ik(
         run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
         write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
         with out.open(out_dir / f"{name}_landmarks.csv") as fh:
-            fh.write(_landmarks_csv(run))
+            write_landmarks_csv(fh, run)
         if opts.rerun:
             _log(run, out.path(out_dir / f"{name}.rrd"), name)
         if opts.osim:
@@ -159,15 +159,14 @@ def _config(measures: Measures, opts: IKOptions, orientations: Path, name: str) 
     return config_text(measures, opts, orientations=orientations, header=header)
 
 
-def _landmarks_csv(run: IKRun) -> str:
-    rows = []
-    for k, t in enumerate(run.time):
-        row = {"time": float(t)}
-        for lm, xyz in run.landmarks.items():
-            row.update({f"{lm}_{a}": float(xyz[k, i]) for i, a in enumerate("xyz")})
-        rows.append(row)
+def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
+    """``time`` and ``<landmark>_x,y,z`` (m, 6 significant digits) to the open file ``fh``, in
+    chunks of rows (memory stays bounded on long recordings)."""
     columns = ["time"] + [f"{lm}_{a}" for lm in run.landmarks for a in "xyz"]
-    return csv_text(rows, columns)
+    for start in range(0, max(len(run.time), 1), chunk):
+        rows = slice(start, start + chunk)
+        data = np.column_stack([run.time[rows], *(xyz[rows] for xyz in run.landmarks.values())])
+        write_array_csv(fh, columns, data, digits=6, header=start == 0)
 
 
 def _log(run: IKRun, path: Path, name: str) -> None:

@@ -248,15 +248,24 @@ def solve_ik(
     return _result(p, Q, iters, conv)
 
 
-def _result(p: IKProblem, Q: np.ndarray, iters: np.ndarray, conv: np.ndarray) -> IKResult:
-    """Residuals at the returned configurations (vectorised log map)."""
+def _result(
+    p: IKProblem, Q: np.ndarray, iters: np.ndarray, conv: np.ndarray, chunk: int = 10_000
+) -> IKResult:
+    """Residuals at the returned configurations (vectorised log map, in chunks of frames so
+    that memory stays bounded on long trials)."""
     tasks, RtT, finite = p.tasks, p.RtT, p.finite
     N, k = finite.shape
-    R_fit = np.stack(list(frame_rotations(p.model, Q, [t.frame for t in tasks]).values()), axis=1)
-    ok = np.all(np.isfinite(R_fit), axis=(2, 3)) & finite
+    frames = [t.frame for t in tasks]
     err = np.full((N, k), np.nan)
-    if ok.any():
-        err[ok] = np.linalg.norm(log3(RtT[ok] @ R_fit[ok]), axis=-1)
+    ok = np.zeros((N, k), dtype=bool)
+    for start in range(0, N, chunk):
+        rows = slice(start, start + chunk)
+        R_fit = np.stack(list(frame_rotations(p.model, Q[rows], frames).values()), axis=1)
+        ok_c = np.all(np.isfinite(R_fit), axis=(2, 3)) & finite[rows]
+        ok[rows] = ok_c
+        if ok_c.any():
+            e = err[rows]
+            e[ok_c] = np.linalg.norm(log3(RtT[rows][ok_c] @ R_fit[ok_c]), axis=-1)
     count = ok.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         rms = np.sqrt(np.where(ok, err, 0.0) ** 2 @ np.ones(k) / count)

@@ -32,14 +32,21 @@ def csv_text(
 
 
 def write_array_csv(
-    f: TextIO, columns: Sequence[str], data: np.ndarray, digits: int = 10, nan: str = "nan"
+    f: TextIO,
+    columns: Sequence[str],
+    data: np.ndarray,
+    digits: int = 10,
+    nan: str = "nan",
+    header: bool = True,
 ) -> None:
     """Write ``columns`` and the rows of ``data`` (N, len(columns)) to the open file ``f``;
-    non-finite values are written as ``nan`` (e.g. ``""`` for an empty field)."""
+    non-finite values are written as ``nan`` (e.g. ``""`` for an empty field). ``header=False``
+    appends rows only (a long table written in chunks)."""
     data = np.asarray(data, dtype=float)
     if data.ndim != 2 or data.shape[1] != len(columns):
         raise ValueError(f"expected an (N, {len(columns)}) array, got shape {data.shape}")
-    f.write(",".join(columns) + "\n")
+    if header:
+        f.write(",".join(columns) + "\n")
     spec = f"{{:.{digits}g}}"
     for row in data:
         f.write(",".join(spec.format(v) if np.isfinite(v) else nan for v in row) + "\n")

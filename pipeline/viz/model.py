@@ -61,6 +61,12 @@ __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "segment_m
 
 BONE_COLOR = (227, 218, 201, 150)
 BONE_LINE_COLOR = (90, 90, 90)
+#: Longer recordings show their 3D content (model, landmarks, IMU frames) at a stride that keeps
+#: at most this many samples (36,000: 10 Hz over an hour), the joint angles at the full rate: the
+#: viewer plays 3D fluently at that density, and the .rrd of an hour stays ~100 MB.
+MAX_3D_SAMPLES = 36_000
+#: Samples logged per chunk (memory stays bounded whatever the length).
+CHUNK_SAMPLES = 10_000
 ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "inversion": (220, 50, 50),
                 "rotation": (30, 160, 70)}  # fmt: skip
 
@@ -270,10 +276,19 @@ def log_motion(
     ok = np.all(np.isfinite(Q), axis=1)
     Q_fk = np.where(ok[:, None], Q, skeleton.neutral())  # FK on finite rows only
     names = list(dict.fromkeys([*segments.values(), *lm_names, *imu_names, *bone_names]))
-    traj = frame_trajectories(skeleton, Q_fk, names)
-    for R, p in traj.values():
-        R[~ok] = np.nan
-        p[~ok] = np.nan
+    # the 3D content at most MAX_3D_SAMPLES samples (a stride over long recordings), logged in
+    # chunks; the joint angles at the full rate
+    stride = max(1, -(-n // MAX_3D_SAMPLES))
+    shown = np.arange(0, n, stride)
+
+    def trajectories(rows: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        traj = frame_trajectories(skeleton, Q_fk[rows], names)
+        for R, p in traj.values():
+            R[~ok[rows]] = np.nan
+            p[~ok[rows]] = np.nan
+        return traj
+
+    view = trajectories(shown[:: max(1, len(shown) // 2000)])  # framing from <= 2000 samples
     angles = {}
     if joint_angles:
         wanted = None if joint_angles is True else set(joint_angles)
@@ -290,9 +305,8 @@ def log_motion(
                              field="reference_angles")  # fmt: skip
         truth[f"plots/{joint}/{angle}_truth"] = check_series(y, n, (), key)
 
-    points = {name: traj[name][1] for name in lm_names}
-    ground = _lowest_height(traj, segments, mesh_data, list(points.values()), vertical)
-    camera = _camera(traj, list(segments.values()), ground, vertical)
+    ground = _lowest_height(view, segments, mesh_data, [view[m][1] for m in lm_names], vertical)
+    camera = _camera(view, list(segments.values()), ground, vertical)
     plots = []
     for side in skeleton.legs:
         for joint in ("hip", "knee", "ankle"):
@@ -305,9 +319,8 @@ def log_motion(
     blueprint = _blueprint(plots, up_axis, camera=camera, ground=ground)
 
     rr = import_rerun()
+    reference = {k: check_series(v, n, (3,), k) for k, v in (reference_landmarks or {}).items()}
     with open_recording(path, app_id, recording_name, up_axis, blueprint) as rec:
-        poses = {seg: traj[frame] for seg, frame in segments.items()}
-        log_poses(rec, t, "world/model", poses, None)
         for seg, mesh in mesh_data.items():
             rec.log(
                 f"world/model/{seg}/mesh",
@@ -319,18 +332,24 @@ def log_motion(
                 ),
                 static=True,
             )
-        log_landmarks(rec, t, points, reference_landmarks, error_arrows, point_radius)
-        log_poses(rec, t, "world/imus", {m: traj[m] for m in imu_names}, imu_axis_length)
-        for side in bone_legs:
-            strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
-            entity = f"world/bones/{side}"
-            rec.log(
-                entity,
-                rr.LineStrips3D.from_fields(colors=[BONE_LINE_COLOR], radii=[0.006]),
-                static=True,
-            )
-            if ok.any():
-                send_columns(rec, entity, t, ok, rr.LineStrips3D.columns(strips=strip[ok]))
+        for start in range(0, len(shown), CHUNK_SAMPLES):  # bounded memory on long recordings
+            rows = shown[start : start + CHUNK_SAMPLES]
+            traj, tc, okc = trajectories(rows), t[rows], ok[rows]
+            log_poses(rec, tc, "world/model", {s: traj[f] for s, f in segments.items()}, None)
+            points = {name: traj[name][1] for name in lm_names}
+            ref = {k: v[rows] for k, v in reference.items()} or None
+            log_landmarks(rec, tc, points, ref, error_arrows, point_radius)
+            log_poses(rec, tc, "world/imus", {m: traj[m] for m in imu_names}, imu_axis_length)
+            for side in bone_legs:
+                strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
+                entity = f"world/bones/{side}"
+                rec.log(
+                    entity,
+                    rr.LineStrips3D.from_fields(colors=[BONE_LINE_COLOR], radii=[0.006]),
+                    static=True,
+                )
+                if okc.any():
+                    send_columns(rec, entity, tc, okc, rr.LineStrips3D.columns(strips=strip[okc]))
         for entity in angles:
             angle = entity.rsplit("/", 1)[1]
             style = rr.SeriesLines(colors=[ANGLE_COLORS[angle]], names=[angle])
