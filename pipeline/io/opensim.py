@@ -97,9 +97,8 @@ def read_orientations_sto(
     if not sensors_names:
         raise InputError("no sensor columns after 'time'", file=path, field="labels")
     flat = ["time"] + [f"{s}[{c}]" for s in sensors_names for c in "wxyz"]
-    expanded = [ln.replace(",", "\t") for ln in rows]
     try:
-        data = parse_table(expanded, flat, file=path, first_line=first_line)
+        data = parse_table(rows, flat, file=path, first_line=first_line, also_sep=",")
     except InputError as e:
         raise InputError(
             e.message + f"; expected 'time' then {len(sensors_names)} cells 'w,x,y,z'",

@@ -32,14 +32,27 @@ def parse_table(
     sep: str = "\t",
     file: FileLike = None,
     first_line: int | None = None,
+    also_sep: str | None = None,
+    chunk: int = 20_000,
 ) -> np.ndarray:
     """Parse delimited text rows into an ``(N, len(labels))`` float array.
 
     Refuses a row with the wrong number of fields (typically a file cut mid-row) and a cell that
     is not a number, naming the row, the file line and the column. Empty cells and ``NaN`` become
-    NaN (missing samples, handled by :func:`fill_gaps`).
+    NaN (missing samples, handled by :func:`fill_gaps`). ``also_sep``: a second separator (the
+    commas inside an OpenSense quaternion cell). Rows are parsed ``chunk`` at a time, so the
+    split strings of an hour-long file never exist at once.
     """
+    if len(lines) > chunk:
+        parts = []
+        for start in range(0, len(lines), chunk):
+            line0 = None if first_line is None else first_line + start
+            parts.append(parse_table(lines[start : start + chunk], labels, sep=sep, file=file,
+                                     first_line=line0, also_sep=also_sep, chunk=chunk))  # fmt: skip
+        return np.concatenate(parts)
     n = len(labels)
+    if also_sep is not None:
+        lines = [ln.replace(also_sep, sep) for ln in lines]
     rows = [ln.rstrip("\r\n").split(sep) for ln in lines]
     for r, cells in enumerate(rows):
         if len(cells) != n:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_dir, output_set
+from pipeline.reproduce.wang2023.evidence import evidence_tables
 from pipeline.reproduce.wang2023.figures import imc_figures
 from pipeline.reproduce.wang2023.imc import imc_tables, run_imc_stage
 from pipeline.reproduce.wang2023.optical import omc_tables, run_omc_stage
@@ -43,6 +44,7 @@ def reproduce_wang2023(
     if imc:
         imc_stage = run_imc_stage(stage, rerun_dir=rerun_dir, progress=progress)
         files.update(imc_tables(imc_stage))
+        files.update(evidence_tables(imc_stage))
     xsens_stage = None
     if imc and (data_dir / "xsens").is_dir():
         xsens_stage = run_xsens_stage(data_dir, omc_stage=stage)
