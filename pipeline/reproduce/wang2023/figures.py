@@ -4,7 +4,12 @@
   error, per correction method, for both tibia inputs (regression landmark positions), with the
   paper's means as markers where the paper has the configuration;
 * ``fig_malleoli_per_subject.png``: each subject's malleolus error (mean of MM and LM) per
-  correction method, on the uncorrected tibia input: who improves with which method.
+  correction method, on the uncorrected tibia input: who improves with which method;
+* ``fig_trajectories.png``: one subject's lateral malleolus trajectory over time, each axis, IMU
+  (uncorrected tibia, no correction and the closed-form correction) against optical;
+* ``fig_bland_altman.png``: Bland-Altman plots of that subject's malleolus coordinates (IMU minus
+  optical against their mean, all samples and axes; bias and 95 % limits of agreement), before
+  and after the correction.
 
 matplotlib is imported here only (the Agg backend: no display needed).
 """
@@ -20,7 +25,8 @@ from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, paper_mean
 
 __all__ = ["FIGURES", "imc_figures"]
 
-FIGURES = ("fig_table4.png", "fig_malleoli_per_subject.png")
+FIGURES = ("fig_table4.png", "fig_malleoli_per_subject.png", "fig_trajectories.png",
+           "fig_bland_altman.png")  # fmt: skip
 
 
 def _png(fig) -> bytes:
@@ -84,5 +90,46 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=3)
     out["fig_malleoli_per_subject.png"] = _png(fig)
+    plt.close(fig)
+    ex = stage.example
+    if ex and {"none", "average"} <= set(ex.get("imc", {})):
+        out.update(_example_figures(plt, ex))
+    return out
+
+
+def _example_figures(plt, ex: dict) -> dict[str, bytes]:
+    out = {}
+    omc, imc = ex["omc"], ex["imc"]
+    t = np.arange(len(omc["LM"])) / ex["rate_hz"]
+    fig, axes = plt.subplots(3, 1, figsize=(10, 6.5), sharex=True)
+    for k, (ax, axis) in enumerate(zip(axes, "xyz", strict=True)):
+        ax.plot(t, omc["LM"][:, k], "k", lw=1.6, label="optical")
+        ax.plot(t, imc["none"]["LM"][:, k], lw=1, label="IMU, no correction")
+        ax.plot(t, imc["average"]["LM"][:, k], lw=1, label="IMU, closed-form AoR correction")
+        ax.set_ylabel(f"LM {axis} (mm)")
+        ax.grid(alpha=0.3)
+    axes[0].set_title(f"subject {ex['subject_id']}: lateral malleolus, hip-centred, optical frame "
+                      "(uncorrected tibia, regression positions)")  # fmt: skip
+    axes[0].legend(fontsize=8, ncol=3)
+    axes[-1].set_xlabel("time (s)")
+    out["fig_trajectories.png"] = _png(fig)
+    plt.close(fig)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    for ax, method, title in zip(axes, ("none", "average"), ("no correction",
+                                 "closed-form AoR correction"), strict=True):  # fmt: skip
+        a = np.concatenate([imc[method][n] for n in ("MM", "LM")]).ravel()
+        b = np.concatenate([omc[n] for n in ("MM", "LM")]).ravel()
+        ok = np.isfinite(a) & np.isfinite(b)
+        mean, diff = 0.5 * (a[ok] + b[ok]), a[ok] - b[ok]
+        bias, sd = float(np.mean(diff)), float(np.std(diff, ddof=1))
+        ax.scatter(mean, diff, s=2, alpha=0.25)
+        for y, style in ((bias, "-"), (bias + 1.96 * sd, "--"), (bias - 1.96 * sd, "--")):
+            ax.axhline(y, color="k", ls=style, lw=1)
+        ax.set_title(f"{title}: bias {bias:.1f} mm, 95 % limits {bias - 1.96 * sd:.1f} to "
+                     f"{bias + 1.96 * sd:.1f} mm", fontsize=9)  # fmt: skip
+        ax.set_xlabel("mean of IMU and optical (mm; MM, LM coordinates, all samples)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("IMU minus optical (mm)")
+    out["fig_bland_altman.png"] = _png(fig)
     plt.close(fig)
     return out

@@ -52,6 +52,7 @@ from pipeline.reproduce.wang2023.evaluation import (
     compare_trajectories,
     estimate_lag,
     frame_from_femur,
+    points_to_omc,
     rms_orientation_error,
     rotations_to_omc,
     unify_frames,
@@ -85,6 +86,10 @@ class ImcStage:
     corrections: tuple[str, ...]
     seconds: float
     notes: list[str] = field(default_factory=list)
+    #: One subject's paired trajectories for the figures: ``subject_id``, ``rate_hz``, ``omc``
+    #: (landmark -> (N, 3) mm) and ``imc`` (correction -> landmark -> (N, 3) mm, in the OMC frame
+    #: after eq 18-19), uncorrected tibia input, regression positions.
+    example: dict = field(default_factory=dict)
 
 
 def _corrections() -> tuple[str, ...]:
@@ -161,6 +166,7 @@ def run_imc_stage(
     corrections = _corrections()
     pop = omc_stage.population
     traj_rows, orient_rows, subjects, notes = [], [], [], []
+    example: dict = {}
     imc_subjects = [s for s in omc_stage.subjects if s.imc is not None]
     if not imc_subjects:
         raise InputError("no subject with IMC data (imcData) in the dataset")
@@ -204,6 +210,13 @@ def run_imc_stage(
                     comp = compare_trajectories(
                         {n: imc_traj[n] for n in LANDMARKS}, omc_paired, R_imc_to_omc=R
                     )
+                    if (positions == "regression" and tibia_input == "uncorrected"
+                            and (not example or example["subject_id"] == sid)):  # fmt: skip
+                        example.setdefault("subject_id", sid)
+                        example["rate_hz"] = subject.omc.rate_hz
+                        example["omc"] = {n: 1e3 * omc_paired[n] for n in LANDMARKS}
+                        example.setdefault("imc", {})[correction] = {
+                            n: 1e3 * points_to_omc(R, imc_traj[n]) for n in LANDMARKS}
                     for name in LANDMARKS:
                         c = comp[name]
                         traj_rows.append(
@@ -229,7 +242,8 @@ def run_imc_stage(
                         )  # fmt: skip
         if rerun_dir is not None:
             _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
-    return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes)
+    return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes,
+                    example)  # fmt: skip
 
 
 def subject_motion(
