@@ -11,7 +11,9 @@ from pipeline.calibration.conventions import (
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
     DEFAULT_FILTER,
+    DEFAULT_METHOD,
     FILTERS,
+    METHODS,
 )
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 
@@ -22,7 +24,7 @@ IK_FLAGS = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_
             "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
             "segment_orientations", "calibration_pose", "static_trial", "filter", "knee",
             "correction", "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun",
-            "strict", "osim")  # fmt: skip
+            "strict", "osim", "calibration_method")  # fmt: skip
 
 
 def add_ik_options(p: argparse.ArgumentParser) -> None:
@@ -69,6 +71,9 @@ def add_ik_options(p: argparse.ArgumentParser) -> None:
                    "accelerometer (and magnetometer) signals: VQF or Hu's PI filter; also replaces "
                    "orientations the recording has (default: the recording's own orientations, "
                    f"{DEFAULT_FILTER} where it has none)")
+    p.add_argument("--calibration-method", choices=(*METHODS, "none"), help="joint-constraint "
+                   "calibration of knees with raw signals, reported with its trust decision "
+                   f"(default {DEFAULT_METHOD}; none skips it)")
     p.add_argument("--knee", choices=KNEE_MODES, help=f"knee model (default {DEFAULT_KNEE})")
     p.add_argument("--correction", choices=CORRECTIONS, help="knee-AoR orientation correction: "
                    "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt) or none "

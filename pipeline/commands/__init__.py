@@ -30,6 +30,7 @@ _EXPORTS = {
     "run_view": "view",
     "SUBJECT": "demo",
     "SUMMARY_COLUMNS": "batch",
+    "write_landmarks_csv": "ik",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

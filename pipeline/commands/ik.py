@@ -203,6 +203,20 @@ def _summary(source: Path, run: IKRun, measures: Measures) -> str:
     ]
     if run.corrections:
         lines += _correction_table(run)
+    if run.knee_calibrations:
+        lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
+                  f"{o.calibration_method}; reported, not yet used by the IK):", "",
+                  "| knee | axis in thigh sensor | axis in shank sensor | halves apart (deg) | "
+                  "hinge residual (rad/s) | vs model axis (deg) | trusted |",
+                  "|---|---|---|---|---|---|---|"]  # fmt: skip
+        for c in run.knee_calibrations:
+            def v(a):
+                return "(" + ", ".join(f"{x:.3f}" for x in a) + ")"
+
+            lines.append(f"| {c.side} | {v(c.axis_thigh)} | {v(c.axis_shank)} | "
+                         f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
+                         f"| {'yes' if c.trusted else 'no: ' + c.reason} |")  # fmt: skip
+        lines.append("")
     if not any(j.endswith("_ankle") for j in run.sensors.joints):
         lines.append("- no foot sensors: the ankle is held neutral and not reported")
     lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]

@@ -50,6 +50,7 @@ IK_KEYS: dict[str, tuple[type, ...]] = {
     "calibration_pose": (str,),
     "static_trial": (str,),
     "filter": (str,),
+    "calibration_method": (str,),
     "sensor_to_model": (list,),
     "heading": (str,),
     "foot_length_m": (float, int),

@@ -10,18 +10,22 @@ from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
     "apply_sensor_map": "sensors",
+    "calibrate_knees": "functional",
     "check_sensor_to_model": "options",
     "IKOptions": "options",
     "IKRun": "run",
     "JOINT_SEGMENTS": "sensors",
+    "KneeCalibration": "functional",
     "known_segments": "sensors",
     "mot_columns": "run",
     "MOT_NAMES": "run",
     "orientations_from_signals": "signals",
     "process_recording": "run",
+    "RESIDUAL_BOUND_RAD_S": "functional",
     "SENSOR_ALIASES": "sensors",
     "sensor_set": "sensors",
     "SensorSet": "sensors",
+    "SPLIT_HALF_DEG": "functional",
     "Z_UP_TO_Y_UP": "signals",
 }
 __all__ = sorted(_EXPORTS)

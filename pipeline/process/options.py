@@ -18,7 +18,9 @@ from pipeline.calibration.conventions import (
     CORRECTIONS,
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
+    DEFAULT_METHOD,
     FILTERS,
+    METHODS,
 )
 from pipeline.calibration.heading import HEADINGS
 from pipeline.errors import InputError
@@ -60,6 +62,9 @@ class IKOptions:
         sensor_map: our sensor name (``pelvis_imu``, ``femur_r_imu``, ...) -> the name (or a
             unique part of it, e.g. an Xsens id) of the recording's sensor to use for it.
         strict: implausible results raise :class:`~pipeline.errors.QualityError`.
+        calibration_method: the joint-constraint calibration of knees with raw signals
+            (:mod:`pipeline.process.functional`; reported): ``'ipopt'``, ``'gn'``,
+            ``'dwpso'``, ``'gwo'``, or ``'none'`` to skip it.
         rerun: write the rerun recording (``pipeline ik`` only).
         osim: also write the model as an OpenSim ``.osim`` whose coordinates are the ``.mot``'s
             columns (``pipeline ik`` only).
@@ -79,6 +84,7 @@ class IKOptions:
     joint_limits: bool = True
     sensor_map: Mapping[str, str] = field(default_factory=dict)
     strict: bool = False
+    calibration_method: str = DEFAULT_METHOD
     rerun: bool = True
     osim: bool = False
 
@@ -89,6 +95,7 @@ class IKOptions:
         _choice("heading", self.heading, HEADINGS)
         if self.filter is not None:
             _choice("filter", self.filter, FILTERS)
+        _choice("calibration_method", self.calibration_method, (*METHODS, "none"))
         for name in ("segment_orientations", "joint_limits", "strict", "rerun", "osim"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"expected true or false, got {getattr(self, name)!r}",

@@ -52,6 +52,7 @@ from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
+from pipeline.process.functional import KneeCalibration, calibrate_knees
 from pipeline.process.options import IKOptions
 from pipeline.process.sensors import SensorSet, apply_sensor_map, known_segments, sensor_set
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
@@ -111,6 +112,7 @@ class IKRun:
     sensors: SensorSet | None = None
     placements: dict[str, np.ndarray] = field(default_factory=dict)
     corrections: dict[str, KneeCorrection] = field(default_factory=dict)
+    knee_calibrations: list[KneeCalibration] = field(default_factory=list)
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -218,6 +220,14 @@ def process_recording(
             placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
                                                            c.tibia_rotation)  # fmt: skip
 
+    knee_cal = []
+    if opts.calibration_method != "none":
+        axes_by_side = {}
+        for s in legs:
+            if sensors.observes(s, "knee"):
+                g = geometry.for_side(s)
+                axes_by_side[s] = (g.knee_axis_femur, g.knee_axis_tibia)
+        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method)
     targets = {f"{seg}_imu": R for seg, R in rotations.items()}
     t0 = _time.perf_counter()
     if sensors.pelvis:
@@ -251,7 +261,8 @@ def process_recording(
     flags = quality_flags(sk, Q, result.residual_rms, notes,
                           joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, right, opts.heading, result.residual_rms,
-                 sk, seconds, notes, flags, opts, sensors, placements, corrections)  # fmt: skip
+                 sk, seconds, notes, flags, opts, sensors, placements, corrections,
+                 knee_cal)  # fmt: skip
 
 
 def _side(segment: str) -> str:

@@ -1,0 +1,113 @@
+"""The joint-constraint calibration of each knee from raw signals, and whether to trust it.
+
+Where a knee's thigh and shank sensors have gyroscope and accelerometer signals, the hinge is
+calibrated from them alone (Hu 2021 eq 4-6 and 1-3/16: :func:`pipeline.calibration.calibrate`,
+IPOPT by default, with an independent start), on the whole trial and on each half. Trust needs
+evidence that holds on real data, all three of:
+
+* **determined**: the observability test passes and the independent start agrees
+  (:mod:`pipeline.calibration.observability`);
+* **split-half agreement**: the axes fitted to the first and the second half of the trial within
+  :data:`SPLIT_HALF_DEG` of each other in both sensor frames (on a real recording the shank axis
+  moved by 58-69 deg between halves while the formal SDs claimed 1-4 mm);
+* **hinge residual**: the RMS of the eq-6 residual (``|w_1 x j_1| - |w_2 x j_2|``) below
+  :data:`RESIDUAL_BOUND_RAD_S`.
+
+Reported per knee, with the angle between the functional axis, carried into the segment by the
+sensor's placement, and the model's knee axis. The IK does not use the result yet: the placements
+come from the calibration pose and the AoR correction (a knee that passes is the candidate for
+replacing them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.io.recording import Recording
+from pipeline.rotations import angle_between
+
+__all__ = ["RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG", "KneeCalibration", "calibrate_knees"]
+
+SPLIT_HALF_DEG = 5.0
+RESIDUAL_BOUND_RAD_S = 0.35
+_SENSORS = {"right": ("femur_r_imu", "tibia_r_imu"), "left": ("femur_l_imu", "tibia_l_imu")}
+
+
+@dataclass(frozen=True)
+class KneeCalibration:
+    """One knee's functional calibration (axes unit, sensor frames; angles in degrees)."""
+
+    side: str
+    axis_thigh: np.ndarray
+    axis_shank: np.ndarray
+    split_half_deg: float
+    residual_rad_s: float
+    determined: bool
+    vs_model_deg: float
+    trusted: bool
+    reason: str
+
+
+def calibrate_knees(
+    trial: Recording,
+    placements: dict[str, np.ndarray],
+    model_axes: dict[str, tuple[np.ndarray, np.ndarray]],
+    method: str = "ipopt",
+    min_samples: int = 200,
+) -> list[KneeCalibration]:
+    """Every knee whose two sensors have gyroscope and accelerometer (module docstring).
+
+    ``placements``: IMU frame (``right_femur_imu``, ...) -> 4x4 placement on its segment;
+    ``model_axes``: side -> the model's knee axis in the femoral and tibial frames."""
+    out = []
+    for side, (thigh, shank) in _SENSORS.items():
+        s1, s2 = trial.sensors.get(thigh), trial.sensors.get(shank)
+        if side not in model_axes or s1 is None or s2 is None:
+            continue
+        if any(v is None for v in (s1.gyr, s1.acc, s2.gyr, s2.acc)):
+            continue
+        n = trial.n_samples
+        if n < 2 * min_samples:
+            continue
+
+        halves = (slice(None), slice(0, n // 2), slice(n // 2, None))
+        full, first, second = (_fit(trial.time, s1, s2, rows, method) for rows in halves)
+        sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
+        split = float(np.degrees(max(angle_between(first.axis_1, sign * second.axis_1),
+                                     angle_between(first.axis_2,
+                                                   sign * second.axis_2))))  # fmt: skip
+        # eq 6 alone: |w_1 x j_1| - |w_2 x j_2| (rad/s), over the whole trial
+        r = (np.linalg.norm(np.cross(s1.gyr, full.axis_1), axis=1)
+             - np.linalg.norm(np.cross(s2.gyr, full.axis_2), axis=1))  # fmt: skip
+        residual = float(np.sqrt(np.mean(r**2)))
+        a_F, a_T = model_axes[side]
+        P_F = placements[f"{side}_femur_imu"][:3, :3]
+        P_T = placements[f"{side}_tibia_imu"][:3, :3]
+        seg_F, seg_T = P_F @ full.axis_1, P_T @ full.axis_2
+        s = 1.0 if float(seg_F @ a_F) >= 0 else -1.0
+        vs_model = float(np.degrees(max(angle_between(s * seg_F, a_F),
+                                        angle_between(s * seg_T, a_T))))  # fmt: skip
+        reasons = []
+        if not full.observability.determined:
+            reasons.append("not determined: " + "; ".join(full.observability.undetermined))
+        if split > SPLIT_HALF_DEG:
+            reasons.append(f"the halves' axes are {split:.1f} deg apart (> {SPLIT_HALF_DEG:g})")
+        if residual > RESIDUAL_BOUND_RAD_S:
+            reasons.append(f"hinge residual {residual:.2f} rad/s (> {RESIDUAL_BOUND_RAD_S:g})")
+        out.append(KneeCalibration(side, full.axis_1, full.axis_2, split, residual,
+                                   full.observability.determined, vs_model, not reasons,
+                                   "; ".join(reasons)))  # fmt: skip
+    return out
+
+
+def _fit(time, s1, s2, rows: slice, method: str):
+    # the solvers (CasADi for IPOPT) load only when a recording has raw signals to calibrate
+    from pipeline.calibration.calibrate import calibrate
+    from pipeline.calibration.joint_constraints import joint_data
+
+    d = joint_data(time[rows], s1.gyr[rows], s1.acc[rows], s2.gyr[rows], s2.acc[rows])
+    q1 = None if s1.quat is None else s1.quat[rows]
+    q2 = None if s2.quat is None else s2.quat[rows]
+    return calibrate(d, "hinge", method, quat_1=q1, quat_2=q2)
