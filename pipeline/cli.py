@@ -26,12 +26,12 @@ EXAMPLES = {
     "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
     "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
     "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
+    "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
     "orientations": "pipeline orientations --imu out/sim --filter vqf "
     "--out out/sim_orientations.sto",
-    "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",
     "calibrate": "pipeline calibrate hinge --imu1 out/sim/right_femur_imu.csv "
     "--imu2 out/sim/right_tibia_imu.csv --method ipopt --json",
-    "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
+    "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",
     "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
     "demo": "pipeline demo --out out/demo",
     "view": "pipeline view out/demo/demo.rrd --web",
