@@ -120,29 +120,22 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
 
 
 def _out_dir(out: Path, row: Mapping[str, object]) -> Path:
-    rec = Path(str(row["orientations"]))
-    name = rec.stem if rec.suffix else rec.name
-    return out / str(row["subject"]) / name
+    from pipeline.commands.ik import recording_name
 
-
-def _complete(folder: Path, row: Mapping[str, object]) -> bool:
-    rec = Path(str(row["orientations"]))
-    name = rec.stem if rec.suffix else rec.name
-    return all((folder / f"{name}{s}").is_file() for s in _OUTPUTS)
+    return out / str(row["subject"]) / recording_name(str(row["orientations"]))
 
 
 def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[str, object]:
     """One manifest row through ``pipeline ik`` (what a worker runs); never raises: a failure is
     the row's ``status`` and ``message``."""
-    from pipeline.commands.ik import resolve_ik, run_ik
+    from pipeline.commands.ik import recording_name, resolve_ik, run_ik
 
     folder = _out_dir(Path(out), row)
+    name = recording_name(str(row["orientations"]))
     result: dict[str, object] = {c: "" for c in SUMMARY_COLUMNS}
     result.update(row=row["row"], subject=row["subject"], orientations=row["orientations"],
                   out_dir=str(folder))  # fmt: skip
-    if not force and _complete(folder, row):
-        rec = Path(str(row["orientations"]))
-        name = rec.stem if rec.suffix else rec.name
+    if not force and all((folder / f"{name}{s}").is_file() for s in _OUTPUTS):
         text = (folder / f"{name}_summary.md").read_text(encoding="utf-8")
         result.update(status="skipped", message="outputs complete (--force redoes them)",
                       **_figures(text))  # fmt: skip

@@ -26,11 +26,12 @@ import numpy as np
 from pipeline.analysis.landmarks import jcs_angles, joint_angles
 from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
+from pipeline.commands.ik import write_landmarks_csv
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import SENSOR_TO_SEGMENT, sensor_to_opensim_matrix
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.io.tables import csv_text, markdown_table
+from pipeline.io.tables import markdown_table
 from pipeline.model.anthropometry import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
@@ -153,14 +154,8 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         # 5. outputs
         t0 = time.perf_counter()
         write_mot(out.path(out_dir / "demo_ik.mot"), run.time, mot_columns(run))
-        cols = ["time"] + [f"{n}_{a}" for n in run.landmarks for a in "xyz"]
-        rows = [
-            {"time": float(t), **{f"{n}_{a}": float(v[k, i]) for n, v in run.landmarks.items()
-                                  for i, a in enumerate("xyz")}}
-            for k, t in enumerate(run.time)
-        ]  # fmt: skip
         with out.open(out_dir / "demo_landmarks.csv") as fh:
-            fh.write(csv_text(rows, cols))
+            write_landmarks_csv(fh, run)
         # the simulator's truth beside the estimate (NaN over the standing calibration pose)
         truth_curves = {k: np.where(np.arange(len(trial.time)) < n0, np.nan, truth_angles[k])
                         for k in run.joint_angles if k in truth_angles}  # fmt: skip

@@ -28,7 +28,7 @@ from pipeline.model.anthropometry import Measures
 from pipeline.process.options import IKOptions
 from pipeline.process.run import IKRun, mot_columns, process_recording
 
-__all__ = ["load_orientations", "resolve_ik", "run_ik", "write_landmarks_csv"]
+__all__ = ["load_orientations", "recording_name", "resolve_ik", "run_ik", "write_landmarks_csv"]
 
 
 def load_orientations(
@@ -59,6 +59,12 @@ def load_orientations(
         raise InputError(f"no file ending in {first_id}.txt", file=path, field="sensor_map")
     prefix = matches[0].name[: -len(f"{first_id}.txt")]
     return read_xsens_trial(path, {sid: name for name, sid in sensor_map.items()}, prefix=prefix)
+
+
+def recording_name(path: str | Path) -> str:
+    """The name a recording's outputs take: the file's stem, or the folder's name."""
+    path = Path(path)
+    return path.stem if path.suffix else path.name
 
 
 def resolve_ik(
@@ -123,7 +129,7 @@ def run_ik(
         static = load_orientations(opts.static_trial, opts.sensor_map)
     # a folder's reader has applied the map already
     run_opts = opts.replace(sensor_map={}) if folder else opts
-    name = orientations.stem if orientations.suffix else orientations.name
+    name = recording_name(orientations)
     output_dir(out_dir)
     with output_set() as out:
         run = process_recording(trial, measures, run_opts, static=static)
@@ -178,7 +184,7 @@ def _log(run: IKRun, path: Path, name: str) -> None:
 
 
 def _summary(source: Path, run: IKRun, measures: Measures) -> str:
-    name = source.stem if source.suffix else source.name
+    name = recording_name(source)
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     o = run.options
     what = "segment orientations" if o.segment_orientations else "sensor orientations"
