@@ -139,14 +139,17 @@ FLEXION_RANGE = {"hip": (np.radians(-40.0), np.radians(140.0)),
                  "knee": (np.radians(-10.0), np.radians(160.0))}  # fmt: skip
 
 
-def _range_violation(R_ref, R_mov, line, start, joint, sign):
-    """How far (rad, summed over frames) the flexion ``start + sign * phi(t)`` leaves
-    :data:`FLEXION_RANGE`, ``phi`` the signed rotation about ``line`` (world at t0) since t0."""
+def _signed_excursion(R_ref: np.ndarray, R_mov: np.ndarray, line: np.ndarray) -> np.ndarray:
+    """``phi(t)``: the moving sensor's rotation since t0 relative to the reference sensor, signed
+    about ``line`` (world at t0); the opposite line gives ``-phi``."""
     rel = np.swapaxes(R_ref, 1, 2) @ R_mov
     axis, angle = axis_angle(rel @ rel[0].T)
     ok = np.isfinite(angle) & np.all(np.isfinite(axis), axis=-1)  # no axis at zero angle
-    phi = angle[ok] * np.sign(axis[ok] @ (R_ref[0].T @ line))
-    flex = start + sign * phi
+    return angle[ok] * np.sign(axis[ok] @ (R_ref[0].T @ line))
+
+
+def _range_violation(flex: np.ndarray, joint: str) -> float:
+    """How far (rad, summed over frames) the flexion ``flex`` leaves :data:`FLEXION_RANGE`."""
     lo, hi = FLEXION_RANGE[joint]
     return float(np.sum(np.clip(lo - flex, 0, None) + np.clip(flex - hi, 0, None)))
 
@@ -179,10 +182,9 @@ def anatomical_right(
                 if axis is not None and excursion >= min_excursion:
                     # flexion = sign * (rotation about right): right = sign * axis keeps the
                     # largest excursions flexions; check that against the joint's range
-                    args = (rotations[ref], rotations[mov], sign * axis, start, joint, sign)
-                    keep = _range_violation(*args)
-                    flip = _range_violation(rotations[ref], rotations[mov], -sign * axis, start,
-                                            joint, sign)  # fmt: skip
+                    phi = _signed_excursion(rotations[ref], rotations[mov], sign * axis)
+                    keep = _range_violation(start + sign * phi, joint)
+                    flip = _range_violation(start - sign * phi, joint)  # about -sign * axis
                     cues.append(-sign * axis if flip < keep else sign * axis)
     if not cues:
         raise InputError(

@@ -18,8 +18,8 @@ import numpy as np
 from pipeline.calibration.attitude import filter_orientations
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.errors import InputError
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording
+from pipeline.process.sensors import known_segments
 
 __all__ = ["Z_UP_TO_Y_UP", "orientations_from_signals"]
 
@@ -35,8 +35,7 @@ def orientations_from_signals(
     None for the recording's own orientations, else ``'9-D'`` (every sensor with a magnetometer)
     or ``'6-D'`` (world z up either way). ``every_sensor``: all sensors, not only those with a
     segment in the model."""
-    names = [n for n in trial.sensor_names
-             if every_sensor or SENSOR_TO_SEGMENT.get(n, "torso") != "torso"]  # fmt: skip
+    names = list(trial.sensor_names) if every_sensor else list(known_segments(trial))
     have = [n for n in names if trial.sensors[n].quat is not None]
     if method is None and len(have) == len(names):
         return trial, None
