@@ -94,6 +94,7 @@ _EXPORTS = {
     "spherical_from_axis": "joint_constraints",
     "spherical_jacobian": "joint_constraints",
     "spherical_residual": "joint_constraints",
+    "still_start": "attitude",
     "subject_right": "heading",
     "Subproblem": "solvers",
     "subproblem": "solvers",

@@ -53,6 +53,7 @@ __all__ = [
     "filter_orientations",
     "mahony_filter",
     "rest_bias",
+    "still_start",
     "tilt_error",
 ]
 
@@ -104,9 +105,7 @@ def mahony_filter(
         q = np.array([1.0, 0.0, 0.0, 0.0]) if q0 is None else np.asarray(q0, float)  # eq 44
     ix = iy = iz = 0.0
     if rest_start:
-        still = (np.linalg.norm(gyr, axis=1) < 0.05) & (
-            np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)  # fmt: skip
-        n0 = int(np.argmin(still)) if not still.all() else n
+        n0 = still_start(gyr, acc)
         if n0 * period >= 0.5:
             ix, iy, iz = (-float(v) for v in gyr[:n0].mean(axis=0))
             q = quat_from_matrix(rotation_aligning(acc[:n0].mean(axis=0), [0.0, 0.0, 1.0]))
@@ -171,14 +170,20 @@ def tilt_error(quat_est: np.ndarray, quat_true: np.ndarray) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(ve, vt), axis=-1), np.sum(ve * vt, axis=-1))
 
 
+def still_start(gyr: np.ndarray, acc: np.ndarray) -> int:
+    """How many samples the recording starts with still: |gyro| < 0.05 rad/s and
+    | |a| - g | < 0.3 m/s^2 (the rest test of ``rest_start`` and :func:`rest_bias`)."""
+    still = (np.linalg.norm(gyr, axis=1) < 0.05) & (
+        np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)  # fmt: skip
+    return int(np.argmin(still)) if not still.all() else len(still)
+
+
 def rest_bias(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray) -> np.ndarray | None:
     """The gyro bias (rad/s) as the mean gyro over a still start (|gyro| < 0.05 rad/s and
     | |a| - g | < 0.3 m/s^2 for at least 0.5 s: the calibration pose), or None. Without a
     magnetometer the vertical component of the bias is unobservable in motion, and each sensor's
     heading would drift by it (0.005 rad/s is 4 deg in 15 s)."""
-    still = (np.linalg.norm(gyr, axis=1) < 0.05) & (
-        np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)  # fmt: skip
-    n0 = int(np.argmin(still)) if not still.all() else len(still)
+    n0 = still_start(gyr, acc)
     if n0 < 2 or t[n0 - 1] - t[0] < 0.5:
         return None
     return gyr[:n0].mean(axis=0)

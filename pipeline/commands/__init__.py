@@ -16,6 +16,7 @@ _EXPORTS = {
     "OPTION_COLUMNS": "batch",
     "PAPERS": "reproduce",
     "read_manifest": "batch",
+    "recording_name": "ik",
     "REQUIRED_COLUMNS": "batch",
     "resolve_ik": "ik",
     "run_batch": "batch",

@@ -14,10 +14,8 @@ from pathlib import Path
 
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.errors import InputError
-from pipeline.io.imu_csv import read_imu_csv
-from pipeline.io.imu_folder import read_imu_folder
+from pipeline.io.imu_folder import read_imu_file, read_imu_folder
 from pipeline.io.opensim import write_orientations_sto
-from pipeline.io.vendor_imu import read_movella_dot_csv
 from pipeline.process.signals import orientations_from_signals
 
 __all__ = ["run_orientations"]
@@ -38,9 +36,7 @@ def run_orientations(
     if imu.is_dir():
         rec = read_imu_folder(imu, sensor_map)
     elif imu.is_file():
-        with open(imu, encoding="utf-8", errors="replace") as fh:
-            dot = any(fh.readline().startswith("PacketCounter") for _ in range(12))
-        rec = read_movella_dot_csv(imu) if dot else read_imu_csv(imu)
+        rec = read_imu_file(imu)
     else:
         raise InputError("no such file or folder", file=imu)
     notes: list[str] = []

@@ -35,7 +35,14 @@ from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.vendor_imu import read_movella_dot_csv, read_ximu3_folder
 
-__all__ = ["MODEL_FRAME_NAMES", "XIMU3_LABELS", "align_clocks", "read_imu_folder"]
+__all__ = [
+    "MODEL_FRAME_NAMES",
+    "XIMU3_LABELS",
+    "align_clocks",
+    "imu_format",
+    "read_imu_file",
+    "read_imu_folder",
+]
 
 #: x-IMU3 example labels (lower case) -> our sensor names.
 XIMU3_LABELS = {
@@ -48,19 +55,33 @@ MODEL_FRAME_NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items
                      if seg != "torso"}  # fmt: skip
 
 
-def _read_entry(path: Path) -> Recording | None:
+def imu_format(path: str | Path) -> str | None:
+    """``'ximu3'`` (a device folder), ``'dot'`` (a Movella DOT export), ``'imu_csv'`` (ours), or
+    None: what the entry looks like, from its name and first lines."""
+    path = Path(path)
     if path.is_dir():
-        return read_ximu3_folder(path) if (path / "Inertial.csv").is_file() else None
-    if path.suffix.lower() != ".csv":
+        return "ximu3" if (path / "Inertial.csv").is_file() else None
+    if path.suffix.lower() != ".csv" or not path.is_file():
         return None
     with open(path, encoding="utf-8", errors="replace") as fh:
         head = [fh.readline() for _ in range(12)]
     if any(line.startswith("PacketCounter") for line in head):
-        return read_movella_dot_csv(path)
+        return "dot"
     first = head[0].strip().lower().split(",") if head else []
-    if first[:1] == ["time"] and "gyr_x" in first:
-        return read_imu_csv(path)
-    return None
+    return "imu_csv" if first[:1] == ["time"] and "gyr_x" in first else None
+
+
+def read_imu_file(path: str | Path) -> Recording:
+    """One sensor's recording in any of the module's formats; anything else is read as our IMU
+    CSV, whose reader says what is missing."""
+    kind = imu_format(path)
+    if kind == "ximu3":
+        return read_ximu3_folder(path)
+    return read_movella_dot_csv(path) if kind == "dot" else read_imu_csv(path)
+
+
+def _read_entry(path: Path) -> Recording | None:
+    return read_imu_file(path) if imu_format(path) is not None else None
 
 
 def _name_of(path: Path, sensor_map: Mapping[str, str]) -> str | None:
