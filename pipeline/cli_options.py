@@ -15,16 +15,13 @@ from pipeline.calibration.conventions import (
     FILTERS,
     METHODS,
 )
+from pipeline.io.config import IK_KEYS, SUBJECT_KEYS
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 
 __all__ = ["IK_FLAGS", "add_ik_options"]
 
-#: The ``pipeline ik`` flags (argparse ``dest`` names) that map onto the configuration's keys.
-IK_FLAGS = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_medial_m",
-            "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
-            "segment_orientations", "calibration_pose", "static_trial", "filter", "knee",
-            "correction", "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun",
-            "strict", "osim", "calibration_method")  # fmt: skip
+#: The ``pipeline ik`` flags (argparse ``dest`` names): exactly the configuration file's keys.
+IK_FLAGS = (*SUBJECT_KEYS, *IK_KEYS)
 
 
 def add_ik_options(p: argparse.ArgumentParser) -> None:
