@@ -4,9 +4,13 @@ Conventions (DESIGN.md §2):
 
 * A rotation matrix ``R`` of a segment has the segment axes as its columns, expressed in the
   world: ``p_world = R @ p_segment + t``.
-* Quaternions are scalar-first ``[w, x, y, z]`` everywhere in this package. SciPy, Pinocchio's
-  configuration vectors (root joints) and rerun are scalar-last: :func:`quat_xyzw_from_matrix`
-  and the conversions inside this module are the only places the order changes.
+* Quaternions are scalar-first ``[w, x, y, z]`` everywhere in this package. Pinocchio's
+  configuration vectors (root joints) and rerun are scalar-last: :func:`quat_xyzw_from_matrix`,
+  :func:`matrix_from_quat_xyzw` and :func:`quat_xyzw_integrate` are the only places the order
+  changes.
+* Plain NumPy, vectorised over stacks (no SciPy: ``scipy.spatial`` costs a command ~0.4 s of
+  import, more than the IK of a whole trial). ``tests/test_rotations.py`` checks every map against
+  SciPy's ``Rotation`` and Pinocchio's ``exp3``/``log3``.
 * Every function accepts a single item (``(3,)``, ``(3, 3)``, ``(4,)``) or a stack
   (``(N, 3)``, ``(N, 3, 3)``, ``(N, 4)``) and returns the same leading shape.
 * Angles are radians.
@@ -15,7 +19,6 @@ Conventions (DESIGN.md §2):
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "angle_between",
@@ -27,10 +30,12 @@ __all__ = [
     "matrix_from_euler_xyz_fixed",
     "matrix_from_euler_zyx",
     "matrix_from_quat",
+    "matrix_from_quat_xyzw",
     "normalize",
     "project_to_so3",
     "quat_from_matrix",
     "quat_xyzw_from_matrix",
+    "quat_xyzw_integrate",
     "rot_x",
     "rot_y",
     "rot_z",
@@ -115,16 +120,46 @@ def rot_z(angle: np.ndarray | float) -> np.ndarray:
 
 
 def exp3(rotvec: np.ndarray) -> np.ndarray:
-    """Exponential map so(3) -> SO(3) (Rodrigues), rotation vector = axis * angle."""
+    """Exponential map so(3) -> SO(3) (Rodrigues), rotation vector = axis * angle.
+
+    ``R = I + (sin t / t) K + ((1 - cos t) / t^2) K^2`` with ``K = [r]x``, ``t = |r|``; the two
+    coefficients by their Taylor series below ``t = 1e-4`` (exact to double precision there).
+    """
     r, single = _stack(rotvec, 1)
-    out = Rotation.from_rotvec(r).as_matrix()
+    t2 = np.einsum("ni,ni->n", r, r)
+    t = np.sqrt(t2)
+    small = t < 1e-4
+    ts = np.where(small, 1.0, t)
+    a = np.where(small, 1.0 - t2 / 6.0, np.sin(ts) / ts)
+    b = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(ts)) / (ts * ts))
+    K = skew(r)
+    out = np.eye(3) + a[:, None, None] * K + b[:, None, None] * (K @ K)
     return out[0] if single else out
 
 
 def log3(R: np.ndarray) -> np.ndarray:
-    """Logarithm SO(3) -> rotation vector (axis * angle, angle in [0, pi])."""
+    """Logarithm SO(3) -> rotation vector (axis * angle, angle in [0, pi]).
+
+    Up to a quarter turn (``cos t = (tr R - 1) / 2 >= 0``) from the antisymmetric part
+    ``v = vee(R - R^T) / 2 = sin t * axis``: ``r = atan2(|v|, cos t) v / |v|`` (``v / cos t`` as
+    ``|v| -> 0``), accurate there; beyond, through the unit quaternion (:func:`quat_from_matrix`,
+    accurate up to pi): ``r = 2 atan2(|u|, w) u / |u|``.
+    """
     m, single = _stack(R, 2)
-    out = Rotation.from_matrix(m).as_rotvec()
+    v = 0.5 * np.stack([m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0],
+                        m[:, 1, 0] - m[:, 0, 1]], axis=-1)  # fmt: skip
+    c = 0.5 * (m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2] - 1.0)
+    s = np.sqrt(np.einsum("ni,ni->n", v, v))
+    tiny = s < 1e-12
+    ss = np.where(tiny, 1.0, s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = v * np.where(tiny, 1.0 / c, np.arctan2(ss, c) / ss)[:, None]
+    wide = c < 0.0
+    if wide.any():
+        q = quat_from_matrix(m[wide])
+        w, u = q[:, 0], q[:, 1:]
+        s = np.sqrt(np.einsum("ni,ni->n", u, u))
+        out[wide] = u * (2.0 * np.arctan2(s, w) / s)[:, None]  # |u| >= sin(pi/4) here
     return out[0] if single else out
 
 
@@ -146,14 +181,67 @@ def matrix_from_quat(q: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(q, axis=-1)
     if np.any(~np.isfinite(n)) or np.any(n < 1e-12):
         raise ValueError("zero or non-finite quaternion")
-    out = Rotation.from_quat(q[:, [1, 2, 3, 0]] / n[:, None]).as_matrix()
+    w, x, y, z = (q / n[:, None]).T
+    out = np.empty((q.shape[0], 3, 3))
+    out[:, 0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    out[:, 0, 1] = 2.0 * (x * y - w * z)
+    out[:, 0, 2] = 2.0 * (x * z + w * y)
+    out[:, 1, 0] = 2.0 * (x * y + w * z)
+    out[:, 1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    out[:, 1, 2] = 2.0 * (y * z - w * x)
+    out[:, 2, 0] = 2.0 * (x * z - w * y)
+    out[:, 2, 1] = 2.0 * (y * z + w * x)
+    out[:, 2, 2] = 1.0 - 2.0 * (x * x + y * y)
     return out[0] if single else out
 
 
+def matrix_from_quat_xyzw(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices from **scalar-last** quaternions ``[x, y, z, w]`` (Pinocchio's spherical
+    and free-flyer configurations), normalised first."""
+    q = np.asarray(q, dtype=float)
+    return matrix_from_quat(q[..., [3, 0, 1, 2]])
+
+
+def quat_xyzw_integrate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q (x) exp(v)``: scalar-last quaternions (N, 4) moved by body-frame rotation vectors
+    (N, 3), then normalised: ``pin.integrate`` of a spherical joint (``R <- R exp3(v)``)."""
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    half = 0.5 * np.sqrt(np.einsum("...i,...i->...", v, v))
+    small = half < 1e-6
+    hs = np.where(small, 1.0, half)
+    k = np.where(small, 0.5 - half * half / 12.0, 0.5 * np.sin(hs) / hs)  # sin(|v|/2) / |v|
+    pw, pv = np.cos(half), v * k[..., None]
+    qw, qv = q[..., 3], q[..., :3]
+    out = np.empty(np.broadcast_shapes(q.shape, v.shape[:-1] + (4,)))
+    out[..., :3] = qw[..., None] * pv + pw[..., None] * qv + np.cross(qv, pv)
+    out[..., 3] = qw * pw - np.einsum("...i,...i->...", qv, pv)
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+
+
 def quat_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Scalar-first unit quaternions ``[w, x, y, z]`` with ``w >= 0``."""
+    """Scalar-first unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
+
+    Shepperd's method: of the four equivalent formulas, the one dividing by the largest of
+    ``1 + tr R``, ``1 + 2 R_ii - tr R`` (numerically stable at every angle); NaN in, NaN out.
+    """
     m, single = _stack(R, 2)
-    q = Rotation.from_matrix(m).as_quat()[:, [3, 0, 1, 2]]
+    r00, r01, r02 = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2]
+    r10, r11, r12 = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2]
+    r20, r21, r22 = m[:, 2, 0], m[:, 2, 1], m[:, 2, 2]
+    tr = r00 + r11 + r22
+    cand = np.stack(
+        [
+            np.stack([1.0 + tr, r21 - r12, r02 - r20, r10 - r01], axis=-1),
+            np.stack([r21 - r12, 1.0 + r00 - r11 - r22, r01 + r10, r02 + r20], axis=-1),
+            np.stack([r02 - r20, r01 + r10, 1.0 - r00 + r11 - r22, r12 + r21], axis=-1),
+            np.stack([r10 - r01, r02 + r20, r12 + r21, 1.0 - r00 - r11 + r22], axis=-1),
+        ],
+        axis=1,
+    )  # (N, 4 formulas, 4)
+    pick = np.argmax(np.nan_to_num(np.stack([tr, r00, r11, r22], axis=-1), nan=0.0), axis=1)
+    q = cand[np.arange(m.shape[0]), pick]
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
     q[q[:, 0] < 0] *= -1
     return q[0] if single else q
 
@@ -172,9 +260,21 @@ def matrix_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
 
 
 def euler_zyx_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`matrix_from_euler_zyx`: ``[z, y, x]`` angles, ``y`` in [-pi/2, pi/2]."""
+    """Inverse of :func:`matrix_from_euler_zyx`: ``[z, y, x]`` angles, ``y`` in [-pi/2, pi/2].
+
+    ``y = -asin(r20)``, ``z = atan2(r10, r00)``, ``x = atan2(r21, r22)``; at gimbal lock
+    (``cos y < 1e-9``) ``x = 0`` and ``z`` takes the whole remaining rotation
+    (``atan2(-r01, r11)``).
+    """
     m, single = _stack(R, 2)
-    out = Rotation.from_matrix(m).as_euler("ZYX")
+    y = -np.arcsin(np.clip(m[:, 2, 0], -1.0, 1.0))
+    z = np.arctan2(m[:, 1, 0], m[:, 0, 0])
+    x = np.arctan2(m[:, 2, 1], m[:, 2, 2])
+    lock = np.hypot(m[:, 0, 0], m[:, 1, 0]) < 1e-9
+    if np.any(lock):
+        z = np.where(lock, np.arctan2(-m[:, 0, 1], m[:, 1, 1]), z)
+        x = np.where(lock, 0.0, x)
+    out = np.stack([z, y, x], axis=-1)
     return out[0] if single else out
 
 
@@ -225,10 +325,9 @@ def matrix_from_euler_xyz_fixed(angles: np.ndarray) -> np.ndarray:
 
 
 def euler_xyz_fixed_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`matrix_from_euler_xyz_fixed`: ``(a, b, c)``, ``b`` in [-pi/2, pi/2]."""
-    m, single = _stack(np.asarray(R, dtype=float), 2)
-    out = Rotation.from_matrix(m).as_euler("xyz")  # lowercase: extrinsic (space-fixed)
-    return out[0] if single else out
+    """Inverse of :func:`matrix_from_euler_xyz_fixed`: ``(a, b, c)``, ``b`` in [-pi/2, pi/2]
+    (space-fixed X-Y-Z is body-fixed Z-Y-X read backwards)."""
+    return euler_zyx_from_matrix(R)[..., ::-1]
 
 
 def matrix_from_euler_zxy(euler: np.ndarray) -> np.ndarray:

@@ -117,3 +117,71 @@ def test_space_fixed_xyz_by_hand():
                                rot.rot_z(1.1) @ rot.rot_y(-0.4) @ rot.rot_x(0.3))  # fmt: skip
     back = rot.euler_xyz_fixed_from_matrix(rot.matrix_from_euler_xyz_fixed(a))
     np.testing.assert_allclose(back, a)
+
+
+def _hard_rotations(n=400, seed=3):
+    """Random rotations plus the hard cases: identity, tiny angles, angles at and near pi."""
+    rng = np.random.default_rng(seed)
+    axes = rng.normal(size=(n, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    angles = np.concatenate([
+        rng.uniform(0.0, np.pi, n - 60), np.zeros(10), 10.0 ** -rng.uniform(5, 12, 20),
+        np.pi - 10.0 ** -rng.uniform(3, 10, 20), np.full(10, np.pi),
+    ])  # fmt: skip
+    return axes * angles[:, None]
+
+
+def test_maps_agree_with_scipy_and_pinocchio():
+    import pinocchio as pin
+    from scipy.spatial.transform import Rotation
+
+    v = _hard_rotations()
+    R = rot.exp3(v)
+    np.testing.assert_allclose(R, Rotation.from_rotvec(v).as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(R[:5], [pin.exp3(x) for x in v[:5]], atol=1e-14)
+    # log3: the same rotation back (at pi the sign of the vector is a free choice)
+    np.testing.assert_allclose(rot.exp3(rot.log3(R)), R, atol=1e-12)
+    far = np.linalg.norm(v, axis=1) < np.pi - 1e-6
+    np.testing.assert_allclose(rot.log3(R)[far], v[far], atol=1e-9)
+    np.testing.assert_allclose(rot.log3(R[:40]), [pin.log3(m) for m in R[:40]], atol=1e-9)
+    q = rot.quat_from_matrix(R)
+    ref = Rotation.from_matrix(R).as_quat()[:, [3, 0, 1, 2]]
+    ref[ref[:, 0] < 0] *= -1
+    both = np.abs(q[:, 0]) > 1e-9  # at w = 0, q and -q are both valid
+    np.testing.assert_allclose(q[both], ref[both], atol=1e-12)
+    np.testing.assert_allclose(rot.matrix_from_quat(q), R, atol=1e-13)
+    e = Rotation.from_matrix(R[:300]).as_euler("ZYX")
+    np.testing.assert_allclose(rot.matrix_from_euler_zyx(rot.euler_zyx_from_matrix(R)), R,
+                               atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(rot.euler_zyx_from_matrix(R[:300]), e, atol=1e-9)
+    xyz = Rotation.from_matrix(R[:300]).as_euler("xyz")
+    np.testing.assert_allclose(rot.euler_xyz_fixed_from_matrix(R[:300]), xyz, atol=1e-9)
+
+
+def test_euler_zyx_at_gimbal_lock_rebuilds_the_rotation():
+    for y in (np.pi / 2, -np.pi / 2):
+        R = rot.matrix_from_euler_zyx(np.array([0.4, y, -0.3]))
+        e = rot.euler_zyx_from_matrix(R)
+        assert e[2] == 0.0
+        np.testing.assert_allclose(rot.matrix_from_euler_zyx(e), R, atol=1e-12)
+
+
+def test_quat_xyzw_integrate_is_pinocchio_spherical_integrate():
+    import pinocchio as pin
+
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelSpherical(), pin.SE3.Identity(), "ball")
+    rng = np.random.default_rng(4)
+    q = rng.normal(size=(30, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    v = rng.normal(size=(30, 3)) * np.r_[np.full(20, 1.0), np.full(10, 1e-8)][:, None]
+    ours = rot.quat_xyzw_integrate(q, v)
+    ref = [pin.integrate(model, a, b) for a, b in zip(q, v, strict=True)]
+    np.testing.assert_allclose(ours, ref, atol=1e-12)
+    np.testing.assert_allclose(rot.matrix_from_quat_xyzw(ours),
+                               rot.matrix_from_quat_xyzw(q) @ rot.exp3(v), atol=1e-12)  # fmt: skip
+
+
+def test_nan_in_nan_out():
+    R = np.full((2, 3, 3), np.nan)
+    assert np.isnan(rot.log3(R)).all() and np.isnan(rot.quat_from_matrix(R)).all()

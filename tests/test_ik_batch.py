@@ -1,0 +1,111 @@
+"""Tests of pipeline.ik.batch: the block kinematics against Pinocchio, and the strided solver
+(anchors in sequence, blocks between) against the sequential one (``stride=1``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from test_ik_solver import FRAMES, gait, leg_model
+
+from pipeline.errors import InputError
+from pipeline.ik.batch import JointRotations, block_setup
+from pipeline.ik.problem import setup_ik
+from pipeline.ik.solver import frame_rotations, solve_ik
+from pipeline.rotations import exp3
+
+
+def _random_q(model, n, rng):
+    return np.array([pin.integrate(model, pin.neutral(model), rng.uniform(-2, 2, model.nv))
+                     for _ in range(n)])  # fmt: skip
+
+
+@pytest.mark.parametrize(("knee", "root"), [("free", "fixed"), ("hinge", "spherical"),
+                                            ("hinge", "freeflyer")])  # fmt: skip
+def test_joint_rotations_and_integrate_match_pinocchio(knee, root):
+    m = leg_model(knee, root=root)
+    rng = np.random.default_rng(0)
+    Q = _random_q(m, 20, rng)
+    kin = JointRotations(m, set(range(1, m.njoints)))
+    Rw = kin.world(Q)
+    d = m.createData()
+    for n in range(len(Q)):
+        pin.forwardKinematics(m, d, Q[n])
+        for j in range(1, m.njoints):
+            np.testing.assert_allclose(Rw[j][n], d.oMi[j].rotation, atol=1e-13)
+    cols = np.arange(m.nv) if root != "freeflyer" else np.arange(3, m.nv)  # no translations
+    _, _, plan = kin.tangent_plan(m, cols)
+    dv = rng.normal(size=(len(Q), cols.size))
+    ours = kin.integrate(Q, dv, plan)
+    for n in range(len(Q)):
+        v = np.zeros(m.nv)
+        v[cols] = dv[n]
+        np.testing.assert_allclose(ours[n], pin.integrate(m, Q[n], v), atol=1e-12)
+
+
+def _noisy_targets(m, q, sd, seed, pelvis=False):
+    rng = np.random.default_rng(seed)
+    R = frame_rotations(m, q, FRAMES + ["right_femur_imu"] + (["pelvis"] if pelvis else []))
+    return {f: v @ exp3(rng.normal(0, sd, (len(q), 3))) for f, v in R.items()}
+
+
+@pytest.mark.parametrize(("knee", "root"), [("free", "fixed"), ("hinge", "fixed"),
+                                            ("hinge", "spherical")])  # fmt: skip
+def test_strided_reaches_the_sequential_optima(knee, root):
+    m = leg_model(knee, root=root, knee_limits=[(0.0, 0.9)] if knee == "hinge" else None)
+    q = gait(700, seed=2)  # knee flexion 0.05..1.15 rad: the 0.9 limit is active
+    if knee == "hinge":
+        q = np.c_[q[:, :3], q[:, 3], q[:, 6:]]
+    if root == "spherical":
+        ph = np.linspace(0, 6, 700)
+        quat = np.c_[0.2 * np.sin(ph), np.zeros(700), 0.3 * np.cos(ph), np.ones(700)]
+        quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+        q = np.c_[quat, q]
+    targets = _noisy_targets(m, q, 0.03, seed=5, pelvis=root != "fixed")
+    seq = solve_ik(m, targets, stride=1)
+    for stride in (8, 64):
+        res = solve_ik(m, targets, stride=stride)
+        assert res.converged.all()
+        # each is within tol (1e-4 rad) of the same optimum
+        assert np.abs(res.q - seq.q).max() < 2e-4
+        np.testing.assert_allclose(res.residual_rms, seq.residual_rms, atol=1e-6)
+    if knee == "hinge":
+        iq = m.joints[m.getJointId("right_knee_0")].idx_q
+        assert res.q[:, iq].max() == 0.9 and seq.q[:, iq].max() == 0.9  # on the bound, exactly
+
+
+def test_missing_targets_take_the_sequential_path_and_hold_unobserved_dofs():
+    m = leg_model("free")
+    q = gait(300)
+    targets = _noisy_targets(m, q, 0.01, seed=1)
+    targets["right_foot"][100:140] = np.nan  # the ankle is unobserved there
+    for f in targets:
+        targets[f][200:203] = np.nan  # no target at all
+    seq = solve_ik(m, targets, stride=1)
+    res = solve_ik(m, targets)
+    assert np.isnan(res.q[200:203]).all() and (res.iterations[200:203] == 0).all()
+    ok = np.isfinite(seq.q).all(axis=1)
+    assert np.abs(res.q[ok] - seq.q[ok]).max() < 2e-4
+    np.testing.assert_allclose(res.q[100:140, 6:], np.repeat(res.q[99:100, 6:], 40, 0), atol=0)
+
+
+def test_models_the_block_cannot_vectorise_use_the_sequential_solver():
+    m = pin.Model()
+    j = m.addJoint(0, pin.JointModelRUBX(), pin.SE3.Identity(), "unbounded")  # nq = 2
+    m.addFrame(pin.Frame("link", j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+    a = np.linspace(0.0, 7.0, 50)
+    R = np.array([pin.rpy.rpyToMatrix(x, 0.0, 0.0) for x in a])
+    p = setup_ik(m, {"link": R})
+    assert block_setup(p) is None
+    res = solve_ik(m, {"link": R})
+    np.testing.assert_allclose(res.q, solve_ik(m, {"link": R}, stride=1).q, atol=0)
+    np.testing.assert_allclose(np.arctan2(res.q[:, 1], res.q[:, 0]),
+                               np.arctan2(np.sin(a), np.cos(a)), atol=1e-6)  # fmt: skip
+
+
+def test_stride_must_be_a_positive_integer():
+    m = leg_model("free")
+    R = frame_rotations(m, gait(5), FRAMES)
+    for bad in (0, -3, 2.5):
+        with pytest.raises(InputError, match="stride"):
+            solve_ik(m, R, stride=bad)
