@@ -24,7 +24,8 @@ def _rows(offset_mm: float, landmark: str) -> list[dict]:
 
 def test_cells_counted_against_the_papers_means():
     stage = SimpleNamespace(corrections=("none", "average", "individual"),
-                            trajectory_rows=_rows(8.0, "LM"), orientation_rows=[])  # fmt: skip
+                            trajectory_rows=_rows(8.0, "LM"), orientation_rows=[],
+                            factors=[])  # fmt: skip
     cells = table4_agreement(stage)
     assert len(cells) == 4 * len(PAPER_TABLE_IV)
     far = [c for c in cells if abs(c[4] - c[5]) > 5.0]
@@ -34,3 +35,15 @@ def test_cells_counted_against_the_papers_means():
     text = verdict_section(omc, stage)
     assert f"{3 * len(PAPER_TABLE_IV)} of {4 * len(PAPER_TABLE_IV)} cells" in text
     assert "4 IMC subjects" in text
+    assert "one at a time" not in text  # no factor study given, none reported
+
+
+def test_verdict_names_the_factor_closest_to_the_papers_male_lm():
+    factors = [dict(subject_id=i, sex="m", factor=f, MM_mm=50.0, LM_mm=lm)
+               for i in (1, 2) for f, lm in (("ours", 61.7), ("a", 64.0), ("b", 58.5))]
+    stage = SimpleNamespace(corrections=("none", "average", "individual"),
+                            trajectory_rows=_rows(8.0, "LM"), orientation_rows=[],
+                            factors=factors)  # fmt: skip
+    text = verdict_section(SimpleNamespace(results=[0] * 38, fits=[0] * 60), stage)
+    assert "our male LM is 61.7 mm against 55.1 mm" in text
+    assert "the closest is 'b' at 58.5 mm" in text

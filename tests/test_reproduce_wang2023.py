@@ -250,3 +250,26 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
     assert set(reported) == {"EFM", "EFL", "MM", "LM"}
     for n, value in reported.items():
         assert abs(1e3 * comp[n].rms - value) < 0.01, (n, 1e3 * comp[n].rms, value)
+
+
+def test_table4_factors_start_from_our_own_numbers_and_switch_one_choice(out):
+    from pipeline.reproduce.wang2023.factors import FACTORS
+
+    rows = read(out / "table4_factors.csv")
+    ours = {(r["subject_id"], r["landmark"]): float(r["rms_mm"])
+            for r in read(out / "trajectory_errors.csv")
+            if (r["tibia_input"], r["positions"], r["correction"]) == ("stored", "regression",
+                                                                        "reference")}  # fmt: skip
+    subjects = {s for s, _ in ours}
+    assert {(r["subject_id"], r["factor"]) for r in rows} == {(s, f) for s in subjects
+                                                              for f in FACTORS}  # fmt: skip
+    for r in rows:
+        if r["factor"] == "ours":  # the factor study's baseline IS the Table IV cell
+            assert abs(float(r["MM_mm"]) - ours[(r["subject_id"], "MM")]) < 1e-6
+            assert abs(float(r["LM_mm"]) - ours[(r["subject_id"], "LM")]) < 1e-6
+        if r["factor"] == "malleolus-Y quirk":  # only LM's y changes: MM is untouched
+            base = next(b for b in rows if b["subject_id"] == r["subject_id"]
+                        and b["factor"] == "ours")  # fmt: skip
+            assert float(r["MM_mm"]) == float(base["MM_mm"])
+    report = (out / "report.md").read_text()
+    assert "## Table IV male LM: the reference's choices one at a time" in report

@@ -90,6 +90,9 @@ class ImcStage:
     #: (landmark -> (N, 3) mm) and ``imc`` (correction -> landmark -> (N, 3) mm, in the OMC frame
     #: after eq 18-19), uncorrected tibia input, regression positions.
     example: dict = field(default_factory=dict)
+    #: Table IV's malleoli with the reference code's choices one at a time
+    #: (:func:`pipeline.reproduce.wang2023.factors.factor_rows`); empty until computed.
+    factors: list[dict] = field(default_factory=list)
 
 
 def _corrections() -> tuple[str, ...]:

@@ -13,6 +13,7 @@ import numpy as np
 from pipeline.io.tables import markdown_table, mean_sd
 from pipeline.model.anthropometry import EQUATION_INPUTS, load_table1
 from pipeline.reproduce.wang2023.evidence import evidence_section
+from pipeline.reproduce.wang2023.factors import factors_section
 from pipeline.reproduce.wang2023.imc import ImcStage
 from pipeline.reproduce.wang2023.imc_report import imc_report_sections
 from pipeline.reproduce.wang2023.omc import landmarks_in_frames
@@ -263,6 +264,8 @@ def render_report(
     ]
     if imc_stage is not None:
         parts += ["", imc_report_sections(imc_stage), "", evidence_section(imc_stage)]
+        if imc_stage.factors:
+            parts += ["", factors_section(imc_stage.factors)]
     if xsens_stage is not None:
         parts += ["", xsens_report_section(xsens_stage)]
     return "\n".join(parts) + "\n"

@@ -17,6 +17,7 @@ from pathlib import Path
 from pipeline.errors import InputError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.reproduce.wang2023.evidence import evidence_tables
+from pipeline.reproduce.wang2023.factors import factor_rows, factors_tables
 from pipeline.reproduce.wang2023.figures import imc_figures
 from pipeline.reproduce.wang2023.imc import imc_tables, run_imc_stage
 from pipeline.reproduce.wang2023.optical import omc_tables, run_omc_stage
@@ -43,7 +44,9 @@ def reproduce_wang2023(
     imc_stage = None
     if imc:
         imc_stage = run_imc_stage(stage, rerun_dir=rerun_dir, progress=progress)
+        imc_stage.factors = factor_rows(stage)
         files.update(imc_tables(imc_stage))
+        files.update(factors_tables(imc_stage.factors))
         files.update(evidence_tables(imc_stage))
     xsens_stage = None
     if imc and (data_dir / "xsens").is_dir():
