@@ -52,13 +52,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
-import yourdfpy as ud
-from lxml import etree
 
 from pipeline.errors import InputError
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES, LANDMARKS, SEGMENTS
 from pipeline.model.geometry import TEMPLATE_HEIGHT_M, SubjectGeometry, mirror_point
 from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals
+from pipeline.model.urdf_xml import Inertial, Joint, Link, urdf_xml
 from pipeline.rotations import rotation_aligning
 
 __all__ = [
@@ -69,6 +68,7 @@ __all__ = [
     "joint_names",
     "landmark_frame_names",
     "segment_frame_names",
+    "urdf_object",
 ]
 
 
@@ -142,7 +142,7 @@ def _tf(
     return T
 
 
-def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -> ud.Inertial:
+def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -> Inertial:
     m0, com, (ixx, ixy, ixz, iyy, iyz, izz) = _INERTIA[segment]
     inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
     com = np.asarray(com) * length_ratio
@@ -150,27 +150,18 @@ def _inertial(segment: str, mass_scale: float, length_ratio: float, side: str) -
         M = np.diag([1.0, 1.0, -1.0])
         inertia, com = M @ inertia @ M, mirror_point(com)
     inertia = inertia * mass_scale * length_ratio**2
-    return ud.Inertial(origin=_tf(p=com), mass=float(m0 * mass_scale), inertia=inertia)
+    return Inertial(origin=_tf(p=com), mass=float(m0 * mass_scale), inertia=inertia)
 
 
 def _revolute(
     name: str, parent: str, child: str, origin: np.ndarray, axis, limit_key: str
-) -> ud.Joint:
-    effort, velocity, lower, upper = _LIMITS[limit_key]
-    return ud.Joint(
-        name=name,
-        type="revolute",
-        parent=parent,
-        child=child,
-        origin=origin,
-        axis=np.asarray(axis, dtype=float),
-        limit=ud.Limit(effort=effort, velocity=velocity, lower=lower, upper=upper),
-    )
+) -> Joint:
+    return Joint(name, "revolute", parent, child, origin, axis=np.asarray(axis, dtype=float),
+                 limit=tuple(_LIMITS[limit_key]))  # fmt: skip
 
 
-def _fixed_frame(name: str, parent: str, T: np.ndarray) -> tuple[ud.Link, ud.Joint]:
-    joint = ud.Joint(name=f"{name}_joint", type="fixed", parent=parent, child=name, origin=T)
-    return ud.Link(name=name), joint
+def _fixed_frame(name: str, parent: str, T: np.ndarray) -> tuple[Link, Joint]:
+    return Link(name), Joint(f"{name}_joint", "fixed", parent, name, T)
 
 
 def default_imu_placements(g: SubjectGeometry) -> dict[str, np.ndarray]:
@@ -212,12 +203,12 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
     ms = g.mass_scale
     visuals = leg_visuals(g, l_thigh, l_shank, l_foot)
     links = [
-        ud.Link(name=f"{femur}_virtual"),
-        ud.Link(name=f"{femur}_virtual_2"),
-        ud.Link(name=femur, inertial=_inertial("femur", ms, l_thigh, side), visuals=visuals[femur]),
-        ud.Link(name=tibia, inertial=_inertial("tibia", ms, l_shank, side), visuals=visuals[tibia]),
-        ud.Link(name=f"{foot}_virtual"),
-        ud.Link(name=foot, inertial=_inertial("foot", ms, l_foot, side), visuals=visuals[foot]),
+        Link(name=f"{femur}_virtual"),
+        Link(name=f"{femur}_virtual_2"),
+        Link(name=femur, inertial=_inertial("femur", ms, l_thigh, side), visuals=visuals[femur]),
+        Link(name=tibia, inertial=_inertial("tibia", ms, l_shank, side), visuals=visuals[tibia]),
+        Link(name=f"{foot}_virtual"),
+        Link(name=foot, inertial=_inertial("foot", ms, l_foot, side), visuals=visuals[foot]),
     ]
     jn = f"{side}_"
     joints = [
@@ -235,7 +226,7 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
         )
     else:
         v1, v2 = f"{tibia}_virtual", f"{tibia}_virtual_2"
-        links += [ud.Link(name=v1), ud.Link(name=v2)]
+        links += [Link(name=v1), Link(name=v2)]
         joints += [
             _revolute(jn + "knee_Z", femur, v1, _tf(p=kjc), (0, 0, -1), "knee_Z"),
             _revolute(jn + "knee_X", v1, v2, _tf(), (lat, 0, 0), "knee_X"),
@@ -311,7 +302,7 @@ def urdf_text(
         imus[name] = _placement(name, value)
 
     s = geometry.height_m / TEMPLATE_HEIGHT_M
-    pelvis = ud.Link(
+    pelvis = Link(
         name="pelvis",
         inertial=_inertial("pelvis", geometry.mass_scale, s, "right"),
         visuals=pelvis_visuals(s),
@@ -324,14 +315,22 @@ def urdf_text(
         leg_links, leg_joints = _leg(g, knee, imus)
         links += leg_links
         joints += leg_joints
-    robot = ud.Robot(name=f"lower_limb_{knee}_knee_ISB_model", links=links, joints=joints)
-    robot.materials = materials()
-    urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
-    # the bytes yourdfpy's write_xml_file writes (lxml: ASCII declaration, pretty-printed)
-    text = etree.tostring(urdf.write_xml(), xml_declaration=True, pretty_print=True).decode("ascii")
+    text = urdf_xml(f"lower_limb_{knee}_knee_ISB_model", links, joints, materials())
     if check:
         _check_with_pinocchio(text, joint_names(knee, legs))
     return text
+
+
+def urdf_object(text: str, **kwargs: object):
+    """The model as a ``yourdfpy.URDF``, to inspect or edit it in Python (``kwargs`` go to
+    ``yourdfpy.URDF.load``; meshes are not loaded unless asked). yourdfpy is imported here only:
+    it imports trimesh, ~0.8 s, which no command needs."""
+    import io
+
+    import yourdfpy
+
+    kwargs = {"build_scene_graph": False, "load_meshes": False, **kwargs}
+    return yourdfpy.URDF.load(io.BytesIO(text.encode("ascii")), **kwargs)
 
 
 def build_urdf(

@@ -20,10 +20,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-import yourdfpy as ud
 
 from pipeline.model.geometry import SubjectGeometry, mirror_point
 from pipeline.model.resources import example_robot_data_share
+from pipeline.model.urdf_xml import Material, Visual
 
 __all__ = ["leg_visuals", "materials", "pelvis_visuals", "resolve_package_uri"]
 
@@ -51,7 +51,7 @@ def _visual(
     xyz: Sequence[float],
     mat: str,
     mirror: bool = False,
-) -> ud.Visual:
+) -> Visual:
     """Mesh visual; ``mirror``: reflect it through the sagittal plane (``M = diag(1, 1, -1)``).
 
     A mesh vertex ``v`` lands at ``S v + p``; mirrored, at ``M (S v + p) = (M S) v + M p``: the z
@@ -62,11 +62,10 @@ def _visual(
         scale, xyz = scale * [1.0, 1.0, -1.0], mirror_point(xyz)
     origin = np.eye(4)
     origin[:3, 3] = xyz
-    geometry = ud.Geometry(mesh=ud.Mesh(filename=_MESH_URI + mesh, scale=scale))
-    return ud.Visual(name=name, origin=origin, geometry=geometry, material=ud.Material(name=mat))
+    return Visual(name, _MESH_URI + mesh, scale, origin, Material(mat))
 
 
-def pelvis_visuals(height_ratio: float) -> list[ud.Visual]:
+def pelvis_visuals(height_ratio: float) -> list[Visual]:
     """Pelvis mesh scaled by ``height_ratio = H / 1.80 m`` (material ``body_color``)."""
     s = height_ratio
     return [
@@ -82,7 +81,7 @@ def pelvis_visuals(height_ratio: float) -> list[ud.Visual]:
 
 def leg_visuals(
     g: SubjectGeometry, l_thigh: float, l_shank: float, l_foot: float
-) -> dict[str, list[ud.Visual]]:
+) -> dict[str, list[Visual]]:
     """Link name (``<side>_femur``, ``_tibia``, ``_foot``) -> its visuals for leg ``g.side``.
 
     ``l_*`` are the segment length ratios to the template; the left leg is mirrored.
@@ -130,9 +129,9 @@ def leg_visuals(
     }
 
 
-def materials() -> list[ud.Material]:
+def materials() -> list[Material]:
     """``body_color`` (pelvis, blue), ``body_color_R`` (red), ``body_color_L`` (green)."""
     return [
-        ud.Material(name=n, color=ud.Color(rgba=np.array(_COLORS[k])))
+        Material(n, _COLORS[k])
         for n, k in (("body_color", "middle"), ("body_color_R", "right"), ("body_color_L", "left"))
     ]

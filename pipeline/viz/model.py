@@ -41,6 +41,7 @@ import numpy as np
 from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.landmarks import joint_angles as isb_joint_angles
 from pipeline.errors import InputError
+from pipeline.io.stl import read_stl, vertex_normals
 from pipeline.model.meshes import resolve_package_uri
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import matrix_from_euler_zyx
@@ -65,6 +66,7 @@ BONE_LINE_COLOR = (90, 90, 90)
 #: at most this many samples (36,000: 10 Hz over an hour), the joint angles at the full rate: the
 #: viewer plays 3D fluently at that density, and the .rrd of an hour stays ~100 MB.
 MAX_3D_SAMPLES = 36_000
+_CHUNK_FRAMES = 4096  # frames per block of the ground search (memory: frames x vertices)
 #: Samples logged per chunk (memory stays bounded whatever the length).
 CHUNK_SAMPLES = 10_000
 ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "inversion": (220, 50, 50),
@@ -83,14 +85,7 @@ class SegmentMesh:
 
 @functools.lru_cache(maxsize=32)
 def _load_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh  # deferred: only the model recording needs it
-
-    try:
-        mesh = trimesh.load(path, force="mesh")
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read the mesh: {exc}", file=path) from exc
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
+    vertices, faces = read_stl(path)
     vertices.setflags(write=False)
     faces.setflags(write=False)
     return vertices, faces
@@ -143,8 +138,6 @@ def segment_meshes(skeleton: Skeleton) -> dict[str, SegmentMesh]:
     ``(R_o, p_o)`` its ``origin``); triangles are reversed when ``prod(s) < 0`` (a mirroring scale)
     so that they stay counter-clockwise. Segments without a mesh visual are left out.
     """
-    import trimesh
-
     visuals = _link_visuals(skeleton.urdf, skeleton.source)
     out = {}
     for segment, link in skeleton.segment_frames.items():
@@ -157,9 +150,7 @@ def segment_meshes(skeleton: Skeleton) -> dict[str, SegmentMesh]:
         if not parts_v:
             continue
         vertices, triangles = np.concatenate(parts_v), np.concatenate(parts_f)
-        mesh = trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)
-        normals = np.array(mesh.vertex_normals, dtype=float)
-        out[segment] = SegmentMesh(vertices, triangles, normals)
+        out[segment] = SegmentMesh(vertices, triangles, vertex_normals(vertices, triangles))
     return out
 
 
@@ -170,21 +161,24 @@ def _lowest_height(
     points: Sequence[np.ndarray],
     axis: int,
 ) -> float | None:
-    """Lowest value of coordinate ``axis`` over the trial: of the foot meshes (their convex hull
-    vertices ``v`` at ``R v + p``) if any, else of ``points`` ((N, 3) each); ``None`` if no data."""
-    from scipy.spatial import ConvexHull
-
-    heights = []
+    """Lowest value of coordinate ``axis`` over the trial: of the foot meshes' vertices ``v`` at
+    ``R v + p`` if any (exact, in chunks of frames so that memory stays bounded), else of
+    ``points`` ((N, 3) each); ``None`` if no data."""
+    lows = []
     for seg, mesh in meshes.items():
         if seg.endswith("foot"):
             R, p = traj[segments[seg]]
-            hull = mesh.vertices[ConvexHull(mesh.vertices).vertices]
-            heights.append(R[:, axis, :] @ hull.T + p[:, axis, None])
-    if not heights:
-        heights = [np.asarray(x)[:, axis] for x in points]
-    finite = [h[np.isfinite(h)] for h in heights]
-    finite = [h for h in finite if h.size]
-    return float(min(h.min() for h in finite)) if finite else None
+            for lo in range(0, len(R), _CHUNK_FRAMES):
+                h = R[lo : lo + _CHUNK_FRAMES, axis, :] @ mesh.vertices.T
+                h += p[lo : lo + _CHUNK_FRAMES, axis, None]
+                if np.isfinite(h).any():
+                    lows.append(float(np.nanmin(h)))
+    if not meshes or not lows:
+        for x in points:
+            h = np.asarray(x)[:, axis]
+            if np.isfinite(h).any():
+                lows.append(float(np.nanmin(h)))
+    return min(lows) if lows else None
 
 
 def _camera(
