@@ -1,5 +1,5 @@
-"""Tests of pipeline.ik.batch: the block kinematics against Pinocchio, and the strided solver
-(anchors in sequence, blocks between) against the sequential one (``stride=1``)."""
+"""Tests of pipeline.ik.batch: the strided solver (anchors in sequence, blocks between) against
+the sequential one (``stride=1``)."""
 
 from __future__ import annotations
 
@@ -9,38 +9,10 @@ import pytest
 from test_ik_solver import FRAMES, gait, leg_model
 
 from pipeline.errors import InputError
-from pipeline.ik.batch import JointRotations, block_setup
+from pipeline.ik.batch import block_setup
 from pipeline.ik.problem import setup_ik
 from pipeline.ik.solver import frame_rotations, solve_ik
 from pipeline.rotations import exp3
-
-
-def _random_q(model, n, rng):
-    return np.array([pin.integrate(model, pin.neutral(model), rng.uniform(-2, 2, model.nv))
-                     for _ in range(n)])  # fmt: skip
-
-
-@pytest.mark.parametrize(("knee", "root"), [("free", "fixed"), ("hinge", "spherical"),
-                                            ("hinge", "freeflyer")])  # fmt: skip
-def test_joint_rotations_and_integrate_match_pinocchio(knee, root):
-    m = leg_model(knee, root=root)
-    rng = np.random.default_rng(0)
-    Q = _random_q(m, 20, rng)
-    kin = JointRotations(m, set(range(1, m.njoints)))
-    Rw = kin.world(Q)
-    d = m.createData()
-    for n in range(len(Q)):
-        pin.forwardKinematics(m, d, Q[n])
-        for j in range(1, m.njoints):
-            np.testing.assert_allclose(Rw[j][n], d.oMi[j].rotation, atol=1e-13)
-    cols = np.arange(m.nv) if root != "freeflyer" else np.arange(3, m.nv)  # no translations
-    _, _, plan = kin.tangent_plan(m, cols)
-    dv = rng.normal(size=(len(Q), cols.size))
-    ours = kin.integrate(Q, dv, plan)
-    for n in range(len(Q)):
-        v = np.zeros(m.nv)
-        v[cols] = dv[n]
-        np.testing.assert_allclose(ours[n], pin.integrate(m, Q[n], v), atol=1e-12)
 
 
 def _noisy_targets(m, q, sd, seed, pelvis=False):

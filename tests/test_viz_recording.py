@@ -194,3 +194,20 @@ def test_default_layout_and_hidden_labels(recording):
             break
     else:
         raise AssertionError("no static landmark style")
+
+
+def test_the_program_records_without_importing_pandas(tmp_path):
+    """`pipeline demo` as a program: pyarrow is told once that pandas is absent (0.5 s saved)
+    and the recording is complete, with no rerun warning."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.argv = ['pipeline', 'demo', '--out', sys.argv[1]]\n"
+            "from pipeline.cli import main\nrc = main()\nprint(rc, 'pandas' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
+                         text=True, check=True)  # fmt: skip
+    assert res.stdout.split()[-2:] == ["0", "False"]
+    assert "Warning" not in res.stderr
+    rrd = next(tmp_path.glob("*.rrd"))
+    counts = entity_row_counts(rrd)
+    assert any(k.startswith("/plots/") for k in counts) and any("mesh" in k for k in counts)

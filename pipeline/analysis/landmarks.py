@@ -29,6 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
+from pipeline.model.batch_kinematics import JointRotations
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import euler_zxy_from_matrix
 
@@ -61,20 +62,32 @@ def frame_trajectories(
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """World rotations ``(N, 3, 3)`` and positions ``(N, 3)`` of frames over configurations ``Q``.
 
-    One ``pin.forwardKinematics`` per sample, then only the requested frames are updated.
+    Vectorised over the samples (:class:`~pipeline.model.batch_kinematics.JointRotations`, in
+    blocks of 10,000); one ``pin.forwardKinematics`` per sample for joint types it does not
+    cover. Rows of ``Q`` with NaN give NaN.
     """
     Q = _check_q(skeleton, Q)
-    model, data = skeleton.model, skeleton.data
+    model = skeleton.model
     ids = [skeleton.frame_id(n) for n in names]
     n = len(Q)
-    R = np.empty((len(ids), n, 3, 3))
-    p = np.empty((len(ids), n, 3))
-    for k in range(n):
-        pin.forwardKinematics(model, data, Q[k])
-        for i, fid in enumerate(ids):
-            M = pin.updateFramePlacement(model, data, fid)
-            R[i, k] = M.rotation
-            p[i, k] = M.translation
+    R = np.full((len(ids), n, 3, 3), np.nan)
+    p = np.full((len(ids), n, 3), np.nan)
+    ok = np.flatnonzero(np.all(np.isfinite(Q), axis=1))
+    try:
+        kin = JointRotations(model, {model.frames[f].parentJoint for f in ids})
+    except ValueError:
+        kin = None
+    if kin is None:
+        data = skeleton.data
+        for k in ok:
+            pin.forwardKinematics(model, data, Q[k])
+            for i, fid in enumerate(ids):
+                M = pin.updateFramePlacement(model, data, fid)
+                R[i, k], p[i, k] = M.rotation, M.translation
+    else:
+        for lo in range(0, ok.size, _CHUNK):
+            rows = ok[lo : lo + _CHUNK]
+            R[:, rows], p[:, rows] = kin.frame_poses(model, Q[rows], ids)
     return {name: (R[i], p[i]) for i, name in enumerate(names)}
 
 
@@ -84,18 +97,10 @@ def landmark_trajectories(
     """Landmark name -> ``(N, 3)`` world positions (m) over configurations ``Q`` ``(N, nq)``.
 
     Default names: every landmark frame of the model (``right_EFM``, ..., ``left_LM``). This is
-    Wang eq 15-17 evaluated by forward kinematics.
+    Wang eq 15-17 evaluated by forward kinematics (:func:`frame_trajectories`).
     """
     names = list(skeleton.landmark_frames if names is None else names)
-    Q = _check_q(skeleton, Q)
-    model, data = skeleton.model, skeleton.data
-    ids = [skeleton.frame_id(n) for n in names]
-    out = np.empty((len(ids), len(Q), 3))
-    for k in range(len(Q)):
-        pin.forwardKinematics(model, data, Q[k])
-        for i, fid in enumerate(ids):
-            out[i, k] = pin.updateFramePlacement(model, data, fid).translation
-    return {name: out[i] for i, name in enumerate(names)}
+    return {name: p for name, (_, p) in frame_trajectories(skeleton, Q, names).items()}
 
 
 def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: str) -> np.ndarray:

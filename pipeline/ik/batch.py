@@ -7,11 +7,11 @@ same iteration (module :mod:`pipeline.ik.solver`),
     (A^T A o C + mu I) dq = -rowsum((A^T U) o W_m),   U_i = log3(R_i(q) R_i*^T),
 
 is evaluated for every frame of a block with array operations: the world rotations of the joints
-by forward kinematics over the block (:class:`JointRotations`, from the model's joint placements
-and axes: the same rotations Pinocchio computes, checked by the tests), the world joint axes
-``A`` (3, na) of each frame, and one batched linear solve. Every frame keeps the per-frame stopping
-test and leaves the block when it meets it, so each returned ``q`` is within ``tol`` of its optimum,
-exactly as with :func:`~pipeline.ik.solver.solve_frame`.
+by forward kinematics over the block (:class:`~pipeline.model.batch_kinematics.JointRotations`:
+the rotations Pinocchio computes, from the model's joint placements and axes), the world joint
+axes ``A`` (3, na) of each frame, and one batched linear solve. Every frame keeps the per-frame
+stopping test and leaves the block when it meets it, so each returned ``q`` is within ``tol`` of
+its optimum, exactly as with :func:`~pipeline.ik.solver.solve_frame`.
 
 Warm start (frames are independent once each has a starting point): every ``stride``-th frame is
 solved by the per-frame solver, warm-started from the previous one of them, as the sequential
@@ -30,146 +30,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from pipeline.ik.problem import IKProblem
-from pipeline.rotations import log3, matrix_from_quat_xyzw, quat_xyzw_integrate, skew
+from pipeline.model.batch_kinematics import JointRotations, times
+from pipeline.rotations import log3
 
-__all__ = ["BlockSetup", "JointRotations", "block_frame_rotations", "block_setup", "solve_block"]
-
-_AXES = {"JointModelRX": 0, "JointModelRY": 1, "JointModelRZ": 2}
-
-
-@dataclass(frozen=True)
-class _Joint:
-    index: int
-    parent: int
-    placement: np.ndarray  # rotation of the joint frame in its parent joint's frame (3, 3)
-    kind: str  # "revolute" | "spherical" | "freeflyer"
-    axis: np.ndarray | None  # unit axis of a revolute joint, in its own frame
-    iq: int
-    iv: int
-
-
-class JointRotations:
-    """World rotations of a model's joints, vectorised over configurations (forward kinematics
-    of the rotational part only: ``R_j = R_parent(j) M_j R_j(q_j)``, ``M_j`` the joint placement).
-
-    ``joints``: the joint indices needed (with their ancestors). Revolute joints (``RX``, ``RY``,
-    ``RZ``, unaligned) rotate by ``I + sin q K + (1 - cos q) K^2``, spherical and free-flyer joints
-    by their configuration quaternion (scalar-last). Other joint types raise ``ValueError``.
-    """
-
-    def __init__(self, model: pin.Model, joints: set[int]):
-        needed: set[int] = set()
-        for j in joints:
-            while j > 0:
-                needed.add(j)
-                j = model.parents[j]
-        self.joints: list[_Joint] = []
-        for j in sorted(needed):  # Pinocchio orders parents before children
-            jm = model.joints[j]
-            name = jm.shortname()
-            axis = None
-            if name in _AXES:
-                kind, axis = "revolute", np.eye(3)[_AXES[name]]
-            elif name == "JointModelRevoluteUnaligned":
-                kind, axis = "revolute", np.asarray(jm.extract().axis, dtype=float).copy()
-            elif name == "JointModelSpherical":
-                kind = "spherical"
-            elif name == "JointModelFreeFlyer":
-                kind = "freeflyer"
-            else:
-                raise ValueError(f"joint type {name} is not vectorised")
-            R = np.asarray(model.jointPlacements[j].rotation, dtype=float).copy()
-            self.joints.append(_Joint(j, int(model.parents[j]), R, kind, axis, jm.idx_q, jm.idx_v))
-        self._MK = {}  # (M, M K, M K^2) of each revolute joint
-        for jt in self.joints:
-            if jt.kind == "revolute":
-                K = skew(jt.axis)
-                self._MK[jt.index] = (jt.placement, jt.placement @ K, jt.placement @ K @ K)
-
-    def world(self, Q: np.ndarray) -> dict[int, np.ndarray]:
-        """``{joint: (B, 3, 3)}`` world rotations for configurations ``Q`` (B, nq).
-
-        A revolute joint's ``R_parent M (I + s K + c K^2)`` (``s = sin q``, ``c = 1 - cos q``) is
-        evaluated as ``R_parent M + s R_parent (M K) + c R_parent (M K^2)`` on the (3B, 3) stack of
-        rows: three BLAS products with constant matrices, ~3x faster than ``np.matmul``'s per-item
-        loop over (B, 3, 3) stacks.
-        """
-        B = Q.shape[0]
-        out: dict[int, np.ndarray] = {}
-        for jt in self.joints:
-            if jt.kind == "revolute":
-                a = Q[:, jt.iq]
-                s, c = np.sin(a), 1.0 - np.cos(a)
-                M, MK, MK2 = self._MK[jt.index]
-                if jt.parent == 0:
-                    out[jt.index] = M + s[:, None, None] * MK + c[:, None, None] * MK2
-                else:
-                    s, c = np.repeat(s, 3)[:, None], np.repeat(c, 3)[:, None]
-                    R = out[jt.parent].reshape(-1, 3)
-                    r = R @ M
-                    r += s * (R @ MK)
-                    r += c * (R @ MK2)
-                    out[jt.index] = r.reshape(B, 3, 3)
-            else:
-                iq = jt.iq + (3 if jt.kind == "freeflyer" else 0)
-                Rj = matrix_from_quat_xyzw(Q[:, iq : iq + 4]).reshape(B, 3, 3)
-                if jt.parent != 0:
-                    out[jt.index] = times(out[jt.parent], jt.placement) @ Rj
-                elif np.array_equal(jt.placement, np.eye(3)):
-                    out[jt.index] = Rj
-                else:
-                    out[jt.index] = jt.placement @ Rj
-        return out
-
-    def tangent_plan(
-        self, model: pin.Model, cols: np.ndarray
-    ) -> tuple[list[int], np.ndarray, list[tuple[_Joint, np.ndarray, np.ndarray]]]:
-        """For the tangent indices ``cols``: each one's joint, its rotation axis in that joint's
-        frame (a revolute joint's axis; the unit axes of a spherical or free-flyer joint's angular
-        velocity, Pinocchio's LOCAL convention), and per joint the positions in ``cols`` and the
-        angular components they move (for :meth:`integrate`)."""
-        owners, axes, plan = [], [], []
-        for jt in self.joints:
-            off = 3 if jt.kind == "freeflyer" else 0
-            sel = np.flatnonzero((cols >= jt.iv + off) & (cols < jt.iv + model.nvs[jt.index]))
-            if sel.size == 0:
-                continue
-            comps = cols[sel] - jt.iv - off
-            plan.append((jt, sel, comps))
-        for v in cols:
-            jt, _, comps = next(e for e in plan if v in cols[e[1]])
-            owners.append(jt.index)
-            off = 3 if jt.kind == "freeflyer" else 0
-            axes.append(jt.axis if jt.kind == "revolute" else np.eye(3)[int(v - jt.iv - off)])
-        return owners, np.array(axes), plan
-
-    @staticmethod
-    def integrate(Q: np.ndarray, d: np.ndarray, plan: list) -> np.ndarray:
-        """``pin.integrate`` of the tangent steps ``d`` (B, na) (``plan`` from
-        :meth:`tangent_plan`): revolute angles add, quaternions move by ``q (x) exp(w)``."""
-        Q = Q.copy()
-        for jt, sel, comps in plan:
-            if jt.kind == "revolute":
-                Q[:, jt.iq] += d[:, sel[0]]
-            else:
-                iq = jt.iq + (3 if jt.kind == "freeflyer" else 0)
-                w = np.zeros((Q.shape[0], 3))
-                w[:, comps] = d[:, sel]
-                Q[:, iq : iq + 4] = quat_xyzw_integrate(Q[:, iq : iq + 4], w)
-        return Q
-
-    def normalize(self, Q: np.ndarray) -> np.ndarray:
-        """Configurations with their quaternions normalised (after an interpolation)."""
-        Q = Q.copy()
-        for jt in self.joints:
-            if jt.kind != "revolute":
-                iq = jt.iq + (3 if jt.kind == "freeflyer" else 0)
-                Q[:, iq : iq + 4] /= np.linalg.norm(Q[:, iq : iq + 4], axis=1, keepdims=True)
-        return Q
-
+__all__ = ["BlockSetup", "block_frame_rotations", "block_setup", "solve_block"]
 
 @dataclass
 class BlockSetup:
@@ -198,13 +64,6 @@ def block_setup(p: IKProblem) -> BlockSetup | None:
     rots = np.array([model.frames[f].placement.rotation for f in p.fids])
     owners, axes, plan = kin.tangent_plan(model, p.cols)
     return BlockSetup(kin, parents, rots, owners, axes, plan)
-
-
-def times(R: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """``R @ M`` for a stack ``R`` (B, 3, 3) and one matrix ``M`` (3, 3) (or a vector (3,)),
-    through one BLAS product (``np.matmul`` broadcasts it item by item, ~6x slower)."""
-    B = R.shape[0]
-    return (R.reshape(-1, 3) @ M).reshape((B, 3, 3) if M.ndim == 2 else (B, 3))
 
 
 def block_frame_rotations(b: BlockSetup, Q: np.ndarray) -> np.ndarray:

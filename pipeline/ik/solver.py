@@ -21,11 +21,11 @@ WORLD joint Jacobians; ``m_i``: DoFs that move frame ``i``), the normal equation
 Jacobian: ``J^T W J = (A^T A) o sum_i w_i m_i m_i^T`` and ``J^T W r = sum_i w_i m_i o (A^T u_i)``
 with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no
 present task observes (e.g. the ankle of a frame without its foot target) the matrix is singular:
-LAPACK's ``dposv`` reports it (``info > 0``) and the step is then the minimum-norm least-squares
-one, which leaves that DoF alone. Damping does not move the fixed point either, so the result is the
-exact weighted least-squares optimum (stationary: ``J^T W r = 0`` with the exact Jacobian of
-:func:`orientation_residuals`); with an exactly reachable target set it reproduces the targets (Wang
-2023 eq 15-17 then follow from the model's forward kinematics).
+its Cholesky factorisation fails (:func:`pipeline.ik.bounds.solve_spd`) and the step is then the
+minimum-norm least-squares one, which leaves that DoF alone. Damping does not move the fixed point
+either, so the result is the exact weighted least-squares optimum (stationary: ``J^T W r = 0``
+with the exact Jacobian of :func:`orientation_residuals`); with an exactly reachable target set it
+reproduces the targets (Wang 2023 eq 15-17 then follow from the model's forward kinematics).
 
 Warm start: the previous frame's solution (plus its last velocity if ``extrapolate``); revolute
 angles are never wrapped, so trajectories are continuous. Stopping: when the linear-rate estimate
@@ -49,11 +49,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg.lapack import dposv
 
 from pipeline.errors import InputError
 from pipeline.ik.batch import BlockSetup, block_frame_rotations, block_setup, solve_block
-from pipeline.ik.bounds import box_margin, box_step
+from pipeline.ik.bounds import box_margin, box_step, solve_spd
 from pipeline.ik.problem import IKProblem, OrientationTask, frame_id, setup_ik
 from pipeline.rotations import log3
 
@@ -168,8 +167,8 @@ def solve_frame(
             De = pin.dDifference(model, p.q_ref, q, pin.ARG1)[np.ix_(p.cols, p.cols)]
             H += lam * (De.T @ De)
             g += lam * (De.T @ e)
-        _, x, info = dposv(H, g)
-        d = -x if info == 0 else -np.linalg.lstsq(H, g, rcond=None)[0]
+        x = solve_spd(H, g)
+        d = -x if x is not None else -np.linalg.lstsq(H, g, rcond=None)[0]
         dn = max(d.max(), -d.min())
         clipped = False
         if dn >= margin:  # a bound may be crossed (margin: distance of q to the box)
