@@ -65,9 +65,7 @@ def _parse_tasks(
     for task, arr in zip(tasks, arrays, strict=True):
         ok = np.all(np.isfinite(arr), axis=(1, 2))
         if ok.any():
-            a = arr[ok]
-            ortho = np.abs(np.swapaxes(a, 1, 2) @ a - np.eye(3)).max()
-            det = np.abs(np.linalg.det(a) - 1.0).max()
+            ortho, det = _rotation_deviation(arr[ok])
             if ortho > 1e-3 or det > 1e-3:
                 raise InputError(
                     "targets must be rotation matrices (R^T R = I, det 1); "
@@ -75,6 +73,17 @@ def _parse_tasks(
                     field=task.frame,
                 )
     return tasks, arrays
+
+
+def _rotation_deviation(a: np.ndarray) -> tuple[float, float]:
+    """Largest ``|R^T R - I|`` entry and ``|det R - 1|`` over a stack (M, 3, 3), from the columns'
+    dot products and triple product (no per-matrix product: ~5x faster than ``a^T @ a``)."""
+    c = [a[:, :, i] for i in range(3)]
+    dot = lambda u, v: np.einsum("ni,ni->n", u, v)  # noqa: E731
+    ortho = max(np.abs(dot(c[i], c[i]) - 1.0).max() for i in range(3))
+    ortho = max(ortho, *(np.abs(dot(c[i], c[j])).max() for i, j in ((0, 1), (0, 2), (1, 2))))
+    det = np.abs(dot(c[0], np.cross(c[1], c[2])) - 1.0).max()
+    return float(ortho), float(det)
 
 
 def _support_dofs(model: pin.Model, fids: list[int]) -> np.ndarray:
@@ -223,9 +232,10 @@ def setup_ik(
     weights = np.array([t.weight for t in tasks])
     # support masks: DoF a (of cols) rotates task frame i
     masks = np.zeros((k, na))
+    owner = [next(j for j in range(1, model.njoints) if _owns(model, j, int(v))) for v in cols]
     for i, fid in enumerate(fids):
         sup = set(model.supports[model.frames[fid].parentJoint])
-        masks[i] = [any(_owns(model, j, int(v)) for j in sup) for v in cols]
+        masks[i] = [j in sup for j in owner]
     euclid = all(model.nqs[j] == 1 and model.nvs[j] == 1 for j in _joints_of(model, cols))
     qcols = np.array([_q_of_v(model, v) for v in cols]) if euclid else cols
     cq = slice(qcols[0], qcols[-1] + 1) if np.all(np.diff(qcols) == 1) else qcols

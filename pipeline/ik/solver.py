@@ -21,7 +21,7 @@ WORLD joint Jacobians; ``m_i``: DoFs that move frame ``i``), the normal equation
 Jacobian: ``J^T W J = (A^T A) o sum_i w_i m_i m_i^T`` and ``J^T W r = sum_i w_i m_i o (A^T u_i)``
 with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no
 present task observes (e.g. the ankle of a frame without its foot target) the matrix is singular:
-its Cholesky factorisation fails (:func:`pipeline.ik.bounds.solve_spd`) and the step is then the
+its factorisation fails (:func:`pipeline.ik.bounds.solve_spd`) and the step is then the
 minimum-norm least-squares one, which leaves that DoF alone. Damping does not move the fixed point
 either, so the result is the exact weighted least-squares optimum (stationary: ``J^T W r = 0``
 with the exact Jacobian of :func:`orientation_residuals`); with an exactly reachable target set it
@@ -286,12 +286,8 @@ def _solve_strided(
     while spacing > 1:
         spacing = max(1, spacing // 8)
         level = np.flatnonzero(~done & whole & (np.arange(N) % spacing == 0))
-        ref = np.flatnonzero(done)
-        right = np.minimum(np.searchsorted(ref, level), ref.size - 1)
-        lo, hi = ref[np.maximum(right - 1, 0)], ref[right]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.nan_to_num((level - lo) / (hi - lo))[:, None]
-        start = b.kin.normalize((1.0 - t) * known[lo] + t * known[hi])
+        start = b.kin.normalize(_interpolate(np.flatnonzero(done), known, level))
+        start[:, b.fixed_q] = p.q_ref[b.fixed_q]  # exactly as given, not interpolated
         for first in range(0, level.size, block):
             frames = level[first : first + block]
             Q[frames], iters[frames], conv[frames] = solve_block(
@@ -313,6 +309,31 @@ def _solve_strided(
         m = before[n - 1] if n > 0 else -1
         Q[n], iters[n], conv[n] = solve_frame(p, n, Q[m].copy() if m >= 0 else p.q_ref.copy())
     return Q, iters, conv
+
+
+def _interpolate(ref: np.ndarray, known: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Starting points at frames ``at`` from the solutions ``known[ref]``: the cubic through the
+    two solved frames on each side (Lagrange in the frame index; exact for cubic motion, so that
+    most frames converge in one or two steps), linear where a side has only one."""
+    right = np.minimum(np.searchsorted(ref, at), ref.size - 1)
+    i1, i2 = np.maximum(right - 1, 0), right
+    i0, i3 = np.maximum(i1 - 1, 0), np.minimum(i2 + 1, ref.size - 1)
+    x = at.astype(float)
+    nodes = [ref[i].astype(float) for i in (i0, i1, i2, i3)]
+    cubic = (i0 < i1) & (i2 < i3)
+    w = np.zeros((at.size, 4))
+    for k in range(4):
+        wk = np.ones(at.size)
+        for m in range(4):
+            if m != k:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    wk *= (x - nodes[m]) / (nodes[k] - nodes[m])
+        w[:, k] = wk
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.nan_to_num((x - nodes[1]) / (nodes[2] - nodes[1]))
+    w = np.where(cubic[:, None], np.nan_to_num(w), np.c_[np.zeros_like(t), 1.0 - t, t,
+                                                        np.zeros_like(t)])  # fmt: skip
+    return sum(w[:, k, None] * known[ref[i]] for k, i in enumerate((i0, i1, i2, i3)))
 
 
 def _result(
