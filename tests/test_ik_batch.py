@@ -81,3 +81,28 @@ def test_stride_must_be_a_positive_integer():
     for bad in (0, -3, 2.5):
         with pytest.raises(InputError, match="stride"):
             solve_ik(m, R, stride=bad)
+
+
+def test_fast_turns_and_splices_get_closer_anchors_and_the_sequential_optima():
+    """A pelvis turning 3 full turns in 2 s and a trial spliced end to end (a jump): anchors
+    every 64 frames would interpolate across half turns; the motion-adaptive anchors do not."""
+    from pipeline.ik.solver import ANCHOR_TURN_RAD, _anchors
+
+    m = leg_model("hinge", root="spherical", knee_limits=[(0.0, 0.9)])
+    n = 400
+    legs = gait(n, seed=3)
+    legs = np.c_[legs[:, :3], legs[:, 3], legs[:, 6:]]
+    yaw = np.linspace(0.0, 6 * np.pi, n)
+    yaw[200:] -= 2.0  # the splice: a 2 rad jump of heading between two frames
+    quat = np.c_[np.zeros(n), np.sin(yaw / 2), np.zeros(n), np.cos(yaw / 2)]
+    q = np.c_[quat, legs]
+    targets = _noisy_targets(m, q, 0.02, seed=8, pelvis=True)
+    p = setup_ik(m, targets)
+    anchors = _anchors(p, 64)
+    assert np.diff(anchors).max() <= 64 and 199 in anchors and 200 in anchors
+    turn = [np.arccos(np.clip((np.trace(targets["pelvis"][a].T @ targets["pelvis"][b]) - 1) / 2,
+                              -1, 1)) for a, b in zip(anchors[:-1], anchors[1:], strict=True)
+            if b - a > 1]  # fmt: skip
+    assert max(turn) <= ANCHOR_TURN_RAD + 0.2  # no frame is interpolated across a large turn
+    seq, res = solve_ik(m, targets, stride=1), solve_ik(m, targets)
+    assert res.converged.all() and np.abs(res.q - seq.q).max() < 2e-4

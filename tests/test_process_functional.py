@@ -52,3 +52,34 @@ def test_the_real_ximu3_recording_is_not_trusted_and_says_why():
     assert len(run.knee_calibrations) == 2
     for c in run.knee_calibrations:
         assert not c.trusted and "apart" in c.reason and c.split_half_deg > 10.0
+
+
+def _femur_axis_error_deg(run, trial, side) -> float:
+    """Angle between the true hinge axis (thigh sensor frame) carried into the femur by the run's
+    placement and the model's knee axis: 0 when the correction found the true axis."""
+    P = run.placements[f"{side}_femur_imu"][:3, :3]
+    a_F = run.corrections[side].reference_femur_axis
+    true = trial.knee_axis[f"{side}_femur_imu"]
+    return float(np.degrees(np.arccos(min(1.0, abs(float((P @ true) @ a_F))))))
+
+
+def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says_so(tmp_path):
+    """6-D (no magnetometer): the knee is aligned with the gyroscopes' hinge axis, not the AoR of
+    the drifting orientations; the true hinge axis then lands on the model's knee axis within
+    0.3 deg, where eq 1-8 on the orientations leaves 11 and 24 deg (seed 5)."""
+    from pipeline.commands.ik import summary_text
+
+    trial = simulate_trial(motion="gait", duration_s=12.0, seed=5, standing_s=2.0)
+    raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
+                                                               acc=i.recording.acc)
+                                        for f, i in trial.imus.items()})  # fmt: skip
+    measures = Measures("m", 1.75)
+    run = process_recording(raw, measures, filter="vqf")
+    fallback = process_recording(raw, measures, filter="vqf", calibration_method="none")
+    for side in ("right", "left"):
+        assert run.corrections[side].method == "functional" and run.corrections[side].applied
+        assert fallback.corrections[side].method == "aor"
+        ours, theirs = (_femur_axis_error_deg(r, trial, side) for r in (run, fallback))
+        assert ours < 1.0 and theirs > 5.0, (side, ours, theirs)
+    text = summary_text(tmp_path / "raw", run, measures)
+    assert "(functional calibration)" in text and text.count("| yes | yes |") == 2

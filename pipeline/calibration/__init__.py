@@ -29,6 +29,7 @@ _EXPORTS = {
     "check_vertical": "heading",
     "consistent_axis_signs": "joint_constraints",
     "correct_knee": "correction",
+    "correct_knee_to_axes": "correction",
     "corrected_placement": "correction",
     "correction_rotations": "aor",
     "CORRECTIONS": "conventions",

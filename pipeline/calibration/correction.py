@@ -31,9 +31,10 @@ import numpy as np
 from pipeline.calibration.aor import correction_rotations, knee_aor
 from pipeline.calibration.conventions import CORRECTIONS
 from pipeline.errors import InputError
-from pipeline.rotations import angle_between, axis_angle
+from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
-__all__ = ["KneeCorrection", "correct_knee", "corrected_placement", "knee_hinge_residual"]
+__all__ = ["KneeCorrection", "correct_knee", "correct_knee_to_axes", "corrected_placement",
+           "knee_hinge_residual"]
 
 
 @dataclass(frozen=True)
@@ -145,6 +146,36 @@ def correct_knee(
     after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
     return KneeCorrection(side, method, True, "", C_F, C_T, measured.femur_axis,
                           measured.tibia_axis, a_F, a_T, measured.n_pairs, before,
+                          after)  # fmt: skip
+
+
+def correct_knee_to_axes(
+    femur_R: np.ndarray,
+    tibia_R: np.ndarray,
+    measured_femur_axis: np.ndarray,
+    measured_tibia_axis: np.ndarray,
+    reference_femur_axis: np.ndarray,
+    reference_tibia_axis: np.ndarray,
+    *,
+    method: str = "functional",
+    side: str = "right",
+) -> KneeCorrection:
+    """The closed-form correction (eq 10-12) of a knee whose AoR was measured otherwise than by
+    eq 1-8: e.g. the joint-constraint hinge axis (Hu 2021 eq 4-6) carried into the segment frames
+    by the sensors' placements. ``femur_R``/``tibia_R`` (N, 3, 3) only serve the hinge residuals
+    reported before and after. Axis signs: the measured pair is flipped together if its femoral
+    axis points away from the reference's."""
+    F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
+    a_F = np.asarray(reference_femur_axis, dtype=float)
+    a_T = np.asarray(reference_tibia_axis, dtype=float)
+    v_F = np.asarray(measured_femur_axis, dtype=float)
+    v_T = np.asarray(measured_tibia_axis, dtype=float)
+    if float(v_F @ a_F) < 0.0:
+        v_F, v_T = -v_F, -v_T
+    C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)
+    before = knee_hinge_residual(F, T, a_F, a_T)
+    after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
+    return KneeCorrection(side, method, True, "", C_F, C_T, v_F, v_T, a_F, a_T, 0, before,
                           after)  # fmt: skip
 
 

@@ -31,6 +31,7 @@ _EXPORTS = {
     "run_view": "view",
     "SUBJECT": "demo",
     "SUMMARY_COLUMNS": "batch",
+    "summary_text": "ik",
     "write_landmarks_csv": "ik",
 }
 __all__ = sorted(_EXPORTS)

@@ -28,7 +28,8 @@ from pipeline.model.anthropometry import Measures
 from pipeline.process.options import IKOptions
 from pipeline.process.run import IKRun, mot_columns, process_recording
 
-__all__ = ["load_orientations", "recording_name", "resolve_ik", "run_ik", "write_landmarks_csv"]
+__all__ = ["load_orientations", "recording_name", "resolve_ik", "run_ik", "summary_text",
+           "write_landmarks_csv"]
 
 
 def load_orientations(
@@ -149,7 +150,7 @@ def run_ik(
             with out.open(out_dir / f"{name}.osim") as fh:
                 fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
                                    name=name))  # fmt: skip
-        summary = _summary(orientations, run, measures)
+        summary = summary_text(orientations, run, measures)
         with out.open(out_dir / f"{name}_summary.md") as fh:
             fh.write(summary)
         with out.open(out_dir / f"{name}_config.toml") as fh:
@@ -183,7 +184,8 @@ def _log(run: IKRun, path: Path, name: str) -> None:
                landmarks=list(run.landmarks) or False, joint_angles=angles)  # fmt: skip
 
 
-def _summary(source: Path, run: IKRun, measures: Measures) -> str:
+def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
+    """The run's ``_summary.md``: inputs, quality flags, corrections, calibrations, ranges."""
     name = recording_name(source)
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     o = run.options
@@ -211,17 +213,22 @@ def _summary(source: Path, run: IKRun, measures: Measures) -> str:
         lines += _correction_table(run)
     if run.knee_calibrations:
         lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
-                  f"{o.calibration_method}; reported, not yet used by the IK):", "",
+                  f"{o.calibration_method}; a trusted knee's hinge axis is the AoR its 'aor' "
+                  "correction aligns with the model's):", "",
                   "| knee | axis in thigh sensor | axis in shank sensor | halves apart (deg) | "
-                  "hinge residual (rad/s) | vs model axis (deg) | trusted |",
-                  "|---|---|---|---|---|---|---|"]  # fmt: skip
+                  "hinge residual (rad/s) | vs model axis (deg) | trusted | used |",
+                  "|---|---|---|---|---|---|---|---|"]  # fmt: skip
         for c in run.knee_calibrations:
             def v(a):
                 return "(" + ", ".join(f"{x:.3f}" for x in a) + ")"
 
+            corr = run.corrections.get(c.side)
+            used = ("yes" if corr is not None and corr.method == "functional" else
+                    "no: the knee falls back to the AoR its orientations show (eq 1-8)"
+                    if c.trusted is False else f"no: correction {o.correction}")  # fmt: skip
             lines.append(f"| {c.side} | {v(c.axis_thigh)} | {v(c.axis_shank)} | "
                          f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
-                         f"| {'yes' if c.trusted else 'no: ' + c.reason} |")  # fmt: skip
+                         f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")  # fmt: skip
         lines.append("")
     if not any(j.endswith("_ankle") for j in run.sensors.joints):
         lines.append("- no foot sensors: the ankle is held neutral and not reported")
@@ -247,6 +254,8 @@ def _correction_table(run: IKRun) -> list[str]:
              "|---|---|---|---|---|---|"]  # fmt: skip
     for side, c in run.corrections.items():
         seen = f"{vec(c.measured_femur_axis)}; {vec(c.measured_tibia_axis)}"
+        if c.method == "functional":
+            seen += " (functional calibration)"
         ref = f"{vec(c.reference_femur_axis)}; {vec(c.reference_tibia_axis)}"
         if c.applied:
             fem, tib = rot(c.femur_axis_angle), rot(c.tibia_axis_angle)

@@ -7,6 +7,9 @@ The public names below load their module on first use (:mod:`pipeline._lazy`).
 from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
+    "block_frame_rotations": "batch",
+    "block_setup": "batch",
+    "BlockSetup": "batch",
     "box_margin": "bounds",
     "box_step": "bounds",
     "frame_id": "problem",
@@ -18,8 +21,10 @@ _EXPORTS = {
     "OrientationTask": "problem",
     "remove_limits": "bounds",
     "setup_ik": "problem",
+    "solve_block": "batch",
     "solve_frame": "solver",
     "solve_ik": "solver",
+    "solve_spd": "bounds",
     "UNBOUNDED": "bounds",
 }
 __all__ = sorted(_EXPORTS)

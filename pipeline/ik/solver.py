@@ -120,9 +120,11 @@ def orientation_residuals(
 
 
 def solve_frame(
-    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None
+    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None,
+    max_iters: int | None = None,
 ) -> tuple[np.ndarray, int, bool]:
-    """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``.
+    """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``,
+    at most ``max_iters`` steps (default ``p.max_iters``).
 
     ``previous`` (2, nq): the solutions of frames ``n-2`` and ``n-1`` for the constant-velocity
     warm start (``extrapolate``). A frame without any finite target returns ``q`` untouched with
@@ -154,7 +156,7 @@ def solve_frame(
     margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
     prev = np.inf
     it = 0
-    for it in range(1, p.max_iters + 1):
+    for it in range(1, (p.max_iters if max_iters is None else max_iters) + 1):
         cjj(model, data, q)
         for i, fid in enumerate(p.fids):
             U[:, i] = log3_(ufp(model, data, fid).rotation @ Rn[i])
@@ -261,7 +263,8 @@ def solve_ik(
 def _solve_strided(
     p: IKProblem, b: BlockSetup, stride: int, block: int = 2048
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Anchors (every ``stride``-th frame and the last) in sequence, then the frames between them
+    """Anchors (every ``stride``-th frame, closer where the targets turn fast: :func:`_anchors`)
+    in sequence, then the frames between them
     level by level (spacing divided by 8 per level, down to 1), each level in blocks started from
     the interpolation of the frames solved so far (:mod:`pipeline.ik.batch`). Frames with a
     missing target are solved last, in time order, each warm-started from the solution before
@@ -272,7 +275,7 @@ def _solve_strided(
     iters = np.zeros(N, dtype=int)
     conv = np.zeros(N, dtype=bool)
     whole = p.finite.all(axis=1)
-    anchors = np.unique(np.r_[np.arange(0, N, stride), N - 1])
+    anchors = _anchors(p, stride)
     known = np.empty((N, model.nq))  # the warm start each solved frame leaves
     done = np.zeros(N, dtype=bool)
     q = p.q_ref.copy()
@@ -293,11 +296,11 @@ def _solve_strided(
             Q[frames], iters[frames], conv[frames] = solve_block(
                 p, b, frames, start[first : first + block]
             )
-        for n in level[~conv[level]]:  # the per-frame solver finishes what a block did not
-            qn = Q[n].copy()
+        for n in level[~conv[level]]:  # the per-frame solver finishes what a block did not,
+            qn = Q[n].copy()  # with max_iters steps of its own
             if p.has_limits:
                 qn[p.bq] = np.clip(qn[p.bq], p.blo, p.bhi)
-            Q[n], extra, conv[n] = solve_frame(p, n, qn)
+            Q[n], extra, conv[n] = solve_frame(p, n, qn, max_iters=p.max_iters)
             iters[n] += extra
         known[level] = Q[level]
         done[level] = True
@@ -311,16 +314,48 @@ def _solve_strided(
     return Q, iters, conv
 
 
+#: Largest rotation (rad, ~57 deg) of any target, summed along the trial, between two anchors:
+#: where the motion is fast the anchors come closer (down to every frame), so that no frame starts
+#: from an interpolation across a large turn (a pelvis turning round, a recording spliced end to
+#: end: there the interpolated start can lie in another basin of the least-squares problem).
+ANCHOR_TURN_RAD = 1.0
+
+
+def _anchors(p: IKProblem, stride: int) -> np.ndarray:
+    """Every ``stride``-th frame and the last, and more where the targets' rotation summed since
+    the previous anchor exceeds :data:`ANCHOR_TURN_RAD`."""
+    N = p.n_frames
+    if N < 2:
+        return np.arange(N)
+    tr = np.einsum("nkij,nkij->nk", p.RtT[1:], p.RtT[:-1])  # tr(R_n^T R_{n-1}), per task
+    turn = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
+    turn = np.nan_to_num(turn, nan=0.0).max(axis=1)  # (N-1,): from frame n to n + 1
+    out, acc, last = [0], 0.0, 0
+    for n, t in enumerate(turn.tolist(), start=1):
+        acc += t
+        if acc > ANCHOR_TURN_RAD or n - last >= stride:
+            if t > ANCHOR_TURN_RAD and n - 1 > last:
+                out.append(n - 1)  # a jump: no frame is interpolated across it
+            out.append(n)
+            acc, last = 0.0, n
+    if out[-1] != N - 1:
+        out.append(N - 1)
+    return np.array(out)
+
+
 def _interpolate(ref: np.ndarray, known: np.ndarray, at: np.ndarray) -> np.ndarray:
     """Starting points at frames ``at`` from the solutions ``known[ref]``: the cubic through the
     two solved frames on each side (Lagrange in the frame index; exact for cubic motion, so that
-    most frames converge in one or two steps), linear where a side has only one."""
+    most frames converge in one or two steps), linear where a side has only one or where an outer
+    interval changes by more than 0.5 rad in a coordinate (a jump: the cubic would overshoot)."""
     right = np.minimum(np.searchsorted(ref, at), ref.size - 1)
     i1, i2 = np.maximum(right - 1, 0), right
     i0, i3 = np.maximum(i1 - 1, 0), np.minimum(i2 + 1, ref.size - 1)
     x = at.astype(float)
     nodes = [ref[i].astype(float) for i in (i0, i1, i2, i3)]
     cubic = (i0 < i1) & (i2 < i3)
+    step = lambda a, b: np.abs(known[ref[a]] - known[ref[b]]).max(axis=1)  # noqa: E731
+    cubic &= (step(i0, i1) < 0.5) & (step(i2, i3) < 0.5)
     w = np.zeros((at.size, 4))
     for k in range(4):
         wk = np.ones(at.size)

@@ -14,9 +14,10 @@ evidence that holds on real data, all three of:
   :data:`RESIDUAL_BOUND_RAD_S`.
 
 Reported per knee, with the angle between the functional axis, carried into the segment by the
-sensor's placement, and the model's knee axis. The IK does not use the result yet: the placements
-come from the calibration pose and the AoR correction (a knee that passes is the candidate for
-replacing them).
+sensor's placement, and the model's knee axis. A trusted knee's axes replace the AoR the
+orientations show in the ``'aor'`` correction (:func:`pipeline.process.run.process_recording`,
+step 5): the sensor-to-segment rotations are turned so that the hinge axis is the model's knee
+axis, ISB's medio-lateral direction (Hu 2021 eq 30-37 define the segment frame the same way).
 """
 
 from __future__ import annotations

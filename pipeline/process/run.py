@@ -17,7 +17,12 @@ model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang
    placements are the identity.
 5. **Correction** (:mod:`pipeline.calibration.correction`): per leg with a knee, the segment
    orientations implied by step 4 are corrected towards the reference knee AoR (Wang eq 9-13 or
-   the IPOPT version); the correction becomes part of the sensor placements.
+   the IPOPT version); the correction becomes part of the sensor placements. Where the knee's
+   sensors have gyroscopes and accelerometers, the joint-constraint calibration
+   (:mod:`pipeline.process.functional`, Hu 2021) runs first; a knee whose calibration is trusted
+   is corrected (``'aor'``) to its hinge axis instead of the one the orientations show (eq 1-8),
+   which inherits the attitude filter's heading drift; the others fall back to eq 1-8 and the
+   report says why.
 6. **IK.** Weighted orientation IK of all sensor frames (:func:`pipeline.ik.solve_ik`) with a
    spherical pelvis root. Without a pelvis sensor the pelvis is held in its calibration-pose
    orientation and the hips are free of limits (their angles are then not observed and not
@@ -35,7 +40,12 @@ import numpy as np
 
 from pipeline.analysis.landmarks import frame_trajectories, joint_angles, landmark_trajectories
 from pipeline.analysis.quality import quality_flags
-from pipeline.calibration.correction import KneeCorrection, correct_knee, corrected_placement
+from pipeline.calibration.correction import (
+    KneeCorrection,
+    correct_knee,
+    correct_knee_to_axes,
+    corrected_placement,
+)
 from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
 from pipeline.calibration.placement import (
     mean_rotation,
@@ -200,6 +210,16 @@ def process_recording(
         at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
     placements = placements_from_pose(pose, geometry, at_pose, legs)
 
+    knee_cal = []
+    if opts.calibration_method != "none":
+        axes_by_side = {}
+        for s in legs:
+            if sensors.observes(s, "knee"):
+                g = geometry.for_side(s)
+                axes_by_side[s] = (g.knee_axis_femur, g.knee_axis_tibia)
+        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method)
+    functional = {c.side: c for c in knee_cal if c.trusted}
+
     corrections = {}
     if opts.correction != "none":
         for side in legs:
@@ -209,8 +229,18 @@ def process_recording(
             S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
             S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
             g = geometry.for_side(side)
-            c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
-                             method=opts.correction, side=side, rate_hz=trial.rate_hz)  # fmt: skip
+            if opts.correction == "aor" and side in functional:
+                # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
+                # show (eq 1-8): it does not inherit the filter's heading drift
+                f = functional[side]
+                v_F = placements[f"{fem}_imu"][:3, :3] @ f.axis_thigh
+                v_T = placements[f"{tib}_imu"][:3, :3] @ f.axis_shank
+                c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur, g.knee_axis_tibia,
+                                         side=side)  # fmt: skip
+            else:
+                c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
+                                 method=opts.correction, side=side,
+                                 rate_hz=trial.rate_hz)  # fmt: skip
             corrections[side] = c
             if not c.applied:
                 notes.append(f"{side} knee not corrected: {c.reason}")
@@ -220,14 +250,6 @@ def process_recording(
             placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
                                                            c.tibia_rotation)  # fmt: skip
 
-    knee_cal = []
-    if opts.calibration_method != "none":
-        axes_by_side = {}
-        for s in legs:
-            if sensors.observes(s, "knee"):
-                g = geometry.for_side(s)
-                axes_by_side[s] = (g.knee_axis_femur, g.knee_axis_tibia)
-        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method)
     targets = {f"{seg}_imu": R for seg, R in rotations.items()}
     t0 = _time.perf_counter()
     if sensors.pelvis:
