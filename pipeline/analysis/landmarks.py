@@ -66,11 +66,16 @@ def frame_trajectories(
     blocks of 10,000); one ``pin.forwardKinematics`` per sample for joint types it does not
     cover. Rows of ``Q`` with NaN give NaN.
     """
+    R, p = _frame_poses(skeleton, Q, names, rotations=True)
+    return {name: (R[i], p[i]) for i, name in enumerate(names)}
+
+
+def _frame_poses(skeleton: Skeleton, Q: np.ndarray, names: Sequence[str], rotations: bool):
     Q = _check_q(skeleton, Q)
     model = skeleton.model
     ids = [skeleton.frame_id(n) for n in names]
     n = len(Q)
-    R = np.full((len(ids), n, 3, 3), np.nan)
+    R = np.full((len(ids), n, 3, 3), np.nan) if rotations else None
     p = np.full((len(ids), n, 3), np.nan)
     ok = np.flatnonzero(np.all(np.isfinite(Q), axis=1))
     try:
@@ -83,12 +88,16 @@ def frame_trajectories(
             pin.forwardKinematics(model, data, Q[k])
             for i, fid in enumerate(ids):
                 M = pin.updateFramePlacement(model, data, fid)
-                R[i, k], p[i, k] = M.rotation, M.translation
+                p[i, k] = M.translation
+                if rotations:
+                    R[i, k] = M.rotation
     else:
         for lo in range(0, ok.size, _CHUNK):
             rows = ok[lo : lo + _CHUNK]
-            R[:, rows], p[:, rows] = kin.frame_poses(model, Q[rows], ids)
-    return {name: (R[i], p[i]) for i, name in enumerate(names)}
+            Rc, p[:, rows] = kin.frame_poses(model, Q[rows], ids)
+            if rotations:
+                R[:, rows] = Rc
+    return R, p
 
 
 def landmark_trajectories(
@@ -97,10 +106,12 @@ def landmark_trajectories(
     """Landmark name -> ``(N, 3)`` world positions (m) over configurations ``Q`` ``(N, nq)``.
 
     Default names: every landmark frame of the model (``right_EFM``, ..., ``left_LM``). This is
-    Wang eq 15-17 evaluated by forward kinematics (:func:`frame_trajectories`).
+    Wang eq 15-17 evaluated by forward kinematics (positions only: memory stays at 24 bytes per
+    landmark and sample on long recordings).
     """
     names = list(skeleton.landmark_frames if names is None else names)
-    return {name: p for name, (_, p) in frame_trajectories(skeleton, Q, names).items()}
+    _, p = _frame_poses(skeleton, Q, names, rotations=False)
+    return {name: p[i] for i, name in enumerate(names)}
 
 
 def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: str) -> np.ndarray:

@@ -289,13 +289,12 @@ def _solve_strided(
     while spacing > 1:
         spacing = max(1, spacing // 8)
         level = np.flatnonzero(~done & whole & (np.arange(N) % spacing == 0))
-        start = b.kin.normalize(_interpolate(np.flatnonzero(done), known, level))
-        start[:, b.fixed_q] = p.q_ref[b.fixed_q]  # exactly as given, not interpolated
-        for first in range(0, level.size, block):
+        ref = np.flatnonzero(done)
+        for first in range(0, level.size, block):  # memory: one block's starting points
             frames = level[first : first + block]
-            Q[frames], iters[frames], conv[frames] = solve_block(
-                p, b, frames, start[first : first + block]
-            )
+            start = b.kin.normalize(_interpolate(ref, known, frames))
+            start[:, b.fixed_q] = p.q_ref[b.fixed_q]  # exactly as given, not interpolated
+            Q[frames], iters[frames], conv[frames] = solve_block(p, b, frames, start)
         for n in level[~conv[level]]:  # the per-frame solver finishes what a block did not,
             qn = Q[n].copy()  # with max_iters steps of its own
             if p.has_limits:
