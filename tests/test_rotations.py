@@ -185,3 +185,11 @@ def test_quat_xyzw_integrate_is_pinocchio_spherical_integrate():
 def test_nan_in_nan_out():
     R = np.full((2, 3, 3), np.nan)
     assert np.isnan(rot.log3(R)).all() and np.isnan(rot.quat_from_matrix(R)).all()
+
+
+def test_cross_is_numpys_cross_with_broadcasting():
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=(2, 40, 3))
+    np.testing.assert_allclose(rot.cross(a, b), np.cross(a, b), atol=1e-15)
+    np.testing.assert_allclose(rot.cross(a[0], b), np.cross(a[0], b), atol=1e-15)
+    np.testing.assert_array_equal(rot.cross([1.0, 0, 0], [0, 1.0, 0]), [0, 0, 1.0])

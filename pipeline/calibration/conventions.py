@@ -21,8 +21,10 @@ METHODS = ("gn", "dwpso", "gwo", "ipopt")
 DEFAULT_METHOD = "ipopt"
 JOINTS = ("hinge", "spherical")
 
-#: Knee-AoR orientation corrections: none, Wang eq 9-13 (closed form), the whole-trial IPOPT NLP.
-CORRECTIONS = ("none", "aor", "aor-ipopt")
+#: Knee-AoR orientation corrections: none, Wang eq 9-13 (closed form), the whole-trial IPOPT NLP,
+#: and the closed form towards the knee's joint-constraint hinge axis (Hu 2021 eq 4-6, from the
+#: gyroscopes; only where that calibration is trusted, else eq 1-8 as ``aor``).
+CORRECTIONS = ("none", "aor", "aor-ipopt", "functional")
 #: The correction used when none is asked for: the closed form. On the Wang dataset's
 #: ``uncorrected`` IMC input it halves the malleolus errors (mean MM/LM 105/109 mm without it,
 #: 67/72 mm with it; the IPOPT version 64/68 mm costs CasADi), see ``results/wang2023``.

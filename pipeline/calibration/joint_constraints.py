@@ -30,7 +30,7 @@ import numpy as np
 from scipy.signal import savgol_filter
 
 from pipeline.errors import InputError
-from pipeline.rotations import matrix_from_quat, normalize, skew
+from pipeline.rotations import cross, matrix_from_quat, normalize, skew
 
 __all__ = [
     "JointData",
@@ -94,7 +94,7 @@ def joint_data(time, gyr_1, acc_1, gyr_2, acc_2, *, window_s: float = 0.11) -> J
 
 def gamma(w: np.ndarray, dw: np.ndarray, o: np.ndarray) -> np.ndarray:
     """Eq 2: ``Gamma(o) = w x (w x o) + dw x o`` for (N,3) ``w``, ``dw`` and a (3,) ``o``."""
-    return np.cross(w, np.cross(w, o)) + np.cross(dw, o)
+    return cross(w, cross(w, o)) + cross(dw, o)
 
 
 def _joint_force(d: JointData, o1: np.ndarray, o2: np.ndarray):
@@ -129,13 +129,13 @@ def hinge_residual(
     j1: np.ndarray, j2: np.ndarray, gyr_1: np.ndarray, gyr_2: np.ndarray
 ) -> np.ndarray:
     """Eq 6: ``e(t) = |w_1 x j_1| - |w_2 x j_2|`` (N,) in rad/s."""
-    return np.linalg.norm(np.cross(gyr_1, j1), axis=1) - np.linalg.norm(np.cross(gyr_2, j2), axis=1)
+    return np.linalg.norm(cross(gyr_1, j1), axis=1) - np.linalg.norm(cross(gyr_2, j2), axis=1)
 
 
 def _norm_cross_grad(w: np.ndarray, j: np.ndarray) -> np.ndarray:
-    c = np.cross(w, j)
+    c = cross(w, j)
     n = np.maximum(np.linalg.norm(c, axis=1, keepdims=True), 1e-12)
-    return np.cross(c, w) / n
+    return cross(c, w) / n
 
 
 def hinge_jacobian(j1: np.ndarray, j2: np.ndarray, gyr_1, gyr_2) -> np.ndarray:

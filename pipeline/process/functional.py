@@ -14,10 +14,18 @@ evidence that holds on real data, all three of:
   :data:`RESIDUAL_BOUND_RAD_S`.
 
 Reported per knee, with the angle between the functional axis, carried into the segment by the
-sensor's placement, and the model's knee axis. A trusted knee's axes replace the AoR the
-orientations show in the ``'aor'`` correction (:func:`pipeline.process.run.process_recording`,
+sensor's placement, and the model's knee axis. With ``correction='functional'`` a trusted knee's
+axes replace the AoR the orientations show (:func:`pipeline.process.run.process_recording`,
 step 5): the sensor-to-segment rotations are turned so that the hinge axis is the model's knee
 axis, ISB's medio-lateral direction (Hu 2021 eq 30-37 define the segment frame the same way).
+
+Why it is not the default (``scripts/bench_raw_path.py``, simulated gait, sensors misplaced by up
+to 15 deg): the placement it gives is the more accurate one, the true hinge axis lands within
+0.1-0.3 deg of the model's where eq 1-8 on 6-D orientations leaves 0.4-24 deg; but the joint
+angles get worse without magnetometers (knee axes other than flexion 11-21 deg RMS against 4-6
+deg with eq 1-8), because there the error that dominates is the filter's heading difference
+between the thigh and shank sensors, whose constant part eq 1-8, fitted to the orientations,
+absorbs and a correct placement cannot. With 9-D orientations both give the same angles.
 """
 
 from __future__ import annotations

@@ -19,10 +19,9 @@ model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang
    orientations implied by step 4 are corrected towards the reference knee AoR (Wang eq 9-13 or
    the IPOPT version); the correction becomes part of the sensor placements. Where the knee's
    sensors have gyroscopes and accelerometers, the joint-constraint calibration
-   (:mod:`pipeline.process.functional`, Hu 2021) runs first; a knee whose calibration is trusted
-   is corrected (``'aor'``) to its hinge axis instead of the one the orientations show (eq 1-8),
-   which inherits the attitude filter's heading drift; the others fall back to eq 1-8 and the
-   report says why.
+   (:mod:`pipeline.process.functional`, Hu 2021) runs first; with ``correction='functional'`` a
+   knee whose calibration is trusted is corrected to its hinge axis instead of the one the
+   orientations show (eq 1-8); the others fall back to eq 1-8 and the notes say why.
 6. **IK.** Weighted orientation IK of all sensor frames (:func:`pipeline.ik.solve_ik`) with a
    spherical pelvis root. Without a pelvis sensor the pelvis is held in its calibration-pose
    orientation and the hips are free of limits (their angles are then not observed and not
@@ -229,18 +228,25 @@ def process_recording(
             S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
             S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
             g = geometry.for_side(side)
-            if opts.correction == "aor" and side in functional:
+            if opts.correction == "functional" and side in functional:
                 # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
-                # show (eq 1-8): it does not inherit the filter's heading drift
+                # show (eq 1-8): the sensor placement is right, but the filter's heading errors
+                # stay (eq 1-8 absorbs their constant part; see pipeline.process.functional)
                 f = functional[side]
                 v_F = placements[f"{fem}_imu"][:3, :3] @ f.axis_thigh
                 v_T = placements[f"{tib}_imu"][:3, :3] @ f.axis_shank
                 c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur, g.knee_axis_tibia,
                                          side=side)  # fmt: skip
             else:
+                method = "aor" if opts.correction == "functional" else opts.correction
+                if opts.correction == "functional":
+                    why = ("its functional calibration is not trusted"
+                           if any(k.side == side for k in knee_cal)
+                           else "no functional calibration (raw gyroscope and accelerometer "
+                           "signals of both sensors are needed)")  # fmt: skip
+                    notes.append(f"{side} knee: {why}; corrected by eq 1-8 ('aor') instead")
                 c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
-                                 method=opts.correction, side=side,
-                                 rate_hz=trial.rate_hz)  # fmt: skip
+                                 method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
             corrections[side] = c
             if not c.applied:
                 notes.append(f"{side} knee not corrected: {c.reason}")
