@@ -21,8 +21,7 @@ optimum reached is the one the sequential solver reaches (tested within ``tol``)
 of iterations differs.
 
 The per-frame solver takes over, from the block's last iterate, where the block cannot match it:
-frames that did not converge within :data:`BLOCK_STEPS` steps (mostly frames on a joint limit)
-and frames with a missing target. Joint limits
+frames that did not converge within ``max_iters`` and frames with a missing target. Joint limits
 are handled in the block by projected Newton (:func:`solve_block`).
 """
 
@@ -36,13 +35,8 @@ from pipeline.ik.problem import IKProblem
 from pipeline.model.batch_kinematics import JointRotations, times
 from pipeline.rotations import log3
 
-__all__ = ["BLOCK_STEPS", "BlockSetup", "block_frame_rotations", "block_setup", "solve_block"]
+__all__ = ["BlockSetup", "block_frame_rotations", "block_setup", "solve_block"]
 
-#: Steps a frame may take in a block. Most frames converge in 2-3 from their interpolated start;
-#: the rest are mostly frames on a joint limit, where the block's projected Newton can zig-zag
-#: between holding and releasing the bound while the per-frame active-set solver converges in a
-#: few steps: they leave the block unconverged, for the per-frame solver.
-BLOCK_STEPS = 6
 
 @dataclass
 class BlockSetup:
@@ -176,7 +170,7 @@ def solve_block(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gauss-Newton on ``frames`` (all targets present) from ``Q`` (B, nq, inside the joint box):
     ``(Q, iterations, converged)``, with the stopping test of
-    :func:`~pipeline.ik.solver.solve_frame` per frame, at most :data:`BLOCK_STEPS` steps.
+    :func:`~pipeline.ik.solver.solve_frame` per frame.
 
     Joint limits by projected Newton (Bertsekas 1982): a bounded DoF at a bound whose gradient
     points out of the box is held (its row and column of the normal matrix replaced by the
@@ -193,7 +187,7 @@ def solve_block(
     Wm, C, tol = p.Wm_all, p.C_all, p.tol
     bq, bsel, blo, bhi = p.bq, p.bsel, p.blo, p.bhi
     na = p.cols.size
-    for it in range(1, min(p.max_iters, BLOCK_STEPS) + 1):
+    for it in range(1, p.max_iters + 1):
         Qa = Q[active]
         Rw = b.kin.world(Qa)
         Rf = np.stack([times(Rw[j], P) for j, P in zip(b.frame_joints, b.frame_rotations,
