@@ -90,3 +90,20 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
                            measures)  # fmt: skip
     assert text.count("| yes | no: correction aor |") == 0
     assert default.count("| yes | no: correction aor |") == 2
+
+
+def test_a_long_recording_is_calibrated_on_evenly_spaced_samples(monkeypatch):
+    """MAX_SAMPLES below the trial's length: the fits use a subsample (what keeps an hour of raw
+    signals cheap) and the hinge axis is still found."""
+    import pipeline.process.functional as functional
+
+    monkeypatch.setattr(functional, "MAX_SAMPLES", 400)
+    trial = simulate_trial(motion="gait", duration_s=12.0, seed=4, standing_s=2.0)
+    raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
+                                                               acc=i.recording.acc)
+                                        for f, i in trial.imus.items()})  # fmt: skip
+    run = process_recording(raw, Measures("m", 1.75), filter="vqf")
+    for c in run.knee_calibrations:
+        true = trial.knee_axis[f"{c.side}_femur_imu"]
+        err = np.degrees(np.arccos(min(1.0, abs(float(c.axis_thigh @ true)))))
+        assert err < 1.5 and c.trusted, (c.side, err, c.reason)

@@ -30,16 +30,21 @@ absorbs and a correct placement cannot. With 9-D orientations both give the same
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from pipeline.io.recording import Recording
 from pipeline.rotations import angle_between
 
-__all__ = ["RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG", "KneeCalibration", "calibrate_knees"]
+__all__ = ["MAX_SAMPLES", "RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG", "KneeCalibration",
+           "calibrate_knees"]
 
 SPLIT_HALF_DEG = 5.0
+#: Samples one fit uses at most: a longer (half) trial is subsampled evenly after the angular
+#: accelerations are taken on every sample (the hinge residuals are per sample), so that an hour
+#: of raw signals costs a calibration of a minute's size, not an NLP of 360,000 residuals.
+MAX_SAMPLES = 6000
 RESIDUAL_BOUND_RAD_S = 0.35
 _SENSORS = {"right": ("femur_r_imu", "tibia_r_imu"), "left": ("femur_l_imu", "tibia_l_imu")}
 
@@ -114,9 +119,15 @@ def calibrate_knees(
 def _fit(time, s1, s2, rows: slice, method: str):
     # the solvers (CasADi for IPOPT) load only when a recording has raw signals to calibrate
     from pipeline.calibration.calibrate import calibrate
-    from pipeline.calibration.joint_constraints import joint_data
+    from pipeline.calibration.joint_constraints import JointData, joint_data
 
     d = joint_data(time[rows], s1.gyr[rows], s1.acc[rows], s2.gyr[rows], s2.acc[rows])
     q1 = None if s1.quat is None else s1.quat[rows]
     q2 = None if s2.quat is None else s2.quat[rows]
+    n = d.gyr_1.shape[0]
+    if n > MAX_SAMPLES:
+        keep = np.linspace(0, n - 1, MAX_SAMPLES).round().astype(int)
+        d = JointData(*(getattr(d, f.name)[keep] for f in fields(JointData)))
+        q1 = None if q1 is None else q1[keep]
+        q2 = None if q2 is None else q2[keep]
     return calibrate(d, "hinge", method, quat_1=q1, quat_2=q2)
