@@ -24,7 +24,7 @@ _EXPORTS = {
     "solve_block": "batch",
     "solve_frame": "solver",
     "solve_ik": "solver",
-    "solve_spd": "bounds",
+    "solve_linear": "bounds",
     "UNBOUNDED": "bounds",
 }
 __all__ = sorted(_EXPORTS)

@@ -13,12 +13,12 @@ axes ``A`` (3, na) of each frame, and one batched linear solve. Every frame keep
 stopping test and leaves the block when it meets it, so each returned ``q`` is within ``tol`` of
 its optimum, exactly as with :func:`~pipeline.ik.solver.solve_frame`.
 
-Warm start (frames are independent once each has a starting point): every ``stride``-th frame is
-solved by the per-frame solver, warm-started from the previous one of them, as the sequential
-solver does; each frame between two of them starts from the interpolation of their solutions
-(linear in the revolute angles, normalised linear in the quaternion of a spherical root). The
-optimum reached is the one the sequential solver reaches (tested within ``tol``); only the number
-of iterations differs.
+Warm start (frames are independent once each has a starting point): anchor frames (every
+``stride``-th, closer where the targets turn fast) are solved by the per-frame solver, each
+warm-started from the previous one, as the sequential solver does; every other frame starts from
+the cubic through the solved frames around it, quaternions renormalised
+(:func:`pipeline.ik.solver.solve_ik` drives this). The optimum reached is the one the sequential
+solver reaches (tested within ``tol``); only the number of iterations differs.
 
 The per-frame solver takes over, from the block's last iterate, where the block cannot match it:
 frames that did not converge within ``max_iters`` and frames with a missing target. Joint limits
@@ -86,9 +86,9 @@ def _coupling(C: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
     na = C.shape[0]
     linked = C != 0.0
     root = np.flatnonzero(linked.all(axis=1))
-    rest = [a for a in range(na) if a not in set(root.tolist())]
-    groups, seen = [], set()
-    for a in rest:
+    seen = set(root.tolist())  # the root joins no group
+    groups = []
+    for a in range(na):
         if a in seen:
             continue
         stack, group = [a], []
@@ -96,10 +96,10 @@ def _coupling(C: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
         while stack:
             x = stack.pop()
             group.append(x)
-            for y in np.flatnonzero(linked[x]):
-                if int(y) not in seen and int(y) not in set(root.tolist()):
-                    seen.add(int(y))
-                    stack.append(int(y))
+            for y in np.flatnonzero(linked[x]).tolist():
+                if y not in seen:
+                    seen.add(y)
+                    stack.append(y)
         groups.append(np.array(sorted(group), dtype=int))
     if len(groups) <= 1:
         return np.array([], dtype=int), [np.arange(na)]
@@ -109,8 +109,8 @@ def _coupling(C: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
 def _solve_normal(At: np.ndarray, g: np.ndarray, C: np.ndarray, mu: float, b: BlockSetup,
                   free: np.ndarray | None) -> np.ndarray:  # fmt: skip
     """``x`` with ``H x = g`` for every frame, ``H = (A^T A) o C + mu I`` (``At = A^T``: (B, na,
-    3), the world axes of the DoFs as rows), the
-    rows and columns of held DoFs (``free == 0``) replaced by the identity.
+    3), the world axes of the DoFs as rows), the rows and columns of held DoFs (``free == 0``)
+    replaced by the identity.
 
     Arrowhead elimination where the model allows it (:func:`_coupling`): each group's block
     ``H_gg`` is solved against ``[H_gR | g_g]``, the root's Schur complement
@@ -160,7 +160,11 @@ def _solve_normal(At: np.ndarray, g: np.ndarray, C: np.ndarray, mu: float, b: Bl
 def block_frame_rotations(b: BlockSetup, Q: np.ndarray) -> np.ndarray:
     """World rotations (B, k, 3, 3) of the task frames at configurations ``Q`` (B, nq); rows of
     ``Q`` with NaN give NaN."""
-    Rw = b.kin.world(Q)
+    return _task_rotations(b, b.kin.world(Q))
+
+
+def _task_rotations(b: BlockSetup, Rw: dict[int, np.ndarray]) -> np.ndarray:
+    """The task frames' world rotations (B, k, 3, 3) from the joints' ``Rw``."""
     return np.stack([times(Rw[j], P) for j, P in zip(b.frame_joints, b.frame_rotations,
                                                      strict=True)], axis=1)  # fmt: skip
 
@@ -190,8 +194,7 @@ def solve_block(
     for it in range(1, p.max_iters + 1):
         Qa = Q[active]
         Rw = b.kin.world(Qa)
-        Rf = np.stack([times(Rw[j], P) for j, P in zip(b.frame_joints, b.frame_rotations,
-                                                       strict=True)], axis=1)  # fmt: skip
+        Rf = _task_rotations(b, Rw)
         U = log3((Rf @ p.RtT[frames[active]]).reshape(-1, 3, 3)).reshape(active.size, -1, 3)
         At = np.stack([times(Rw[j], a) for j, a in zip(b.owners, b.axes, strict=True)], axis=1)
         g = ((At @ np.ascontiguousarray(np.swapaxes(U, 1, 2))) * Wm).sum(axis=2)  # (Ba, na)

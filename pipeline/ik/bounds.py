@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-__all__ = ["UNBOUNDED", "box_margin", "box_step", "joint_box", "remove_limits", "solve_spd"]
+__all__ = ["UNBOUNDED", "box_margin", "box_step", "joint_box", "remove_limits", "solve_linear"]
 
 UNBOUNDED = 1e30
 """Limits at or beyond this magnitude mean "no limit" (pinocchio's default is +-DBL_MAX)."""
@@ -68,15 +68,15 @@ def remove_limits(model: pin.Model, joints: list[str]) -> None:
     model.lowerPositionLimit, model.upperPositionLimit = lo, hi
 
 
-def solve_spd(H: np.ndarray, g: np.ndarray) -> np.ndarray | None:
-    """``x`` with ``H x = g`` for the symmetric normal matrix ``H``, or ``None`` when ``H`` is
-    singular (a DoF no task observes, without damping: its row and column are exactly zero).
-    NumPy's LAPACK (LU), not SciPy's ``dposv``: ``scipy.linalg`` costs a command ~0.4 s of
-    import, and one LU call costs less than a Cholesky and two triangular solves through NumPy."""
+def solve_linear(H: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``x`` with ``H x = g`` for the symmetric normal matrix ``H``; where ``H`` is singular (a DoF
+    no task observes, without damping: its row and column are exactly zero), the minimum-norm
+    least-squares ``x``, which leaves that DoF alone. NumPy's LAPACK (LU), not SciPy's ``dposv``:
+    ``scipy.linalg`` costs a command ~0.4 s of import."""
     try:
         return np.linalg.solve(H, g)
     except np.linalg.LinAlgError:
-        return None
+        return np.linalg.lstsq(H, g, rcond=None)[0]
 
 
 def box_margin(qb: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
@@ -101,9 +101,7 @@ def box_step(
         if free.size:
             fx = np.flatnonzero(fixed)
             rhs = -g[free] - H[free][:, fx] @ d[fx]
-            Hf = H[free][:, free]
-            x = solve_spd(Hf, rhs)
-            d[free] = x if x is not None else np.linalg.lstsq(Hf, rhs, rcond=None)[0]
+            d[free] = solve_linear(H[free][:, free], rhs)
         new_lo, new_hi = d < lo, d > hi
         if new_lo.any() or new_hi.any():
             at_lo |= new_lo

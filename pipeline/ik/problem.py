@@ -12,6 +12,7 @@ import pinocchio as pin
 
 from pipeline.errors import InputError
 from pipeline.ik.bounds import joint_box
+from pipeline.rotations import cross
 
 __all__ = ["IKProblem", "OrientationTask", "frame_id", "setup_ik"]
 
@@ -82,7 +83,7 @@ def _rotation_deviation(a: np.ndarray) -> tuple[float, float]:
     dot = lambda u, v: np.einsum("ni,ni->n", u, v)  # noqa: E731
     ortho = max(np.abs(dot(c[i], c[i]) - 1.0).max() for i in range(3))
     ortho = max(ortho, *(np.abs(dot(c[i], c[j])).max() for i, j in ((0, 1), (0, 2), (1, 2))))
-    det = np.abs(dot(c[0], np.cross(c[1], c[2])) - 1.0).max()
+    det = np.abs(dot(c[0], cross(c[1], c[2])) - 1.0).max()
     return float(ortho), float(det)
 
 

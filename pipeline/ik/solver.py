@@ -21,7 +21,7 @@ WORLD joint Jacobians; ``m_i``: DoFs that move frame ``i``), the normal equation
 Jacobian: ``J^T W J = (A^T A) o sum_i w_i m_i m_i^T`` and ``J^T W r = sum_i w_i m_i o (A^T u_i)``
 with the world residual ``u_i = R_i r_i = log3(R_i R_i*^T)``. With ``damping = 0`` and a DoF that no
 present task observes (e.g. the ankle of a frame without its foot target) the matrix is singular:
-its factorisation fails (:func:`pipeline.ik.bounds.solve_spd`) and the step is then the
+its factorisation fails (:func:`pipeline.ik.bounds.solve_linear`) and the step is then the
 minimum-norm least-squares one, which leaves that DoF alone. Damping does not move the fixed point
 either, so the result is the exact weighted least-squares optimum (stationary: ``J^T W r = 0``
 with the exact Jacobian of :func:`orientation_residuals`); with an exactly reachable target set it
@@ -52,7 +52,7 @@ import pinocchio as pin
 
 from pipeline.errors import InputError
 from pipeline.ik.batch import BlockSetup, block_frame_rotations, block_setup, solve_block
-from pipeline.ik.bounds import box_margin, box_step, solve_spd
+from pipeline.ik.bounds import box_margin, box_step, solve_linear
 from pipeline.ik.problem import IKProblem, OrientationTask, frame_id, setup_ik
 from pipeline.rotations import log3
 
@@ -120,11 +120,9 @@ def orientation_residuals(
 
 
 def solve_frame(
-    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None,
-    max_iters: int | None = None,
+    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None
 ) -> tuple[np.ndarray, int, bool]:
-    """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``,
-    at most ``max_iters`` steps (default ``p.max_iters``).
+    """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``.
 
     ``previous`` (2, nq): the solutions of frames ``n-2`` and ``n-1`` for the constant-velocity
     warm start (``extrapolate``). A frame without any finite target returns ``q`` untouched with
@@ -156,7 +154,7 @@ def solve_frame(
     margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
     prev = np.inf
     it = 0
-    for it in range(1, (p.max_iters if max_iters is None else max_iters) + 1):
+    for it in range(1, p.max_iters + 1):
         cjj(model, data, q)
         for i, fid in enumerate(p.fids):
             U[:, i] = log3_(ufp(model, data, fid).rotation @ Rn[i])
@@ -169,8 +167,7 @@ def solve_frame(
             De = pin.dDifference(model, p.q_ref, q, pin.ARG1)[np.ix_(p.cols, p.cols)]
             H += lam * (De.T @ De)
             g += lam * (De.T @ e)
-        x = solve_spd(H, g)
-        d = -x if x is not None else -np.linalg.lstsq(H, g, rcond=None)[0]
+        d = -solve_linear(H, g)
         dn = max(d.max(), -d.min())
         clipped = False
         if dn >= margin:  # a bound may be crossed (margin: distance of q to the box)
@@ -264,9 +261,9 @@ def _solve_strided(
     p: IKProblem, b: BlockSetup, stride: int, block: int = 2048
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Anchors (every ``stride``-th frame, closer where the targets turn fast: :func:`_anchors`)
-    in sequence, then the frames between them
-    level by level (spacing divided by 8 per level, down to 1), each level in blocks started from
-    the interpolation of the frames solved so far (:mod:`pipeline.ik.batch`). Frames with a
+    in sequence, then the frames between them level by level (spacing divided by 8 per level,
+    down to 1), each level in blocks started from the interpolation of the frames solved so far
+    (:func:`_interpolate`, :mod:`pipeline.ik.batch`). Frames with a
     missing target are solved last, in time order, each warm-started from the solution before
     it, so that the DoFs only the missing targets observe are held as in the sequential solver."""
     model = p.model
@@ -299,7 +296,7 @@ def _solve_strided(
             qn = Q[n].copy()  # with max_iters steps of its own
             if p.has_limits:
                 qn[p.bq] = np.clip(qn[p.bq], p.blo, p.bhi)
-            Q[n], extra, conv[n] = solve_frame(p, n, qn, max_iters=p.max_iters)
+            Q[n], extra, conv[n] = solve_frame(p, n, qn)
             iters[n] += extra
         known[level] = Q[level]
         done[level] = True
