@@ -62,6 +62,8 @@ def test_a_still_knee_is_left_uncorrected_with_the_reason():
     np.testing.assert_allclose(c.femur_rotation, np.eye(3))
     with pytest.raises(InputError):
         correct_knee(F, F, np.array([0, 0, 1.0]), np.array([0, 0, 1.0]), method="none")
+    with pytest.raises(InputError, match="correct_knee_to_axes"):  # it needs measured axes
+        correct_knee(F, F, np.array([0, 0, 1.0]), np.array([0, 0, 1.0]), method="functional")
 
 
 def test_corrected_placement_keeps_the_sensor_where_it_is():
@@ -80,3 +82,21 @@ def test_hinge_residual_is_the_rms_angle_between_the_carried_axes():
     T = np.stack([rot_x(a) for a in np.radians([0.0, 10.0, 10.0, 0.0])])
     z = np.array([0.0, 0.0, 1.0])
     assert np.degrees(knee_hinge_residual(F, T, z, z)) == pytest.approx(np.sqrt(50.0))
+
+
+def test_correct_knee_to_axes_by_hand():
+    """Eq 10-12 towards given axes: R_co V = v (reference V, measured v), the measured pair
+    flipped together when it points left."""
+    from pipeline.calibration.correction import correct_knee_to_axes
+
+    F = np.tile(np.eye(3), (10, 1, 1))
+    a = np.array([0.0, 0.0, 1.0])
+    v_F, v_T = exp3([0.1, 0.0, 0.0]) @ a, exp3([0.0, -0.2, 0.0]) @ a
+    c = correct_knee_to_axes(F, F, v_F, v_T, a, a, side="left")
+    assert c.applied and c.method == "functional" and c.side == "left"
+    np.testing.assert_allclose(c.femur_rotation @ a, v_F, atol=1e-12)
+    np.testing.assert_allclose(c.tibia_rotation @ a, v_T, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(c.femur_axis_angle), 0.1, atol=1e-12)
+    flipped = correct_knee_to_axes(F, F, -v_F, -v_T, a, a)
+    np.testing.assert_allclose(flipped.femur_rotation, c.femur_rotation, atol=1e-12)
+    np.testing.assert_allclose(flipped.measured_tibia_axis, v_T, atol=1e-12)

@@ -29,12 +29,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.calibration.aor import correction_rotations, knee_aor
-from pipeline.calibration.conventions import CORRECTIONS
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
 __all__ = ["KneeCorrection", "correct_knee", "correct_knee_to_axes", "corrected_placement",
            "knee_hinge_residual"]
+
+#: The corrections :func:`correct_knee` computes from the orientations themselves (eq 1-8 first).
+_FROM_ORIENTATIONS = ("aor", "aor-ipopt")
 
 
 @dataclass(frozen=True)
@@ -122,9 +124,9 @@ def correct_knee(
     recording shows (eq 1-8 with :func:`knee_aor`'s defaults, as the Wang reproduction). When the
     knee moves too little for eq 1-8 the leg is left uncorrected and ``reason`` says why.
     """
-    if method not in CORRECTIONS or method == "none":
-        raise InputError(f"expected a correction in {CORRECTIONS[1:]}, got {method!r}",
-                         field="correction")  # fmt: skip
+    if method not in _FROM_ORIENTATIONS:
+        raise InputError(f"expected a correction in {_FROM_ORIENTATIONS}, got {method!r} "
+                         "('functional' is correct_knee_to_axes)", field="correction")  # fmt: skip
     F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
     a_F = np.asarray(reference_femur_axis, dtype=float)
     a_T = np.asarray(reference_tibia_axis, dtype=float)
@@ -143,10 +145,8 @@ def correct_knee(
         C_F, C_T = res.R_co_femur, res.R_co_tibia
     else:
         C_F, C_T = correction_rotations(measured, a_F, a_T)
-    after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
-    return KneeCorrection(side, method, True, "", C_F, C_T, measured.femur_axis,
-                          measured.tibia_axis, a_F, a_T, measured.n_pairs, before,
-                          after)  # fmt: skip
+    return _applied(side, method, F, T, C_F, C_T, measured.femur_axis, measured.tibia_axis, a_F,
+                    a_T, measured.n_pairs, before)  # fmt: skip
 
 
 def correct_knee_to_axes(
@@ -172,10 +172,15 @@ def correct_knee_to_axes(
     v_T = np.asarray(measured_tibia_axis, dtype=float)
     if float(v_F @ a_F) < 0.0:
         v_F, v_T = -v_F, -v_T
-    C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)
-    before = knee_hinge_residual(F, T, a_F, a_T)
+    C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)  # as eq 10-12
+    return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0,
+                    knee_hinge_residual(F, T, a_F, a_T))  # fmt: skip
+
+
+def _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before) -> KneeCorrection:
+    """An applied correction, with the hinge residual about the reference after it."""
     after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
-    return KneeCorrection(side, method, True, "", C_F, C_T, v_F, v_T, a_F, a_T, 0, before,
+    return KneeCorrection(side, method, True, "", C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before,
                           after)  # fmt: skip
 
 
