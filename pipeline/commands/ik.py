@@ -213,8 +213,8 @@ def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
         lines += _correction_table(run)
     if run.knee_calibrations:
         lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
-                  f"{o.calibration_method}; a trusted knee's hinge axis is the AoR its 'aor' "
-                  "correction aligns with the model's):", "",
+                  f"{o.calibration_method}; with `--correction functional` a trusted knee is "
+                  "corrected towards its hinge axis):", "",
                   "| knee | axis in thigh sensor | axis in shank sensor | halves apart (deg) | "
                   "hinge residual (rad/s) | vs model axis (deg) | trusted | used |",
                   "|---|---|---|---|---|---|---|---|"]  # fmt: skip
@@ -223,9 +223,12 @@ def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
                 return "(" + ", ".join(f"{x:.3f}" for x in a) + ")"
 
             corr = run.corrections.get(c.side)
-            used = ("yes" if corr is not None and corr.method == "functional" else
-                    "no: the knee falls back to the AoR its orientations show (eq 1-8)"
-                    if c.trusted is False else f"no: correction {o.correction}")  # fmt: skip
+            if corr is not None and corr.method == "functional":
+                used = "yes"
+            elif o.correction == "functional":  # not trusted
+                used = "no: corrected by the AoR its orientations show (eq 1-8)"
+            else:
+                used = f"no: correction {o.correction}"
             lines.append(f"| {c.side} | {v(c.axis_thigh)} | {v(c.axis_shank)} | "
                          f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
                          f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")  # fmt: skip

@@ -238,13 +238,14 @@ def process_recording(
                 c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur, g.knee_axis_tibia,
                                          side=side)  # fmt: skip
             else:
-                method = "aor" if opts.correction == "functional" else opts.correction
-                if opts.correction == "functional":
+                method = opts.correction
+                if method == "functional":  # this knee's calibration is missing or not trusted
                     why = ("its functional calibration is not trusted"
                            if any(k.side == side for k in knee_cal)
                            else "no functional calibration (raw gyroscope and accelerometer "
                            "signals of both sensors are needed)")  # fmt: skip
                     notes.append(f"{side} knee: {why}; corrected by eq 1-8 ('aor') instead")
+                    method = "aor"
                 c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
                                  method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
             corrections[side] = c
