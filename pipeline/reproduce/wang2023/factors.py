@@ -33,23 +33,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.analysis.landmarks import wang_trajectories
 from pipeline.io.tables import csv_text, markdown_table, mean_sd
 from pipeline.model.anthropometry import Measures, load_table1, predict_landmarks
 from pipeline.reproduce.wang2023.dataset import IMC_OMC_INDEX_OFFSET
-from pipeline.reproduce.wang2023.evaluation import (
-    align,
-    angular_speed,
-    compare_trajectories,
-    estimate_lag,
-    frame_from_femur,
-    unify_frames,
-)
+from pipeline.reproduce.wang2023.evaluation import align, angular_speed, estimate_lag
 from pipeline.reproduce.wang2023.imc import (
-    LANDMARKS,
     MAX_LAG,
-    corrected_orientations,
+    ImcStage,
+    hip_centred_paths,
     subject_measures,
+    unified_comparison,
 )
 from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, paper_mean
 from pipeline.reproduce.wang2023.optical import OmcStage
@@ -111,29 +104,25 @@ class _Pairing:
         if quirk:
             tibia["LM"] = tibia["LM"].copy()
             tibia["LM"][1] = lm_y_quirk(m, self.table)
-        imc = wang_trajectories(eF_p, eT_p, dict(p.femur), tibia)
         t = int(t_frac * (len(eF_p) - 1))
         while not (np.all(np.isfinite(omc_F[t])) and np.all(np.isfinite(eF_p[t]))):
             t += -1 if t_frac == 1.0 else 1
-        R = unify_frames(frame_from_femur(omc_paired["KJC"], omc_F, t, through_hip),
-                         frame_from_femur(imc["KJC"], eF_p, t, through_hip))  # fmt: skip
-        comp = compare_trajectories({n: imc[n] for n in LANDMARKS}, omc_paired, R_imc_to_omc=R)
+        comp, _, _ = unified_comparison(eF_p, eT_p, dict(p.femur), tibia, omc_paired, omc_F, t,
+                                        through_hip)  # fmt: skip
         return 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
 
 
-def factor_rows(omc_stage: OmcStage) -> list[dict]:
-    """MM and LM RMS errors (mm) of every IMC subject under each of :data:`FACTORS`."""
-    pop, table = omc_stage.population, load_table1()
+def factor_rows(omc_stage: OmcStage, imc_stage: ImcStage) -> list[dict]:
+    """MM and LM RMS errors (mm) of every IMC subject under each of :data:`FACTORS`, from the
+    ``reference``-corrected orientations the IMC stage computed."""
+    table = load_table1()
     rows = []
-    for subject in [s for s in omc_stage.subjects if s.imc is not None]:
-        sid = subject.omc.subject_id
+    for sid, (eF, eT) in imc_stage.reference_orientations.items():
+        subject = next(s for s in omc_stage.subjects if s.omc.subject_id == sid)
         r = omc_stage.result(sid)
-        omc_traj = {n: subject.omc.landmarks[n] - r.hjc for n in LANDMARKS}
-        omc_traj["KJC"] = 0.5 * (omc_traj["EFM"] + omc_traj["EFL"])
-        F, T = subject.imc.femur_R, subject.imc.tibia_R
+        omc_traj = hip_centred_paths(subject, r)
+        F = subject.imc.femur_R
         measures = subject_measures(subject, r)
-        eF, eT = corrected_orientations("reference", F, T, measures, pop[r.sex], r.knee_aor,
-                                        pop["f"])  # fmt: skip
         estimated = estimate_lag(angular_speed(r.femur_R), angular_speed(F), MAX_LAG)
         offset = IMC_OMC_INDEX_OFFSET.get(sid, 0)
         first = _first_sample_measures(subject, r, measures)

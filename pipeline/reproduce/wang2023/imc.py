@@ -93,6 +93,9 @@ class ImcStage:
     #: Table IV's malleoli with the reference code's choices one at a time
     #: (:func:`pipeline.reproduce.wang2023.factors.factor_rows`); empty until computed.
     factors: list[dict] = field(default_factory=list)
+    #: subject -> the stored input's femur and tibia orientations after the ``reference``
+    #: correction (IMC world), for the factor study
+    reference_orientations: dict = field(default_factory=dict)
 
 
 def _corrections() -> tuple[str, ...]:
@@ -169,6 +172,7 @@ def run_imc_stage(
     corrections = _corrections()
     pop = omc_stage.population
     traj_rows, orient_rows, subjects, notes = [], [], [], []
+    reference_orientations = {}
     example: dict = {}
     imc_subjects = [s for s in omc_stage.subjects if s.imc is not None]
     if not imc_subjects:
@@ -176,8 +180,7 @@ def run_imc_stage(
     for subject in tqdm(imc_subjects, desc="IMC subjects", unit="subject", disable=not progress):
         sid = subject.omc.subject_id
         r = omc_stage.result(sid)
-        omc_traj = {n: subject.omc.landmarks[n] - r.hjc for n in LANDMARKS}  # hip-centred lab frame
-        omc_traj["KJC"] = 0.5 * (omc_traj["EFM"] + omc_traj["EFL"])
+        omc_traj = hip_centred_paths(subject, r)
         # time lag from the femur's angular speed (frame- and offset-invariant)
         imc_speed = angular_speed(subject.imc.femur_R)
         omc_speed = angular_speed(r.femur_R)
@@ -199,20 +202,16 @@ def run_imc_stage(
             for correction in corrections:
                 eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
                                                 r.knee_aor, pop["f"])  # fmt: skip
+                if (tibia_input, correction) == ("stored", "reference"):
+                    reference_orientations[sid] = (eF, eT)
                 _, eF_p = align(r.femur_R, eF, lag)
                 _, eT_p = align(r.femur_R, eT, lag)
                 R_unify = None
                 for positions in POSITIONS:
                     pf, pt = landmark_positions(positions, subject, r)
-                    imc_traj = wang_trajectories(eF_p, eT_p, pf, pt)
-                    G_imc = frame_from_femur(imc_traj["KJC"], eF_p)
-                    G_omc = frame_from_femur(omc_paired["KJC"], omc_F)
-                    R = unify_frames(G_omc, G_imc)
+                    comp, R, imc_traj = unified_comparison(eF_p, eT_p, pf, pt, omc_paired, omc_F)
                     if positions == "regression":
                         R_unify = R
-                    comp = compare_trajectories(
-                        {n: imc_traj[n] for n in LANDMARKS}, omc_paired, R_imc_to_omc=R
-                    )
                     if (positions == "regression" and tibia_input == "uncorrected"
                             and (not example or example["subject_id"] == sid)):  # fmt: skip
                         example.setdefault("subject_id", sid)
@@ -246,7 +245,28 @@ def run_imc_stage(
         if rerun_dir is not None:
             _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes,
-                    example)  # fmt: skip
+                    example, reference_orientations=reference_orientations)  # fmt: skip
+
+
+def hip_centred_paths(subject, r) -> dict[str, np.ndarray]:
+    """The optical landmark paths with the hip as origin (lab axes), and the knee centre
+    ``KJC`` midway between the epicondyles."""
+    paths = {n: subject.omc.landmarks[n] - r.hjc for n in LANDMARKS}
+    paths["KJC"] = 0.5 * (paths["EFM"] + paths["EFL"])
+    return paths
+
+
+def unified_comparison(
+    femur: np.ndarray, tibia: np.ndarray, femur_positions, tibia_positions, omc_paths,
+    omc_femur: np.ndarray, t: int = 0, through_hip: bool = True,
+):
+    """The landmark trajectories of the paired IMC femur and tibia (eq 15-17), unified with the
+    optical frame from frame ``t`` (eq 18-19) and compared with the optical paths (eq 20):
+    ``(comparisons, R_imc_to_omc, imc_trajectories)``."""  # fmt: skip
+    imc = wang_trajectories(femur, tibia, femur_positions, tibia_positions)
+    R = unify_frames(frame_from_femur(omc_paths["KJC"], omc_femur, t, through_hip),
+                     frame_from_femur(imc["KJC"], femur, t, through_hip))  # fmt: skip
+    return compare_trajectories({n: imc[n] for n in LANDMARKS}, omc_paths, R_imc_to_omc=R), R, imc
 
 
 def subject_motion(

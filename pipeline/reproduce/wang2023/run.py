@@ -44,7 +44,7 @@ def reproduce_wang2023(
     imc_stage = None
     if imc:
         imc_stage = run_imc_stage(stage, rerun_dir=rerun_dir, progress=progress)
-        imc_stage.factors = factor_rows(stage)
+        imc_stage.factors = factor_rows(stage, imc_stage)
         files.update(imc_tables(imc_stage))
         files.update(factors_tables(imc_stage.factors))
         files.update(evidence_tables(imc_stage))
