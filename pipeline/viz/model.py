@@ -173,7 +173,7 @@ def _lowest_height(
                 h += p[lo : lo + _CHUNK_FRAMES, axis, None]
                 if np.isfinite(h).any():
                     lows.append(float(np.nanmin(h)))
-    if not meshes or not lows:
+    if not lows:  # no foot mesh, or no finite sample of one
         for x in points:
             h = np.asarray(x)[:, axis]
             if np.isfinite(h).any():
