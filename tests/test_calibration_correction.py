@@ -85,8 +85,8 @@ def test_hinge_residual_is_the_rms_angle_between_the_carried_axes():
 
 
 def test_correct_knee_to_axes_by_hand():
-    """Eq 10-12 towards given axes: R_co V = v (reference V, measured v), the measured pair
-    flipped together when it points left."""
+    """Eq 10-12 towards given axes: R_co V = v (reference V, measured v), each measured axis
+    turned to point right (eq 6 leaves the signs free, also the one of each axis alone)."""
     from pipeline.calibration.correction import correct_knee_to_axes
 
     F = np.tile(np.eye(3), (10, 1, 1))
@@ -97,6 +97,21 @@ def test_correct_knee_to_axes_by_hand():
     np.testing.assert_allclose(c.femur_rotation @ a, v_F, atol=1e-12)
     np.testing.assert_allclose(c.tibia_rotation @ a, v_T, atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(c.femur_axis_angle), 0.1, atol=1e-12)
-    flipped = correct_knee_to_axes(F, F, -v_F, -v_T, a, a)
-    np.testing.assert_allclose(flipped.femur_rotation, c.femur_rotation, atol=1e-12)
-    np.testing.assert_allclose(flipped.measured_tibia_axis, v_T, atol=1e-12)
+    for signs in ((-1, -1), (1, -1), (-1, 1)):
+        flipped = correct_knee_to_axes(F, F, signs[0] * v_F, signs[1] * v_T, a, a)
+        np.testing.assert_allclose(flipped.femur_rotation, c.femur_rotation, atol=1e-12)
+        np.testing.assert_allclose(flipped.tibia_rotation, c.tibia_rotation, atol=1e-12)
+
+
+def test_correct_knee_to_axes_refuses_an_axis_far_from_medio_lateral():
+    """As eq 1-8's bound (femoral z > 0.6): an axis 60 deg from z means placements that are off;
+    the correction is not applied and says why."""
+    from pipeline.calibration.correction import correct_knee_to_axes
+
+    F = np.tile(np.eye(3), (10, 1, 1))
+    a = np.array([0.0, 0.0, 1.0])
+    v = rot_x(np.radians(60.0)) @ a  # z = 0.5
+    c = correct_knee_to_axes(F, F, v, a, a, a)
+    assert not c.applied and "z = 0.50" in c.reason
+    np.testing.assert_array_equal(c.femur_rotation, np.eye(3))
+    assert correct_knee_to_axes(F, F, rot_x(np.radians(50.0)) @ a, a, a, a).applied

@@ -42,6 +42,7 @@ from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, normalize, rotation_aligning
 
 __all__ = [
+    "MIN_AXIS_Z",
     "KneeAoR",
     "PopulationAoR",
     "apply_correction",
@@ -55,6 +56,10 @@ __all__ = [
     "reexpress_tibia",
     "select_windows",
 ]
+
+#: An AoR is kept only if its femoral z component exceeds this (the reference code's bound, eq 8:
+#: within 53 deg of the medio-lateral axis); a knee axis elsewhere means frames that are off.
+MIN_AXIS_Z = 0.6
 
 
 @dataclass(frozen=True)
@@ -191,7 +196,7 @@ def knee_aor(
     step: int | None = None,
     rel_angle_threshold: float = 0.5,
     min_angle: float = 0.0,
-    min_axis_z: float = 0.6,
+    min_axis_z: float = MIN_AXIS_Z,
 ) -> KneeAoR:
     """Knee AoR (Wang eq 1-8) from femur and tibia orientations ``(N, 3, 3)``.
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.calibration.aor import correction_rotations, knee_aor
+from pipeline.calibration.aor import MIN_AXIS_Z, correction_rotations, knee_aor
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
@@ -163,18 +163,28 @@ def correct_knee_to_axes(
     """The closed-form correction (eq 10-12) of a knee whose AoR was measured otherwise than by
     eq 1-8: e.g. the joint-constraint hinge axis (Hu 2021 eq 4-6) carried into the segment frames
     by the sensors' placements. ``femur_R``/``tibia_R`` (N, 3, 3) only serve the hinge residuals
-    reported before and after. Axis signs: the measured pair is flipped together if its femoral
-    axis points away from the reference's."""
+    reported before and after. Axis signs: the hinge constraint (Hu eq 6, ``|w x j|``) leaves each
+    axis' sign free, so each measured axis is taken pointing to the same side as its reference
+    (the subject's right, as eq 1-8's axes). As for eq 1-8, a femoral axis whose z component is
+    not above :data:`~pipeline.calibration.aor.MIN_AXIS_Z` (more than 53 deg from the
+    medio-lateral axis: the placements it was carried by are off) is not used: ``applied`` is
+    False and ``reason`` says why."""
     F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
     a_F = np.asarray(reference_femur_axis, dtype=float)
     a_T = np.asarray(reference_tibia_axis, dtype=float)
     v_F = np.asarray(measured_femur_axis, dtype=float)
     v_T = np.asarray(measured_tibia_axis, dtype=float)
-    if float(v_F @ a_F) < 0.0:
-        v_F, v_T = -v_F, -v_T
+    v_F = v_F if float(v_F @ a_F) >= 0.0 else -v_F
+    v_T = v_T if float(v_T @ a_T) >= 0.0 else -v_T
+    before = knee_hinge_residual(F, T, a_F, a_T)
+    if v_F[2] <= MIN_AXIS_Z:
+        reason = (f"the measured femoral axis has z = {v_F[2]:.2f} (<= {MIN_AXIS_Z}: more than "
+                  f"{np.degrees(np.arccos(MIN_AXIS_Z)):.0f} deg from the medio-lateral axis)")
+        I3 = np.eye(3)
+        return KneeCorrection(side, method, False, reason, I3, I3, v_F, v_T, a_F, a_T, 0, before,
+                              before)  # fmt: skip
     C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)  # as eq 10-12
-    return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0,
-                    knee_hinge_residual(F, T, a_F, a_T))  # fmt: skip
+    return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0, before)
 
 
 def _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before) -> KneeCorrection:

@@ -228,24 +228,27 @@ def process_recording(
             S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
             S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
             g = geometry.for_side(side)
-            if opts.correction == "functional" and side in functional:
-                # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
-                # show (eq 1-8): the sensor placement is right, but the filter's heading errors
-                # stay (eq 1-8 absorbs their constant part; see pipeline.process.functional)
-                f = functional[side]
-                v_F = placements[f"{fem}_imu"][:3, :3] @ f.axis_thigh
-                v_T = placements[f"{tib}_imu"][:3, :3] @ f.axis_shank
-                c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur, g.knee_axis_tibia,
-                                         side=side)  # fmt: skip
-            else:
-                method = opts.correction
-                if method == "functional":  # this knee's calibration is missing or not trusted
-                    why = ("its functional calibration is not trusted"
-                           if any(k.side == side for k in knee_cal)
-                           else "no functional calibration (raw gyroscope and accelerometer "
-                           "signals of both sensors are needed)")  # fmt: skip
+            c, method = None, opts.correction
+            if method == "functional":
+                if side in functional:
+                    # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
+                    # show (eq 1-8): the sensor placement is right, but the filter's heading
+                    # errors stay (eq 1-8 absorbs their constant part; pipeline.process.functional)
+                    f = functional[side]
+                    v_F = placements[f"{fem}_imu"][:3, :3] @ f.axis_thigh
+                    v_T = placements[f"{tib}_imu"][:3, :3] @ f.axis_shank
+                    c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur,
+                                             g.knee_axis_tibia, side=side)  # fmt: skip
+                    why = f"its functional axis is not used: {c.reason}"
+                elif any(k.side == side for k in knee_cal):
+                    why = "its functional calibration is not trusted"
+                else:
+                    why = ("no functional calibration (raw gyroscope and accelerometer signals "
+                           "of both sensors are needed)")
+                if c is None or not c.applied:
                     notes.append(f"{side} knee: {why}; corrected by eq 1-8 ('aor') instead")
-                    method = "aor"
+                    c, method = None, "aor"
+            if c is None:
                 c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
                                  method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
             corrections[side] = c
