@@ -273,3 +273,46 @@ def test_table4_factors_start_from_our_own_numbers_and_switch_one_choice(out):
             assert float(r["MM_mm"]) == float(base["MM_mm"])
     report = (out / "report.md").read_text()
     assert "## Table IV male LM: the reference's choices one at a time" in report
+
+
+def test_full_ipopt_beats_every_other_imu_only_correction_on_uncorrected_malleoli(out):
+    """Issue 13 item 1: full sensor-to-segment rotations from the IMU data, LOSO priors."""
+    rows = read(out / "trajectory_errors.csv")
+    kw = dict(positions="regression", tibia_input="uncorrected")
+
+    def malleoli(correction):
+        return np.mean([_group(rows, correction=correction, landmark=lm, **kw)
+                        for lm in ("MM", "LM")])  # fmt: skip
+
+    for other in ("average", "ipopt", "hinge_ik"):
+        assert malleoli("full_ipopt") < malleoli(other) - 3.0, other
+    # the tibia has 3 DoF: a constant rotation of the tibia input (the hand tuning) changes
+    # nothing, so the stored and uncorrected inputs give the same trajectories
+    for lm in ("MM", "LM"):
+        a = _group(rows, correction="full_ipopt", landmark=lm, positions="regression",
+                   tibia_input="stored")  # fmt: skip
+        assert a == pytest.approx(_group(rows, correction="full_ipopt", landmark=lm, **kw), abs=0.5)
+    diag = read(out / "full_correction.csv")
+    assert len(diag) == 32 and all(r["status"] == "Solve_Succeeded" for r in diag)
+    assert all(float(r["rest_deg"]) < float(r["rest_closed_form_deg"]) + 0.5 for r in diag)
+    evidence = (out / "report.md").read_text()
+    assert "| uncorrected | full_ipopt | 16 |" in evidence
+
+
+def test_limits_bound_the_imu_only_calibration(out):
+    rows = read(out / "limits.csv")
+    mean = {m: np.mean([float(r["malleoli_mm"]) for r in rows if r["method"] == m])
+            for m in ("full_ipopt", "full_ipopt, own priors", "best constant",
+                      "optical orientations")}  # fmt: skip
+    assert len(rows) == 4 * 16
+    # each bound uses more of the subject's optical data than the one before, and does better
+    assert mean["optical orientations"] < mean["best constant"] < mean["full_ipopt, own priors"]
+    assert mean["full_ipopt, own priors"] < mean["full_ipopt"]
+    # the limits' full_ipopt is the IMC stage's
+    traj = read(out / "trajectory_errors.csv")
+    kw = dict(positions="regression", tibia_input="uncorrected", correction="full_ipopt")
+    stage = np.mean([_group(traj, landmark=lm, **kw) for lm in ("MM", "LM")])
+    assert mean["full_ipopt"] == pytest.approx(stage, abs=1e-3)  # CSVs hold 6 digits
+    report = (out / "report.md").read_text()
+    assert "## What limits the IMU-only calibration" in report
+    assert "42 mm goal is" in report

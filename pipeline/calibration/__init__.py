@@ -1,6 +1,7 @@
 """Calibration (stage 3): recordings and a model in, sensor-to-segment relations out. Takes:
 segment or IMU orientations, gyroscope and accelerometer signals. Gives: the knee AoR (Wang eq
-1-8) and its orientation correction (eq 9-13; IPOPT whole-trial version), joint-constraint
+1-8) and its orientation correction (eq 9-13; IPOPT whole-trial version; the full
+sensor-to-segment rotation of femur and tibia from IMU data and population priors), joint-constraint
 calibration of hinge and spherical joints (Hu eq 1-29: :func:`calibrate` with GN, DWPSO, GWO or
 IPOPT), segment frames from it (eq 30-38), the subject's heading, IMU placements from a
 calibration pose, and the PI attitude filter (eq 43-50).
@@ -31,7 +32,9 @@ _EXPORTS = {
     "correct_knee": "correction",
     "correct_knee_to_axes": "correction",
     "corrected_placement": "correction",
+    "correction_priors": "priors",
     "correction_rotations": "aor",
+    "CorrectionPriors": "priors",
     "CORRECTIONS": "conventions",
     "DEFAULT_CALIBRATION_POSE": "conventions",
     "DEFAULT_CORRECTION": "conventions",
@@ -47,6 +50,8 @@ _EXPORTS = {
     "flexion_coordinate": "aor",
     "FLEXION_RANGE": "heading",
     "frame_pairs": "aor",
+    "full_correction_ipopt": "full_correction",
+    "FullCorrection": "full_correction",
     "gamma": "joint_constraints",
     "gauss_newton": "solvers",
     "gwo": "solvers",
@@ -56,6 +61,7 @@ _EXPORTS = {
     "hinge_jacobian": "joint_constraints",
     "hinge_jacobian_spherical": "joint_constraints",
     "hinge_residual": "joint_constraints",
+    "hinge_sample_cost": "losses",
     "HingeFit": "hinge_fit",
     "imu_placements_from_calibration": "placement",
     "joint_data": "joint_constraints",
@@ -66,10 +72,12 @@ _EXPORTS = {
     "knee_hinge_residual": "correction",
     "KneeAoR": "aor",
     "KneeCorrection": "correction",
+    "KneeTrial": "priors",
     "LOSSES": "losses",
     "mahony_filter": "attitude",
     "mean_rotation": "placement",
     "METHODS": "conventions",
+    "MIN_AXIS_Z": "aor",
     "motion_weights": "hinge_fit",
     "Observability": "observability",
     "observability": "observability",
@@ -86,6 +94,9 @@ _EXPORTS = {
     "reexpress_tibia": "aor",
     "relative_rotations": "hinge_fit",
     "rest_bias": "attitude",
+    "rest_error": "priors",
+    "rest_rotation": "priors",
+    "REST_SAMPLES": "priors",
     "robust_loss": "losses",
     "sample_weights": "hinge_fit",
     "segment_orientation": "segment_frames",

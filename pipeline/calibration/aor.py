@@ -82,6 +82,17 @@ class KneeAoR:
     tibia_axes: np.ndarray
     world_axes: np.ndarray
 
+    @classmethod
+    def from_axes(cls, femur_axis: np.ndarray, tibia_axis: np.ndarray) -> KneeAoR:
+        """A :class:`KneeAoR` carrying only two mean axes (normalised), no pairs: e.g. the
+        whole-trial hinge fit's axes as the start of a correction when eq 1-8 find no pair."""
+        empty = np.zeros((0, 3))
+        return cls(
+            femur_axis=normalize(femur_axis), tibia_axis=normalize(tibia_axis), n_pairs=0,
+            sd_angle_femur=np.nan, sd_angle_tibia=np.nan, pairs=np.zeros((0, 2), dtype=int),
+            angles=np.zeros(0), femur_axes=empty, tibia_axes=empty, world_axes=empty,
+        )  # fmt: skip
+
 
 # --------------------------------------------------------------------------------------------
 # frame selection

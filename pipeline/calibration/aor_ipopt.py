@@ -73,7 +73,7 @@ from pipeline.calibration.hinge_fit import (
     relative_rotations,
     sample_weights,
 )
-from pipeline.calibration.losses import check_loss, robust_loss
+from pipeline.calibration.losses import check_loss, hinge_sample_cost
 from pipeline.errors import InputError
 from pipeline.model.casadi_kinematics import exp3_sym
 from pipeline.rotations import angle_between, normalize, tangent_basis
@@ -174,14 +174,6 @@ def _l2_solver(max_iter: int, tol: float) -> ca.Function:
 
 
 @lru_cache(maxsize=4)
-def _sample_cost(kind: str, scale: float) -> ca.Function:
-    """``w ρ(|M u - v|²)`` of one sample, ``M`` given by its 9 column-major entries."""
-    u, v, m, w = ca.SX.sym("u", 3), ca.SX.sym("v", 3), ca.SX.sym("m", 9), ca.SX.sym("w")
-    r = ca.mtimes(ca.reshape(m, 3, 3), u) - v
-    return ca.Function("sample", [u, v, m, w], [w * robust_loss(ca.sumsqr(r), kind, scale)])
-
-
-@lru_cache(maxsize=4)
 def _robust_solver(n: int, kind: str, scale: float, max_iter: int, tol: float) -> ca.Function:
     """Per-sample data term (MX, mapped): parameters = (geometry, 9n M_k, n weights, 2)."""
     g = NP_GEOMETRY
@@ -190,7 +182,7 @@ def _robust_solver(n: int, kind: str, scale: float, max_iter: int, tol: float) -
     u, v = ca.mtimes(CT, bT), ca.mtimes(CF, bF)
     m = ca.reshape(p[g : g + 9 * n], 9, n)
     w = p[g + 9 * n : g + 10 * n]
-    terms = _sample_cost(kind, scale).map(n)(u, v, m, w.T)
+    terms = hinge_sample_cost(kind, scale).map(n)(u, v, m, w.T)
     f = ca.sum2(terms) / ca.sum1(w) + _regularisers(x, CF, CT, p[g + 10 * n :])
     opts = {**_OPTS, "ipopt": {**_OPTS["ipopt"], "max_iter": max_iter, "tol": tol}}
     return ca.nlpsol(f"aor_{kind}", "ipopt", {"x": x, "p": p, "f": f}, opts)
@@ -252,7 +244,7 @@ def aor_correction_ipopt(
         try:
             start = knee_aor(femur_R, tibia_R, **aor_kwargs)
         except InputError:
-            start = _axes_only(fit.femur_axis, fit.tibia_axis)
+            start = KneeAoR.from_axes(fit.femur_axis, fit.tibia_axis)
     R0F, R0T = correction_rotations(start, aF, aT)
 
     TF, TT = tangent_basis(aF), tangent_basis(aT)
@@ -314,20 +306,3 @@ def _evaluator() -> ca.Function:
 def _evaluate(x: np.ndarray, geom: np.ndarray) -> tuple[np.ndarray, ...]:
     CF, CT, bF, bT = (np.array(v) for v in _evaluator()(x, geom))
     return CF, CT, bF.ravel(), bT.ravel()
-
-
-def _axes_only(femur_axis: np.ndarray, tibia_axis: np.ndarray) -> KneeAoR:
-    """A :class:`KneeAoR` carrying only the two mean axes (for the closed-form start)."""
-    empty = np.zeros((0, 3))
-    return KneeAoR(
-        femur_axis=normalize(femur_axis),
-        tibia_axis=normalize(tibia_axis),
-        n_pairs=0,
-        sd_angle_femur=np.nan,
-        sd_angle_tibia=np.nan,
-        pairs=np.zeros((0, 2), dtype=int),
-        angles=np.zeros(0),
-        femur_axes=empty,
-        tibia_axes=empty,
-        world_axes=empty,
-    )

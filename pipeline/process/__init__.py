@@ -17,6 +17,7 @@ _EXPORTS = {
     "JOINT_SEGMENTS": "sensors",
     "KneeCalibration": "functional",
     "known_segments": "sensors",
+    "MAX_SAMPLES": "functional",
     "mot_columns": "run",
     "MOT_NAMES": "run",
     "orientations_from_signals": "signals",

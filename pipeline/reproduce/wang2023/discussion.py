@@ -40,7 +40,11 @@ def imc_discussion(stage: ImcStage) -> str:
             f"the paper's closed form {g('average', 'MM'):.1f}/{g('average', 'LM'):.1f} mm; "
             f"the IPOPT correction over the whole trial {g('ipopt', 'MM'):.1f}/"
             f"{g('ipopt', 'LM'):.1f} mm; hinge-knee IK about the population AoR with no "
-            f"constant correction {g('hinge_ik', 'MM'):.1f}/{g('hinge_ik', 'LM'):.1f} mm. The "
+            f"constant correction {g('hinge_ik', 'MM'):.1f}/{g('hinge_ik', 'LM'):.1f} mm"
+            + (f"; the full sensor-to-segment rotations from the IMU data alone (`full_ipopt`) "
+               f"{g('full_ipopt', 'MM'):.1f}/{g('full_ipopt', 'LM'):.1f} mm"
+               if "full_ipopt" in stage.corrections else "")
+            + ". The "
             "`individual` rows need the subject's optical AoR, which an IMU-only user does not "
             "have; they bound what a perfect AoR would give.",
         ]

@@ -106,9 +106,9 @@ def evidence_section(stage: ImcStage) -> str:
               "(`individual` uses the subject's optical AoR, which an IMU-only user does not "
               "have)."]  # fmt: skip
     if limits:
-        lines += ["", "What limits it: " + "; ".join(limits) + ". What remains is the orientation "
-                  "error the AoR constraint cannot see (the rotation of each segment about its "
-                  "AoR, and the femur's own error) and soft tissue."]  # fmt: skip
+        lines += ["", "What limits it: " + "; ".join(limits) + ". The next section bounds the "
+                  "rest: the population's spread, what a constant correction cannot do, and "
+                  "what remains with perfect orientations."]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 

@@ -40,12 +40,11 @@ from pipeline.reproduce.wang2023.evaluation import align, angular_speed, estimat
 from pipeline.reproduce.wang2023.imc import (
     MAX_LAG,
     ImcStage,
-    hip_centred_paths,
     subject_measures,
     unified_comparison,
 )
 from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, paper_mean
-from pipeline.reproduce.wang2023.optical import OmcStage
+from pipeline.reproduce.wang2023.optical import OmcStage, hip_centred_paths
 
 __all__ = ["FACTORS", "FACTOR_COLUMNS", "factor_rows", "factors_section", "factors_tables",
            "lm_y_quirk"]

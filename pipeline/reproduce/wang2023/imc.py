@@ -10,10 +10,14 @@ For each of the 16 IMC subjects and each configuration
   numbers); ``ipopt`` (the AoR correction as an NLP over the whole trial,
   :mod:`pipeline.calibration.aor_ipopt`); ``hinge_ik`` (no constant correction: orientation IK
   on a model whose knee is a hinge about the sex-average AoR, i.e. the AoR constraint at every
-  sample);
+  sample); ``full_ipopt`` (the full sensor-to-segment rotation of femur and tibia from the IMU
+  data alone, :mod:`pipeline.calibration.full_correction`: hinge residual, population AoR, rest
+  pose and motion plane, with priors fitted on the *other* subjects' optical data
+  (leave-one-subject-out, :mod:`~pipeline.reproduce.wang2023.full_ipopt`) and the regression's
+  knee and ankle centres; applied as eq 13);
 
-every correction computed by the user's path, ``pipeline ik`` on the IMC femur and tibia as a
-knee-only recording of segment orientations (:func:`user_path_options`,
+every correction but ``full_ipopt`` computed by the user's path, ``pipeline ik`` on the IMC
+femur and tibia as a knee-only recording of segment orientations (:func:`user_path_options`,
 :func:`corrected_orientations`);
 * ``positions``: ``regression`` (Table I, smallest-SD equation given h, s_L, s_M, k, a) or ``omc``
   (the subject's own landmark positions in the segment frames),
@@ -57,7 +61,14 @@ from pipeline.reproduce.wang2023.evaluation import (
     rotations_to_omc,
     unify_frames,
 )
-from pipeline.reproduce.wang2023.optical import OmcStage
+from pipeline.reproduce.wang2023.full_ipopt import (
+    FULL_CORRECTION_COLUMNS,
+    full_corrected,
+    full_row,
+    knee_trial,
+    loso_priors,
+)
+from pipeline.reproduce.wang2023.optical import OmcStage, hip_centred_paths
 from pipeline.rotations import quat_from_matrix
 
 if TYPE_CHECKING:
@@ -96,10 +107,16 @@ class ImcStage:
     #: subject -> the stored input's femur and tibia orientations after the ``reference``
     #: correction (IMC world), for the factor study
     reference_orientations: dict = field(default_factory=dict)
+    #: per subject and tibia input: the ``full_ipopt`` calibration's diagnostics
+    #: (:data:`FULL_CORRECTION_COLUMNS`)
+    full_rows: list[dict] = field(default_factory=list)
+    #: the ``full_ipopt`` correction beside its bounds
+    #: (:func:`pipeline.reproduce.wang2023.limits.limit_rows`); empty until computed.
+    limits: list[dict] = field(default_factory=list)
 
 
 def _corrections() -> tuple[str, ...]:
-    return ("none", "average", "individual", "reference", "ipopt", "hinge_ik")
+    return ("none", "average", "individual", "reference", "ipopt", "hinge_ik", "full_ipopt")
 
 
 #: The IMC world is the femur's pose at the first sample with ``r = Rx(+90 deg)`` (dataset
@@ -173,7 +190,13 @@ def run_imc_stage(
     pop = omc_stage.population
     traj_rows, orient_rows, subjects, notes = [], [], [], []
     reference_orientations = {}
+    full_rows = []
     example: dict = {}
+    trials = {}
+    if "full_ipopt" in corrections:
+        trials = {s.omc.subject_id: (omc_stage.result(s.omc.subject_id).sex,
+                                     knee_trial(s, omc_stage.result(s.omc.subject_id)))
+                  for s in omc_stage.subjects}  # fmt: skip
     imc_subjects = [s for s in omc_stage.subjects if s.imc is not None]
     if not imc_subjects:
         raise InputError("no subject with IMC data (imcData) in the dataset")
@@ -200,8 +223,12 @@ def run_imc_stage(
                 continue
             measures = subject_measures(subject, r)
             for correction in corrections:
-                eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
-                                                r.knee_aor, pop["f"])  # fmt: skip
+                if correction == "full_ipopt":
+                    eF, eT, c = full_corrected(F, T, measures, loso_priors(trials, sid))
+                    full_rows.append(full_row(sid, r.sex, tibia_input, c))
+                else:
+                    eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
+                                                    r.knee_aor, pop["f"])  # fmt: skip
                 if (tibia_input, correction) == ("stored", "reference"):
                     reference_orientations[sid] = (eF, eT)
                 _, eF_p = align(r.femur_R, eF, lag)
@@ -245,15 +272,8 @@ def run_imc_stage(
         if rerun_dir is not None:
             _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes,
-                    example, reference_orientations=reference_orientations)  # fmt: skip
-
-
-def hip_centred_paths(subject, r) -> dict[str, np.ndarray]:
-    """The optical landmark paths with the hip as origin (lab axes), and the knee centre
-    ``KJC`` midway between the epicondyles."""
-    paths = {n: subject.omc.landmarks[n] - r.hjc for n in LANDMARKS}
-    paths["KJC"] = 0.5 * (paths["EFM"] + paths["EFL"])
-    return paths
+                    example, reference_orientations=reference_orientations,
+                    full_rows=full_rows)  # fmt: skip
 
 
 def unified_comparison(
@@ -344,4 +364,5 @@ def imc_tables(stage: ImcStage) -> dict[str, str]:
     return {
         "trajectory_errors.csv": csv_text(stage.trajectory_rows, TRAJECTORY_COLUMNS),
         "orientation_errors.csv": csv_text(stage.orientation_rows, ORIENTATION_COLUMNS),
+        "full_correction.csv": csv_text(stage.full_rows, FULL_CORRECTION_COLUMNS),
     }

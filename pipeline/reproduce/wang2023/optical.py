@@ -24,7 +24,7 @@ from pipeline.reproduce.wang2023.regression import (
     fit_table,
 )
 
-__all__ = ["OmcStage", "omc_tables", "run_omc_stage", "subject_sample"]
+__all__ = ["OmcStage", "hip_centred_paths", "omc_tables", "run_omc_stage", "subject_sample"]
 
 
 SUBJECT_COLUMNS = (
@@ -128,3 +128,11 @@ def omc_tables(stage: OmcStage) -> dict[str, str]:
         "knee_aor.csv": csv_text(aor, AOR_COLUMNS),
         "regression.csv": csv_text(fit_results_to_rows(stage.fits), REGRESSION_COLUMNS),
     }
+
+
+def hip_centred_paths(subject, r) -> dict[str, np.ndarray]:
+    """The optical landmark paths with the hip as origin (lab axes), and the knee centre
+    ``KJC`` midway between the epicondyles."""
+    paths = {n: subject.omc.landmarks[n] - r.hjc for n in ("EFM", "EFL", "MM", "LM")}
+    paths["KJC"] = 0.5 * (paths["EFM"] + paths["EFL"])
+    return paths

@@ -16,6 +16,7 @@ from pipeline.reproduce.wang2023.evidence import evidence_section
 from pipeline.reproduce.wang2023.factors import factors_section
 from pipeline.reproduce.wang2023.imc import ImcStage
 from pipeline.reproduce.wang2023.imc_report import imc_report_sections
+from pipeline.reproduce.wang2023.limits import limits_section
 from pipeline.reproduce.wang2023.omc import landmarks_in_frames
 from pipeline.reproduce.wang2023.optical import OmcStage, subject_sample
 from pipeline.reproduce.wang2023.regression import SubjectSample, fit_table
@@ -264,6 +265,8 @@ def render_report(
     ]
     if imc_stage is not None:
         parts += ["", imc_report_sections(imc_stage), "", evidence_section(imc_stage)]
+        if imc_stage.limits:
+            parts += ["", limits_section(imc_stage.limits)]
         if imc_stage.factors:
             parts += ["", factors_section(imc_stage.factors)]
     if xsens_stage is not None:

@@ -20,6 +20,7 @@ from pipeline.reproduce.wang2023.evidence import evidence_tables
 from pipeline.reproduce.wang2023.factors import factor_rows, factors_tables
 from pipeline.reproduce.wang2023.figures import imc_figures
 from pipeline.reproduce.wang2023.imc import imc_tables, run_imc_stage
+from pipeline.reproduce.wang2023.limits import limit_rows, limits_tables
 from pipeline.reproduce.wang2023.optical import omc_tables, run_omc_stage
 from pipeline.reproduce.wang2023.report import render_report
 from pipeline.reproduce.wang2023.xsens import run_xsens_stage, xsens_tables
@@ -45,9 +46,11 @@ def reproduce_wang2023(
     if imc:
         imc_stage = run_imc_stage(stage, rerun_dir=rerun_dir, progress=progress)
         imc_stage.factors = factor_rows(stage, imc_stage)
+        imc_stage.limits = limit_rows(stage, imc_stage)
         files.update(imc_tables(imc_stage))
         files.update(factors_tables(imc_stage.factors))
         files.update(evidence_tables(imc_stage))
+        files.update(limits_tables(imc_stage.limits))
     xsens_stage = None
     if imc and (data_dir / "xsens").is_dir():
         xsens_stage = run_xsens_stage(data_dir, omc_stage=stage)
