@@ -42,10 +42,9 @@ def test_priors_from_optical_knees():
     knee = F @ KNEE
     ankle = knee + T @ ANKLE
     trials = []
-    for k, twist in enumerate((-4.0, 0.0, 4.0)):
+    for twist in (-4.0, 0.0, 4.0):
         Tk = T @ rot_z(np.radians(twist))  # rest flexion differs by subject
         trials.append(KneeTrial(F, Tk, aor, knee, ankle))
-        assert k >= 0
     p = correction_priors(trials)
     assert angle_between(p.femur_axis, aor.femur_axis) < 1e-9
     assert p.sd_femur_axis < 1e-9

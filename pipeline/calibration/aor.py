@@ -51,6 +51,7 @@ __all__ = [
     "flexion_coordinate",
     "frame_pairs",
     "knee_aor",
+    "measured_aor",
     "population_aor",
     "projection_angles",
     "reexpress_tibia",
@@ -371,3 +372,16 @@ def correction_rotations(
 def apply_correction(R_seq: np.ndarray, R_co: np.ndarray) -> np.ndarray:
     """Eq 13: ``e^k = e_hat^k R_co`` (rotation of each segment frame in its own frame)."""
     return np.asarray(R_seq, dtype=float) @ np.asarray(R_co, dtype=float)
+
+
+def measured_aor(
+    femur_R: np.ndarray, tibia_R: np.ndarray, fallback_axes: Sequence[np.ndarray],
+    **aor_kwargs: object,
+) -> KneeAoR:
+    """The AoR the recording shows, where the closed-form corrections start: :func:`knee_aor`
+    (eq 1-8), or, where eq 1-8 find no usable pair, ``fallback_axes`` (femoral, tibial; e.g. the
+    whole-trial hinge fit's) as a :class:`KneeAoR` without pairs."""  # fmt: skip
+    try:
+        return knee_aor(femur_R, tibia_R, **aor_kwargs)
+    except InputError:
+        return KneeAoR.from_axes(*fallback_axes)

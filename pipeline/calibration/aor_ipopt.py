@@ -67,7 +67,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from pipeline.calibration.aor import KneeAoR, correction_rotations, knee_aor
+from pipeline.calibration.aor import KneeAoR, correction_rotations, measured_aor
 from pipeline.calibration.hinge_fit import (
     hinge_fit,
     relative_rotations,
@@ -241,10 +241,7 @@ def aor_correction_ipopt(
     S, excitation = fit.mean_relative_rotation, fit.excitation
 
     if start is None:
-        try:
-            start = knee_aor(femur_R, tibia_R, **aor_kwargs)
-        except InputError:
-            start = KneeAoR.from_axes(fit.femur_axis, fit.tibia_axis)
+        start = measured_aor(femur_R, tibia_R, (fit.femur_axis, fit.tibia_axis), **aor_kwargs)
     R0F, R0T = correction_rotations(start, aF, aT)
 
     TF, TT = tangent_basis(aF), tangent_basis(aT)

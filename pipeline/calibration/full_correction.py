@@ -64,7 +64,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from pipeline.calibration.aor import KneeAoR, correction_rotations, knee_aor
+from pipeline.calibration.aor import correction_rotations, measured_aor
 from pipeline.calibration.hinge_fit import hinge_fit, relative_rotations, sample_weights
 from pipeline.calibration.losses import check_loss, hinge_sample_cost
 from pipeline.calibration.priors import REST_SAMPLES, CorrectionPriors, rest_error, rest_rotation
@@ -114,7 +114,8 @@ class FullCorrection:
     n_plane_samples: int
 
 
-# Unknowns x: rotation vectors of C_F, C_T around R0_F, R0_T; tangent offsets of b_F, b_T, n.
+# Unknowns x: the femur's correction as a tangent offset ⟂ a_F and the tibia's as a rotation
+# vector (around R0_F, R0_T); tangent offsets of b_F, b_T and n.
 X_CF, X_CT, X_BF, X_BT, X_N = slice(0, 2), slice(2, 5), slice(5, 7), slice(7, 9), slice(9, 11)
 NX = 11
 # Parameters p: the fixed geometry, then the term scales, then the hinge and plane samples.
@@ -178,8 +179,10 @@ def _cost_terms(x, p, nh: int, np_: int, loss: str, scale: float):
     e = _vee_asym(ca.mtimes([K0.T, CF.T, M0, CT]))
     rest = ca.mtimes([e.T, ca.reshape(p[_OFFSETS["S0inv"]], 3, 3), e])
     axis = s[1] * ca.sumsqr(x[X_BF]) + s[2] * ca.sumsqr(x[X_BT])
-    dF = ca.mtimes(ca.reshape(p[_OFFSETS["TF"]], 3, 2), x[X_CF])
-    gauge = s[4] * ((3 - ca.trace(exp3_sym(dF))) + (3 - ca.trace(exp3_sym(x[X_CT]))))
+    R0F = ca.reshape(p[_OFFSETS["R0F"]], 3, 3)
+    R0T = ca.reshape(p[_OFFSETS["R0T"]], 3, 3)
+    # 3 - tr exp(δ) = 3 - tr(R0ᵀ C)
+    gauge = s[4] * ((3 - ca.trace(ca.mtimes(R0F.T, CF))) + (3 - ca.trace(ca.mtimes(R0T.T, CT))))
     return {"hinge": s[0] * hinge, "axis": axis, "rest": rest, "plane": s[3] * plane,
             "gauge": gauge}  # fmt: skip
 
@@ -263,11 +266,8 @@ def full_correction_ipopt(
     F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
     M, valid = relative_rotations(F, T)
     w = sample_weights(F, T, weights, valid, rate_hz, motion_window, static_speed)
-    try:
-        start = knee_aor(F, T)
-    except InputError:
-        fit = hinge_fit(F, T, w, rate_hz, motion_window, static_speed)
-        start = KneeAoR.from_axes(fit.femur_axis, fit.tibia_axis)
+    fit = hinge_fit(F, T, w, rate_hz, motion_window, static_speed)
+    start = measured_aor(F, T, (fit.femur_axis, fit.tibia_axis))
     aF, aT = priors.femur_axis, priors.tibia_axis
     R0F, R0T = correction_rotations(start, aF, aT)
     M0 = rest_rotation(F, T, rest_samples)

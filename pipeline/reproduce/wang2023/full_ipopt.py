@@ -10,13 +10,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from pipeline.calibration.full_correction import FullCorrection, full_correction_ipopt
+from pipeline.calibration.full_correction import full_correction_ipopt
 from pipeline.calibration.priors import CorrectionPriors, KneeTrial, correction_priors
 from pipeline.model.anthropometry import Measures, predict_landmarks
 from pipeline.reproduce.wang2023.optical import hip_centred_paths
 from pipeline.rotations import log3
 
-__all__ = ["FULL_CORRECTION_COLUMNS", "full_corrected", "full_row", "knee_trial", "loso_priors"]
+__all__ = ["FULL_CORRECTION_COLUMNS", "full_corrected", "full_rows", "knee_trial", "loso_priors"]
 
 FULL_CORRECTION_COLUMNS = (
     "subject_id", "sex", "tibia_input", "status", "iterations", "seconds", "hinge_rms_deg",
@@ -54,14 +54,19 @@ def full_corrected(F: np.ndarray, T: np.ndarray, measures: Measures, priors: Cor
     return F @ c.R_co_femur, T @ c.R_co_tibia, c
 
 
-def full_row(sid: int, sex: str, tibia_input: str, c: FullCorrection) -> dict:
-    """One row of ``full_correction.csv`` (:data:`FULL_CORRECTION_COLUMNS`)."""
+def full_rows(stage) -> list[dict]:
+    """The rows of ``full_correction.csv`` (:data:`FULL_CORRECTION_COLUMNS`): each
+    ``full_ipopt`` calibration of an :class:`~pipeline.reproduce.wang2023.imc.ImcStage`."""
+    sex = {s["subject_id"]: s["sex"] for s in stage.subjects}
     angle = lambda A, B: float(np.degrees(np.linalg.norm(log3(A.T @ B))))  # noqa: E731
-    return dict(
-        subject_id=sid, sex=sex, tibia_input=tibia_input, status=c.status,
-        iterations=c.iterations, seconds=c.seconds, hinge_rms_deg=np.degrees(c.hinge_rms),
-        rest_closed_form_deg=c.rest_deg[0], rest_deg=c.rest_deg[1],
-        plane_closed_form_mm=1e3 * c.plane_rms[0], plane_mm=1e3 * c.plane_rms[1],
-        femur_deg=angle(c.R_start_femur, c.R_co_femur),
-        tibia_deg=angle(c.R_start_tibia, c.R_co_tibia),
-    )  # fmt: skip
+    return [
+        dict(
+            subject_id=sid, sex=sex[sid], tibia_input=tibia_input, status=c.status,
+            iterations=c.iterations, seconds=c.seconds, hinge_rms_deg=np.degrees(c.hinge_rms),
+            rest_closed_form_deg=c.rest_deg[0], rest_deg=c.rest_deg[1],
+            plane_closed_form_mm=1e3 * c.plane_rms[0], plane_mm=1e3 * c.plane_rms[1],
+            femur_deg=angle(c.R_start_femur, c.R_co_femur),
+            tibia_deg=angle(c.R_start_tibia, c.R_co_tibia),
+        )
+        for (sid, tibia_input), c in stage.full_corrections.items()
+    ]  # fmt: skip

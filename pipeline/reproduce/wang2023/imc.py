@@ -64,7 +64,7 @@ from pipeline.reproduce.wang2023.evaluation import (
 from pipeline.reproduce.wang2023.full_ipopt import (
     FULL_CORRECTION_COLUMNS,
     full_corrected,
-    full_row,
+    full_rows,
     knee_trial,
     loso_priors,
 )
@@ -107,9 +107,10 @@ class ImcStage:
     #: subject -> the stored input's femur and tibia orientations after the ``reference``
     #: correction (IMC world), for the factor study
     reference_orientations: dict = field(default_factory=dict)
-    #: per subject and tibia input: the ``full_ipopt`` calibration's diagnostics
-    #: (:data:`FULL_CORRECTION_COLUMNS`)
-    full_rows: list[dict] = field(default_factory=list)
+    #: ``(subject, tibia input)`` -> the ``full_ipopt`` calibration, and subject -> its
+    #: leave-one-subject-out priors
+    full_corrections: dict = field(default_factory=dict)
+    priors: dict = field(default_factory=dict)
     #: the ``full_ipopt`` correction beside its bounds
     #: (:func:`pipeline.reproduce.wang2023.limits.limit_rows`); empty until computed.
     limits: list[dict] = field(default_factory=list)
@@ -190,7 +191,7 @@ def run_imc_stage(
     pop = omc_stage.population
     traj_rows, orient_rows, subjects, notes = [], [], [], []
     reference_orientations = {}
-    full_rows = []
+    full_corrections, priors = {}, {}
     example: dict = {}
     trials = {}
     if "full_ipopt" in corrections:
@@ -213,6 +214,8 @@ def run_imc_stage(
         omc_F, _ = align(r.femur_R, subject.imc.femur_R, lag)
         omc_T, _ = align(r.tibia_R, subject.imc.femur_R, lag)
         omc_paired = {n: align(v, subject.imc.femur_R, lag)[0] for n, v in omc_traj.items()}
+        if trials:
+            priors[sid] = loso_priors(trials, sid)
         for tibia_input in TIBIA_INPUTS:
             F = subject.imc.femur_R
             T = subject.imc.tibia_R if tibia_input == "stored" else subject.imc.tibia_R_uncorrected
@@ -224,8 +227,8 @@ def run_imc_stage(
             measures = subject_measures(subject, r)
             for correction in corrections:
                 if correction == "full_ipopt":
-                    eF, eT, c = full_corrected(F, T, measures, loso_priors(trials, sid))
-                    full_rows.append(full_row(sid, r.sex, tibia_input, c))
+                    eF, eT, c = full_corrected(F, T, measures, priors[sid])
+                    full_corrections[sid, tibia_input] = c
                 else:
                     eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
                                                     r.knee_aor, pop["f"])  # fmt: skip
@@ -273,19 +276,30 @@ def run_imc_stage(
             _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes,
                     example, reference_orientations=reference_orientations,
-                    full_rows=full_rows)  # fmt: skip
+                    full_corrections=full_corrections, priors=priors)  # fmt: skip
+
+
+def unified_trajectories(
+    femur: np.ndarray, tibia: np.ndarray, femur_positions, tibia_positions, omc_paths,
+    omc_femur: np.ndarray, t: int = 0, through_hip: bool = True,
+):
+    """The landmark trajectories of the paired IMC femur and tibia (eq 15-17) and the rotation
+    unifying their frame with the optical one from frame ``t`` (eq 18-19):
+    ``(R_imc_to_omc, imc_trajectories)``."""  # fmt: skip
+    imc = wang_trajectories(femur, tibia, femur_positions, tibia_positions)
+    R = unify_frames(frame_from_femur(omc_paths["KJC"], omc_femur, t, through_hip),
+                     frame_from_femur(imc["KJC"], femur, t, through_hip))  # fmt: skip
+    return R, imc
 
 
 def unified_comparison(
     femur: np.ndarray, tibia: np.ndarray, femur_positions, tibia_positions, omc_paths,
     omc_femur: np.ndarray, t: int = 0, through_hip: bool = True,
 ):
-    """The landmark trajectories of the paired IMC femur and tibia (eq 15-17), unified with the
-    optical frame from frame ``t`` (eq 18-19) and compared with the optical paths (eq 20):
+    """:func:`unified_trajectories` compared with the optical paths (eq 20):
     ``(comparisons, R_imc_to_omc, imc_trajectories)``."""  # fmt: skip
-    imc = wang_trajectories(femur, tibia, femur_positions, tibia_positions)
-    R = unify_frames(frame_from_femur(omc_paths["KJC"], omc_femur, t, through_hip),
-                     frame_from_femur(imc["KJC"], femur, t, through_hip))  # fmt: skip
+    R, imc = unified_trajectories(femur, tibia, femur_positions, tibia_positions, omc_paths,
+                                  omc_femur, t, through_hip)  # fmt: skip
     return compare_trajectories({n: imc[n] for n in LANDMARKS}, omc_paths, R_imc_to_omc=R), R, imc
 
 
@@ -364,5 +378,5 @@ def imc_tables(stage: ImcStage) -> dict[str, str]:
     return {
         "trajectory_errors.csv": csv_text(stage.trajectory_rows, TRAJECTORY_COLUMNS),
         "orientation_errors.csv": csv_text(stage.orientation_rows, ORIENTATION_COLUMNS),
-        "full_correction.csv": csv_text(stage.full_rows, FULL_CORRECTION_COLUMNS),
+        "full_correction.csv": csv_text(full_rows(stage), FULL_CORRECTION_COLUMNS),
     }

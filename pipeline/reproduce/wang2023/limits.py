@@ -24,12 +24,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from pipeline.calibration.priors import REST_SAMPLES, rest_rotation
+from pipeline.calibration.full_correction import FullCorrection
+from pipeline.calibration.priors import REST_SAMPLES, CorrectionPriors, rest_rotation
 from pipeline.io.tables import csv_text, markdown_table
 from pipeline.model.anthropometry import predict_landmarks
-from pipeline.reproduce.wang2023.evaluation import align
-from pipeline.reproduce.wang2023.full_ipopt import full_corrected, knee_trial, loso_priors
-from pipeline.reproduce.wang2023.imc import ImcStage, subject_measures, unified_comparison
+from pipeline.reproduce.wang2023.evaluation import align, points_to_omc
+from pipeline.reproduce.wang2023.full_ipopt import full_corrected
+from pipeline.reproduce.wang2023.imc import (
+    ImcStage,
+    subject_measures,
+    unified_comparison,
+    unified_trajectories,
+)
 from pipeline.reproduce.wang2023.optical import OmcStage, hip_centred_paths
 from pipeline.rotations import exp3
 
@@ -50,8 +56,8 @@ def _best_constant(F, T, CF, CT, pf, pt, omc_paths, omc_F, step: int = 4):
 
     def residual(x):
         eF, eT = F[keep] @ CF @ exp3(x[:3]), T[keep] @ CT @ exp3(x[3:])
-        comp, R, imc = unified_comparison(eF, eT, pf, pt, sub, omc_F[keep])
-        e = np.concatenate([imc[n] @ R.T - sub[n] for n in ("MM", "LM")])
+        R, imc = unified_trajectories(eF, eT, pf, pt, sub, omc_F[keep])
+        e = np.concatenate([points_to_omc(R, imc[n]) - sub[n] for n in ("MM", "LM")])
         return e[np.all(np.isfinite(e), axis=1)].ravel()
 
     x = least_squares(residual, np.zeros(6), x_scale=0.1).x
@@ -59,48 +65,46 @@ def _best_constant(F, T, CF, CT, pf, pt, omc_paths, omc_F, step: int = 4):
 
 
 def limit_rows(omc_stage: OmcStage, imc_stage: ImcStage) -> list[dict]:
-    """MM and LM RMS errors (mm) of every IMC subject under each of :data:`LIMITS`."""
-    trials = {s.omc.subject_id: (omc_stage.result(s.omc.subject_id).sex,
-                                 knee_trial(s, omc_stage.result(s.omc.subject_id)))
-              for s in omc_stage.subjects}  # fmt: skip
+    """MM and LM RMS errors (mm) of every IMC subject under each of :data:`LIMITS`, from the IMC
+    stage's ``full_ipopt`` calibrations of the uncorrected input and their priors."""
     lags = {s["subject_id"]: s["lag"] for s in imc_stage.subjects}
     rows = []
     for subject in omc_stage.subjects:
         sid = subject.omc.subject_id
-        if subject.imc is not None and sid in lags:
-            rows += _subject_rows(subject, omc_stage.result(sid), lags[sid], trials)
+        c = imc_stage.full_corrections.get((sid, "uncorrected"))
+        if subject.imc is not None and c is not None:
+            rows += _subject_rows(subject, omc_stage.result(sid), lags[sid], c,
+                                  imc_stage.priors[sid])  # fmt: skip
     return rows
 
 
-def _subject_rows(subject, r, lag: int, trials) -> list[dict]:
+def _subject_rows(subject, r, lag: int, c: FullCorrection, priors: CorrectionPriors
+                  ) -> list[dict]:  # fmt: skip
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     paths = hip_centred_paths(subject, r)
-    omc_F, _ = align(r.femur_R, F, lag)
-    omc_T, _ = align(r.tibia_R, F, lag)
+    omc_F, Fp = align(r.femur_R, F, lag)
+    omc_T, Tp = align(r.tibia_R, T, lag)
     omc_paths = {n: align(v, F, lag)[0] for n, v in paths.items()}
     measures = subject_measures(subject, r)
     p = predict_landmarks(measures)
     pf, pt = dict(p.femur), dict(p.tibia)
 
-    def errors(eF, eT, paired=False):
-        if not paired:
-            eF, eT = align(r.femur_R, eF, lag)[1], align(r.femur_R, eT, lag)[1]
-        comp, _, _ = unified_comparison(eF, eT, pf, pt, omc_paths, omc_F)
+    def errors(CF, CT):
+        """MM and LM RMS (mm) of the paired IMC frames corrected by ``CF``, ``CT`` (eq 13)."""
+        comp, _, _ = unified_comparison(Fp @ CF, Tp @ CT, pf, pt, omc_paths, omc_F)
         return 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
 
-    priors = loso_priors(trials, subject.omc.subject_id)
     own = replace(priors, femur_axis=r.knee_aor.femur_axis, tibia_axis=r.knee_aor.tibia_axis,
                   rest_knee=rest_rotation(r.femur_R, r.tibia_R, REST_SAMPLES))  # fmt: skip
-    eF, eT, c = full_corrected(F, T, measures, priors)
-    oF, oT, _ = full_corrected(F, T, measures, own)
-    Fp, Tp = align(r.femur_R, F, lag)[1], align(r.femur_R, T, lag)[1]
-    bF, bT = _best_constant(Fp, Tp, c.R_co_femur, c.R_co_tibia, pf, pt, omc_paths, omc_F)
+    _, _, o = full_corrected(F, T, measures, own)
+    best = _best_constant(Fp, Tp, c.R_co_femur, c.R_co_tibia, pf, pt, omc_paths, omc_F)
     results = {
-        "full_ipopt": errors(eF, eT),
-        "full_ipopt, own priors": errors(oF, oT),
-        "best constant": errors(Fp @ bF, Tp @ bT, paired=True),
-        "optical orientations": errors(omc_F, omc_T, paired=True),
+        "full_ipopt": errors(c.R_co_femur, c.R_co_tibia),
+        "full_ipopt, own priors": errors(o.R_co_femur, o.R_co_tibia),
+        "best constant": errors(*best),
     }
+    comp, _, _ = unified_comparison(omc_F, omc_T, pf, pt, omc_paths, omc_F)
+    results["optical orientations"] = 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
     return [dict(subject_id=subject.omc.subject_id, sex=r.sex, method=m, MM_mm=mm, LM_mm=lm,
                  malleoli_mm=0.5 * (mm + lm)) for m, (mm, lm) in results.items()]  # fmt: skip
 
