@@ -223,10 +223,9 @@ def _cmd_ik(args) -> int:
 
     keys = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_medial_m",
             "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
-            "segment_orientations", "calibration_pose", "static_trial", "filter", "knee",
-            "correction",
-            "knee_axis_femur", "knee_axis_tibia", "joint_limits", "rerun", "strict",
-            "osim")  # fmt: skip
+            "segment_orientations", "calibration_pose", "static_trial", "filter",
+            "calibration_method", "drift", "knee", "correction", "knee_axis_femur",
+            "knee_axis_tibia", "joint_limits", "rerun", "strict", "osim")  # fmt: skip
     flags = {k: getattr(args, k) for k in keys}
     flags.update({k: str(v) for k, v in flags.items() if isinstance(v, Path)})
     sto, out, measures, options = resolve_ik(args.config, flags,

@@ -12,6 +12,7 @@ from pipeline.calibration.conventions import (
     DEFAULT_CORRECTION,
     DEFAULT_FILTER,
     DEFAULT_METHOD,
+    DRIFT_CORRECTIONS,
     FILTERS,
     METHODS,
 )
@@ -71,6 +72,11 @@ def add_ik_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calibration-method", choices=(*METHODS, "none"), help="joint-constraint "
                    "calibration of knees with raw signals, reported with its trust decision "
                    f"(default {DEFAULT_METHOD}; none skips it)")
+    p.add_argument("--drift", choices=DRIFT_CORRECTIONS, help="heading drift between the "
+                   "sensors: each leg's sensors turned into the pelvis sensor's heading by the "
+                   "joint constraints (hip and ankle centres, knee hinge axis) where their "
+                   "calibrations hold (joints), only for 6-D filter output, whose headings are "
+                   "each sensor's own (auto, default), or never (none)")
     p.add_argument("--knee", choices=KNEE_MODES, help=f"knee model (default {DEFAULT_KNEE})")
     p.add_argument("--correction", choices=CORRECTIONS, help="knee-AoR orientation correction: "
                    "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt), the closed form "

@@ -173,11 +173,61 @@ def test_missing_rate_refused_unless_given(tmp_path):
         xsens.read_xsens_txt(q, rate_hz=50.0)
 
 
-def test_no_orientation_columns_refused(tmp_path):
+def test_a_raw_export_without_orientation_columns_is_read_as_raw_signals(tmp_path):
     t, R, acc, gyr = _motion(20)
     p = _write(tmp_path / "o.txt", R, acc, gyr, orientation="none")
-    with pytest.raises(InputError, match=r"no orientation columns: expected Quat_q0.*found Packet"):
-        xsens.read_xsens_txt(p)
+    rec = xsens.read_xsens_txt(p)
+    s = rec.sensor
+    assert s.quat is None and rec.header["orientation_from"] == "none"
+    np.testing.assert_allclose(s.gyr, gyr, atol=1e-6)
+    np.testing.assert_allclose(s.acc, acc, atol=1e-6)
+    # neither orientations nor the raw signals: refused, naming what was expected
+    lines = p.read_text().splitlines()
+    header = lines[4].split("\t")
+    keep = [k for k, h in enumerate(header) if not h.startswith(("Acc", "Gyr"))]
+    (tmp_path / "n.txt").write_text("\n".join(lines[:4] + ["\t".join(
+        [ln.split("\t")[k] for k in keep]) for ln in lines[4:]]) + "\n")  # fmt: skip
+    with pytest.raises(InputError, match=r"no orientation columns .* no raw Acc_X.*found Packet"):
+        xsens.read_xsens_txt(tmp_path / "n.txt")
+
+
+def test_a_folder_of_raw_xsens_exports_runs_through_the_filter_and_ik(tmp_path):
+    """The Xsens MT raw path end to end: simulated gait (misplaced sensors, noise, gyro bias)
+    written as MT Manager .txt exports with Acc/Gyr/Mag only, read by the ``pipeline ik`` loader
+    with an id map, filtered by VQF 9-D: knee flexion of the truth within 2 deg RMS."""
+    from pipeline.analysis.landmarks import joint_angles
+    from pipeline.commands.ik import load_orientations
+    from pipeline.model.anthropometry import Measures
+    from pipeline.process import process_recording
+    from pipeline.simulate.model import simulate_trial
+
+    trial = simulate_trial(motion="gait", duration_s=10.0, seed=2, standing_s=2.0)
+    ours = {"pelvis_imu": "pelvis_imu", "right_femur_imu": "femur_r_imu",
+            "right_tibia_imu": "tibia_r_imu", "right_foot_imu": "calcn_r_imu",
+            "left_femur_imu": "femur_l_imu", "left_tibia_imu": "tibia_l_imu",
+            "left_foot_imu": "calcn_l_imu"}  # fmt: skip
+    sensor_map = {}
+    for k, (frame, name) in enumerate(ours.items()):
+        sid = f"00B4{k:04X}"
+        sensor_map[name] = sid
+        s = trial.imus[frame].recording.sensor
+        head = ["PacketCounter", "SampleTimeFine", "Acc_X", "Acc_Y", "Acc_Z", "Gyr_X", "Gyr_Y",
+                "Gyr_Z", "Mag_X", "Mag_Y", "Mag_Z"]  # fmt: skip
+        rows = ["// Update Rate: 100.0Hz", "\t".join(head)]
+        for i in range(len(trial.time)):
+            cells = [f"{i:05d}", f"{1000 + 100 * i}"]
+            cells += [f"{v:.6f}" for v in (*s.acc[i], *s.gyr[i], *(s.mag[i] / 50.0))]
+            rows.append("\t".join(cells))
+        (tmp_path / f"MT_012005D6_009-001_{sid}.txt").write_text("\n".join(rows) + "\n")
+    rec = load_orientations(tmp_path, sensor_map)
+    assert all(rec.sensors[n].quat is None and rec.sensors[n].mag is not None
+               for n in ours.values())  # fmt: skip
+    run = process_recording(rec, Measures("m", 1.75))
+    assert any("by VQF, 9-D" in n for n in run.notes)
+    truth = joint_angles(trial.skeleton, trial.q)
+    for key in ("right_knee_flexion", "left_knee_flexion", "right_hip_flexion"):
+        e = np.degrees(run.joint_angles[key][200:] - truth[key][200:])
+        assert np.sqrt(np.mean(e**2)) < 2.0, (key, np.sqrt(np.mean(e**2)))
 
 
 def test_truncated_and_empty_files_refused(tmp_path):

@@ -10,6 +10,7 @@ __all__ = [
     "CORRECTIONS",
     "DEFAULT_CALIBRATION_POSE",
     "DEFAULT_CORRECTION",
+    "DRIFT_CORRECTIONS",
     "DEFAULT_FILTER",
     "DEFAULT_METHOD",
     "FILTERS",
@@ -36,3 +37,9 @@ DEFAULT_CALIBRATION_POSE = "standing"
 #: Attitude filters for raw signals: VQF (Laidig & Seel 2023, the default) and Hu's PI filter.
 FILTERS = ("vqf", "pi")
 DEFAULT_FILTER = "vqf"
+#: Heading-drift corrections (:mod:`pipeline.process.drift`): ``'joints'`` turns each leg's sensors
+#: into the pelvis sensor's heading by the joint constraints (hip and ankle centres, the knee's
+#: hinge axis) where their calibrations hold; ``'auto'`` does so where the orientations come from
+#: a 6-D filter (each sensor's heading its own, drifting with the vertical gyro bias); ``'none'``
+#: never.
+DRIFT_CORRECTIONS = ("auto", "joints", "none")

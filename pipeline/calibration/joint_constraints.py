@@ -37,6 +37,7 @@ __all__ = [
     "angular_acceleration",
     "axis_from_spherical",
     "consistent_axis_signs",
+    "joint_force",
     "gamma",
     "hinge_jacobian",
     "hinge_jacobian_spherical",
@@ -97,7 +98,9 @@ def gamma(w: np.ndarray, dw: np.ndarray, o: np.ndarray) -> np.ndarray:
     return cross(w, cross(w, o)) + cross(dw, o)
 
 
-def _joint_force(d: JointData, o1: np.ndarray, o2: np.ndarray):
+def joint_force(d: JointData, o1: np.ndarray, o2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq 2: the specific force at the joint centre in each sensor's frame, ``a_i + Gamma_i(o_i)``
+    (N, 3) m/s^2, for sensor -> joint positions ``o1``, ``o2``."""
     f1 = d.acc_1 + gamma(d.gyr_1, d.gyr_dot_1, o1)
     f2 = d.acc_2 + gamma(d.gyr_2, d.gyr_dot_2, o2)
     return f1, f2
@@ -105,7 +108,7 @@ def _joint_force(d: JointData, o1: np.ndarray, o2: np.ndarray):
 
 def spherical_residual(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.ndarray:
     """Eq 3: ``e(t) = |a_1 + Gamma_1(o_1)| - |a_2 + Gamma_2(o_2)|`` (N,) in m/s^2."""
-    f1, f2 = _joint_force(data, o1, o2)
+    f1, f2 = joint_force(data, o1, o2)
     return np.linalg.norm(f1, axis=1) - np.linalg.norm(f2, axis=1)
 
 
@@ -117,7 +120,7 @@ def gamma_matrix(w: np.ndarray, dw: np.ndarray) -> np.ndarray:
 
 def spherical_jacobian(o1: np.ndarray, o2: np.ndarray, data: JointData) -> np.ndarray:
     """Eq 8-9: ``de/d[o_1, o_2]`` (N,6)."""
-    f1, f2 = _joint_force(data, o1, o2)
+    f1, f2 = joint_force(data, o1, o2)
     u1 = f1 / np.linalg.norm(f1, axis=1, keepdims=True)
     u2 = f2 / np.linalg.norm(f2, axis=1, keepdims=True)
     J1 = np.einsum("ni,nij->nj", u1, gamma_matrix(data.gyr_1, data.gyr_dot_1))
@@ -207,7 +210,7 @@ def consistent_axis_signs(
         )
     elif data is not None:
         z = np.zeros(3)
-        f1, f2 = _joint_force(data, z if o1 is None else o1, z if o2 is None else o2)
+        f1, f2 = joint_force(data, z if o1 is None else o1, z if o2 is None else o2)
         s = np.sum((f1 @ j1) * (f2 @ j2))
     else:
         raise InputError("need sensor orientations or signals to fix the axis signs")

@@ -211,6 +211,16 @@ def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
     ]
     if run.corrections:
         lines += _correction_table(run)
+    if run.heading_drifts:
+        lines += ["", f"Sensor headings aligned by the joints (`--drift {o.drift}`; the distal "
+                  "sensor turned into the proximal one's heading, deg):", "",
+                  "| joint | from | to | drift | constraint residual | with a constant heading |",
+                  "|---|---|---|---|---|---|"]  # fmt: skip
+        for key, d in run.heading_drifts.items():
+            lines.append(f"| {key.replace('_', ' ')} | {np.degrees(d.psi.min()):.1f} | "
+                         f"{np.degrees(d.psi.max()):.1f} | {d.drift_deg:.1f} | "
+                         f"{d.residual_deg:.2f} | {d.before_deg:.2f} |")  # fmt: skip
+        lines.append("")
     if run.knee_calibrations:
         lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
                   f"{o.calibration_method}; with `--correction functional` a trusted knee is "

@@ -51,6 +51,7 @@ IK_KEYS: dict[str, tuple[type, ...]] = {
     "static_trial": (str,),
     "filter": (str,),
     "calibration_method": (str,),
+    "drift": (str,),
     "sensor_to_model": (list,),
     "heading": (str,),
     "foot_length_m": (float, int),

@@ -13,12 +13,15 @@ Layout (facts from OpenSim's reader and its test files)::
     03583<TAB><TAB>...<TAB>3.030769<TAB>...
 
 Comment lines start with ``//`` (``key: value``); the first other line is the header; cells may be
-empty or ``NaN`` for unused columns. Newer exports may use ``,``, ``;`` or spaces as delimiter
-(detected from the header). Units: ``Acc`` m/s^2, ``Gyr`` rad/s, ``Mag`` arbitrary units (sensor
-frame). Orientation of the sensor in the Xsens world frame (z up): ``Quat_q0..q3`` = ``[w, x, y,
-z]``; ``Mat[r][c]`` = element (r, c) of the same rotation matrix (``p_world = R p_sensor``);
-``Roll, Pitch, Yaw`` in degrees with ``R = Rz(yaw) Ry(pitch) Rx(roll)``. The three agree on the
-test files (checked: gravity ``R^T [0, 0, 9.81]`` equals the accelerometer at rest).
+empty or ``NaN`` for unused columns. A file without orientation columns but with ``Acc_*`` and
+``Gyr_*`` (an export of the raw signals) is read as raw signals: its orientations come from an
+attitude filter (:mod:`pipeline.process.signals`). Newer exports may use ``,``, ``;`` or spaces as
+delimiter (detected from the header). Units: ``Acc`` m/s^2, ``Gyr`` rad/s, ``Mag`` arbitrary units
+(sensor frame). Orientation of the sensor in the Xsens world frame (z up): ``Quat_q0..q3`` =
+``[w, x, y, z]``; ``Mat[r][c]`` = element (r, c) of the same rotation matrix
+(``p_world = R p_sensor``); ``Roll, Pitch, Yaw`` in degrees with ``R = Rz(yaw) Ry(pitch)
+Rx(roll)``. The three agree on the test files (checked: gravity ``R^T [0, 0, 9.81]`` equals the
+accelerometer at rest).
 
 Time: ``SampleTimeFine`` (10 kHz ticks, 32-bit) when present; else ``PacketCounter`` (16-bit,
 wraps at 65536) divided by the update rate, with dropped packets becoming missing samples (filled
@@ -148,10 +151,11 @@ def read_xsens_txt(
         ),
         None,
     )
-    if orient is None:
+    raw_only = all(f"{p}_{a}" in col for p in ("Acc", "Gyr") for a in "XYZ")
+    if orient is None and not raw_only:
         raise InputError(
-            "no orientation columns: expected Quat_q0..Quat_q3, Mat[1][1]..Mat[3][3] or "
-            f"Roll/Pitch/Yaw; found {', '.join(labels)}",
+            "no orientation columns (Quat_q0..Quat_q3, Mat[1][1]..Mat[3][3] or Roll/Pitch/Yaw) "
+            f"and no raw Acc_X..Z and Gyr_X..Z columns; found {', '.join(labels)}",
             file=path,
             field="header",
         )
@@ -226,6 +230,19 @@ def read_xsens_txt(
             return None
         return fill_gaps(time, v, max_gap_s=max_gap_s, notes=notes, file=path, field=prefix)
 
+    acc, gyr, mag = vectors("Acc"), vectors("Gyr"), vectors("Mag")
+    if acc is not None:
+        check_acc_units(acc, file=path, field="Acc")
+    if gyr is not None:
+        check_gyro_units(gyr, file=path, field="Gyr")
+    if orient is None:  # raw signals only: the orientations come from an attitude filter
+        if acc is None or gyr is None:
+            raise InputError("the Acc and Gyr columns are empty and there are no orientation "
+                             "columns", file=path, field="header")  # fmt: skip
+        header = {**comments, "orientation_from": "none"}
+        return Recording.single(_sensor_id(path), time, gyr=gyr, acc=acc, mag=mag,
+                                rate_hz=float(rate), header=header, notes=notes.as_tuple(),
+                                source=path)  # fmt: skip
     kind, cols = orient
     raw = block(cols)
     if kind != "quaternion":
@@ -257,11 +274,6 @@ def read_xsens_txt(
         field="orientation",
     )
     quat = check_quaternions(quat, notes=notes, file=path, field="orientation")
-    acc, gyr, mag = vectors("Acc"), vectors("Gyr"), vectors("Mag")
-    if acc is not None:
-        check_acc_units(acc, file=path, field="Acc")
-    if gyr is not None:
-        check_gyro_units(gyr, file=path, field="Gyr")
     header = {**comments, "orientation_from": kind}
     return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
                             rate_hz=float(rate), header=header, notes=notes.as_tuple(),

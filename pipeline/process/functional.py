@@ -20,16 +20,17 @@ step 5): the sensor-to-segment rotations are turned so that the hinge axis is th
 axis, ISB's medio-lateral direction (Hu 2021 eq 30-37 define the segment frame the same way).
 
 Why it is not the default (``scripts/bench_raw_path.py``, simulated gait, sensors misplaced by up
-to 15 deg): the placement it gives is the more accurate one, the true hinge axis lands within
-0.1-0.3 deg of the model's where eq 1-8 on 6-D orientations leaves 0.4-24 deg; but the joint
-angles get worse without magnetometers (knee axes other than flexion 11-21 deg RMS against 4-6
-deg with eq 1-8), because there the error that dominates is the filter's heading difference
-between the thigh and shank sensors, whose constant part eq 1-8, fitted to the orientations,
-absorbs and a correct placement cannot. With 9-D orientations both give the same angles.
+to 15 deg): it gives the same joint angles as eq 1-8 once the sensors share one heading (a
+magnetometer, or the joints' heading alignment of 6-D orientations, :mod:`pipeline.process.drift`;
+within 0.2 deg RMS on every axis), and needs raw signals. Without that alignment it was worse
+(knee axes other than flexion 11-21 deg RMS against 4-6 deg): the filter's heading difference
+between the thigh and shank sensors dominated, and eq 1-8, fitted to the orientations, absorbed
+its constant part where a correct placement cannot.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -38,7 +39,7 @@ from pipeline.io.recording import Recording
 from pipeline.rotations import angle_between
 
 __all__ = ["MAX_SAMPLES", "RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG", "KneeCalibration",
-           "calibrate_knees"]
+           "calibrate_knees", "fit_joint", "with_placements"]
 
 SPLIT_HALF_DEG = 5.0
 #: Samples one fit uses at most: a longer (half) trial is subsampled evenly after the angular
@@ -70,11 +71,17 @@ def calibrate_knees(
     model_axes: dict[str, tuple[np.ndarray, np.ndarray]],
     method: str = "ipopt",
     min_samples: int = 200,
+    *,
+    shared_world: bool = True,
 ) -> list[KneeCalibration]:
     """Every knee whose two sensors have gyroscope and accelerometer (module docstring).
 
     ``placements``: IMU frame (``right_femur_imu``, ...) -> 4x4 placement on its segment;
-    ``model_axes``: side -> the model's knee axis in the femoral and tibial frames."""
+    ``model_axes``: side -> the model's knee axis in the femoral and tibial frames.
+    ``shared_world``: the sensors' orientations share one world (vendor fusion, 9-D), so they
+    may sign the two axes alike; False (6-D filters: a heading of each sensor's own) signs them
+    by the specific force at the joint alone
+    (:func:`~pipeline.calibration.joint_constraints.consistent_axis_signs`)."""
     out = []
     for side, (thigh, shank) in _SENSORS.items():
         s1, s2 = trial.sensors.get(thigh), trial.sensors.get(shank)
@@ -87,7 +94,8 @@ def calibrate_knees(
             continue
 
         halves = (slice(None), slice(0, n // 2), slice(n // 2, None))
-        full, first, second = (_fit(trial.time, s1, s2, rows, method) for rows in halves)
+        full, first, second = (fit_joint(trial.time, s1, s2, rows, method, shared_world)
+                               for rows in halves)
         sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
         split = float(np.degrees(max(angle_between(first.axis_1, sign * second.axis_1),
                                      angle_between(first.axis_2,
@@ -96,13 +104,7 @@ def calibrate_knees(
         r = (np.linalg.norm(np.cross(s1.gyr, full.axis_1), axis=1)
              - np.linalg.norm(np.cross(s2.gyr, full.axis_2), axis=1))  # fmt: skip
         residual = float(np.sqrt(np.mean(r**2)))
-        a_F, a_T = model_axes[side]
-        P_F = placements[f"{side}_femur_imu"][:3, :3]
-        P_T = placements[f"{side}_tibia_imu"][:3, :3]
-        seg_F, seg_T = P_F @ full.axis_1, P_T @ full.axis_2
-        s = 1.0 if float(seg_F @ a_F) >= 0 else -1.0
-        vs_model = float(np.degrees(max(angle_between(s * seg_F, a_F),
-                                        angle_between(s * seg_T, a_T))))  # fmt: skip
+        vs_model = _vs_model(full.axis_1, full.axis_2, placements, side, model_axes[side])
         reasons = []
         if not full.observability.determined:
             reasons.append("not determined: " + "; ".join(full.observability.undetermined))
@@ -116,18 +118,47 @@ def calibrate_knees(
     return out
 
 
-def _fit(time, s1, s2, rows: slice, method: str):
+def with_placements(
+    calibrations: list[KneeCalibration],
+    placements: dict[str, np.ndarray],
+    model_axes: dict[str, tuple[np.ndarray, np.ndarray]],
+) -> list[KneeCalibration]:
+    """The calibrations with ``vs_model_deg`` recomputed for new ``placements`` (e.g. after the
+    sensors' headings were made consistent, :mod:`pipeline.process.drift`)."""
+    out = []
+    for c in calibrations:
+        vs = _vs_model(c.axis_thigh, c.axis_shank, placements, c.side, model_axes[c.side])
+        out.append(dataclasses.replace(c, vs_model_deg=vs))
+    return out
+
+
+def _vs_model(axis_thigh, axis_shank, placements, side, model_axes):
+    """The larger angle (deg) between the functional axes, carried into the segments by the
+    placements, and the model's knee axes (the pair's sign chosen by the femoral axis)."""
+    a_F, a_T = model_axes
+    seg_F = placements[f"{side}_femur_imu"][:3, :3] @ axis_thigh
+    seg_T = placements[f"{side}_tibia_imu"][:3, :3] @ axis_shank
+    s = 1.0 if float(seg_F @ a_F) >= 0 else -1.0
+    vs = float(np.degrees(max(angle_between(s * seg_F, a_F), angle_between(s * seg_T, a_T))))
+    return vs
+
+
+def fit_joint(time, s1, s2, rows: slice, method: str, shared_world: bool, joint: str = "hinge",
+              verify_start: bool = True):  # fmt: skip
+    """Hu 2021's calibration of one joint between sensors ``s1`` and ``s2``
+    (:class:`~pipeline.io.recording.SensorSignals`) on the samples ``rows``, at most
+    :data:`MAX_SAMPLES` of them (``verify_start``: solved again from an independent start)."""
     # the solvers (CasADi for IPOPT) load only when a recording has raw signals to calibrate
     from pipeline.calibration.calibrate import calibrate
     from pipeline.calibration.joint_constraints import JointData, joint_data
 
     d = joint_data(time[rows], s1.gyr[rows], s1.acc[rows], s2.gyr[rows], s2.acc[rows])
-    q1 = None if s1.quat is None else s1.quat[rows]
-    q2 = None if s2.quat is None else s2.quat[rows]
+    q1 = None if s1.quat is None or not shared_world else s1.quat[rows]
+    q2 = None if s2.quat is None or not shared_world else s2.quat[rows]
     n = d.gyr_1.shape[0]
     if n > MAX_SAMPLES:
         keep = np.linspace(0, n - 1, MAX_SAMPLES).round().astype(int)
         d = JointData(*(getattr(d, f.name)[keep] for f in fields(JointData)))
         q1 = None if q1 is None else q1[keep]
         q2 = None if q2 is None else q2[keep]
-    return calibrate(d, "hinge", method, quat_1=q1, quat_2=q2)
+    return calibrate(d, joint, method, quat_1=q1, quat_2=q2, verify_start=verify_start)

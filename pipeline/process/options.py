@@ -19,6 +19,7 @@ from pipeline.calibration.conventions import (
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
     DEFAULT_METHOD,
+    DRIFT_CORRECTIONS,
     FILTERS,
     METHODS,
 )
@@ -65,6 +66,9 @@ class IKOptions:
         calibration_method: the joint-constraint calibration of knees with raw signals
             (:mod:`pipeline.process.functional`; reported): ``'ipopt'``, ``'gn'``,
             ``'dwpso'``, ``'gwo'``, or ``'none'`` to skip it.
+        drift: heading drift between the sensors (:mod:`pipeline.process.drift`): ``'auto'``
+            (corrected for 6-D filter output), ``'joints'`` (always, where the joints'
+            calibrations hold) or ``'none'``.
         rerun: write the rerun recording (``pipeline ik`` only).
         osim: also write the model as an OpenSim ``.osim`` whose coordinates are the ``.mot``'s
             columns (``pipeline ik`` only).
@@ -85,6 +89,7 @@ class IKOptions:
     sensor_map: Mapping[str, str] = field(default_factory=dict)
     strict: bool = False
     calibration_method: str = DEFAULT_METHOD
+    drift: str = "auto"
     rerun: bool = True
     osim: bool = False
 
@@ -96,6 +101,7 @@ class IKOptions:
         if self.filter is not None:
             _choice("filter", self.filter, FILTERS)
         _choice("calibration_method", self.calibration_method, (*METHODS, "none"))
+        _choice("drift", self.drift, DRIFT_CORRECTIONS)
         for name in ("segment_orientations", "joint_limits", "strict", "rerun", "osim"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"expected true or false, got {getattr(self, name)!r}",

@@ -11,6 +11,9 @@ model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang
    z-up world) so that the world's y axis points up.
 3. **Heading** (:mod:`pipeline.calibration.heading`): the subject's right at the calibration pose,
    from hip and knee flexion by default or from an axis of the pelvis sensor (OpenSense's way).
+   Orientations from a 6-D filter (each sensor's heading its own, drifting) are first put in one
+   heading by the joint constraints (``drift``, :mod:`pipeline.process.drift`: hip and ankle
+   centres, the knee's hinge axis), and the calibration pose is read from them.
 4. **Calibration pose** (:mod:`pipeline.calibration.placement`): the first sample (or the mean of a
    static trial) shows a standing, supine or seated pose; each sensor's rotation on its segment
    follows from it. With ``segment_orientations`` the recording holds segment frames and the
@@ -45,6 +48,7 @@ from pipeline.calibration.correction import (
     correct_knee_to_axes,
     corrected_placement,
 )
+from pipeline.calibration.drift import HeadingDrift
 from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
 from pipeline.calibration.placement import (
     mean_rotation,
@@ -61,7 +65,8 @@ from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
-from pipeline.process.functional import KneeCalibration, calibrate_knees
+from pipeline.process.drift import align_headings, uses_drift_correction
+from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
 from pipeline.process.options import IKOptions
 from pipeline.process.sensors import SensorSet, apply_sensor_map, known_segments, sensor_set
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
@@ -100,7 +105,9 @@ class IKRun:
     sensor). ``skeleton``: the calibrated subject model (spherical pelvis root; its IMU frames
     carry the placements and corrections applied), ``q`` its configurations. ``placements``: IMU
     frame -> 4x4 placement in its segment (the calibration applied); ``corrections``: side ->
-    :class:`~pipeline.calibration.correction.KneeCorrection`; ``sensors``: what the sensors
+    :class:`~pipeline.calibration.correction.KneeCorrection`; ``heading_drifts``:
+    ``'<side>_<joint>'`` -> the :class:`~pipeline.calibration.drift.HeadingDrift` applied
+    (:mod:`pipeline.process.drift`); ``sensors``: what the sensors
     observe; ``heading_right``: the subject's right at the calibration pose (world);
     ``residual_rms`` (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`);
     ``options``: the options used.
@@ -122,6 +129,7 @@ class IKRun:
     placements: dict[str, np.ndarray] = field(default_factory=dict)
     corrections: dict[str, KneeCorrection] = field(default_factory=dict)
     knee_calibrations: list[KneeCalibration] = field(default_factory=list)
+    heading_drifts: dict[str, HeadingDrift] = field(default_factory=dict)
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -210,13 +218,26 @@ def process_recording(
     placements = placements_from_pose(pose, geometry, at_pose, legs)
 
     knee_cal = []
+    axes_by_side = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
+                    for s in legs if sensors.observes(s, "knee")}  # fmt: skip
     if opts.calibration_method != "none":
-        axes_by_side = {}
-        for s in legs:
-            if sensors.observes(s, "knee"):
-                g = geometry.for_side(s)
-                axes_by_side[s] = (g.knee_axis_femur, g.knee_axis_tibia)
-        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method)
+        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method,
+                                   shared_world=filtered != "6-D")  # fmt: skip
+    drifts = {}
+    if uses_drift_correction(opts.drift, filtered):
+        method = "ipopt" if opts.calibration_method == "none" else opts.calibration_method
+        rotations, drifts = align_headings(trial, rotations, knee_cal, legs, method, notes)
+        if drifts:  # the calibration pose read again from the aligned orientations
+            if static is None:
+                at_pose = {seg: R[0] for seg, R in rotations.items()}
+                cue = rotations
+            else:
+                cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
+            right = subject_right(cue, opts.heading, start_flexion=start)
+            H = heading_rotation(right)
+            pose = pose_rotations(pose_model, opts.calibration_pose, H)
+            placements = placements_from_pose(pose, geometry, at_pose, legs)
+            knee_cal = with_placements(knee_cal, placements, axes_by_side)
     functional = {c.side: c for c in knee_cal if c.trusted}
 
     corrections = {}
@@ -294,7 +315,7 @@ def process_recording(
                           joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections,
-                 knee_cal)  # fmt: skip
+                 knee_cal, drifts)  # fmt: skip
 
 
 def _side(segment: str) -> str:

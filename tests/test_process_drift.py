@@ -1,0 +1,112 @@
+"""pipeline.process.drift: each leg's sensors turned into the pelvis sensor's heading by the joint
+constraints, against the simulator's truth (6-D filter output: every sensor's heading its own)."""
+
+import numpy as np
+import pytest
+
+from pipeline.calibration.attitude import filter_orientations
+from pipeline.io.opensim import SENSOR_TO_SEGMENT
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.model.anthropometry import Measures
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.model.skeleton import Skeleton
+from pipeline.process import IKOptions, process_recording
+from pipeline.process.drift import uses_drift_correction
+from pipeline.rotations import matrix_from_quat
+from pipeline.simulate.model import simulate_trial
+
+SUBJECT = Measures("m", 1.75)
+NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
+
+
+@pytest.fixture(scope="module")
+def trial():
+    geometry, _ = geometry_from_measures(SUBJECT)
+    model = Skeleton.build(geometry, knee="hinge", root="freeflyer")
+    return simulate_trial(model, "gait", duration_s=17.0, seed=0, standing_s=2.0)
+
+
+def _raw(trial, mag: bool) -> Recording:
+    return Recording(trial.time, 100.0, {
+        NAMES[f]: SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc,
+                                mag=i.recording.mag if mag else None)
+        for f, i in trial.imus.items()})  # fmt: skip
+
+
+def _knee_rms_deg(trial, run) -> tuple[float, float]:
+    from pipeline.analysis.landmarks import joint_angles
+
+    truth = joint_angles(trial.skeleton, trial.q)
+    flex, other = [], []
+    for key, est in run.joint_angles.items():
+        if "_knee_" in key:
+            (flex if key.endswith("flexion") else other).append(np.degrees(est - truth[key])[200:])
+    return tuple(float(np.sqrt(np.mean(np.square(x)))) for x in (flex, other))
+
+
+@pytest.fixture(scope="module")
+def runs(trial):
+    raw = _raw(trial, mag=False)
+    return {d: process_recording(raw, SUBJECT, filter="vqf", drift=d) for d in ("auto", "none")}
+
+
+def test_every_joint_is_aligned_and_each_heading_matches_the_filters_true_error(trial, runs):
+    run = runs["auto"]
+    assert set(run.heading_drifts) == {f"{s}_{j}" for s in ("right", "left")
+                                       for j in ("hip", "knee", "ankle")}  # fmt: skip
+
+    def heading_error(frame):  # the 6-D filter's world turn of this sensor (about z up)
+        imu = trial.imus[frame]
+        s = imu.recording.sensor
+        E = matrix_from_quat(filter_orientations(trial.time, s.gyr, s.acc)) @ np.swapaxes(
+            imu.rotation, 1, 2)  # fmt: skip
+        return np.unwrap(np.arctan2(E[:, 1, 0], E[:, 0, 0]))
+
+    pelvis = heading_error("pelvis_imu")
+    for side in ("right", "left"):
+        for joint, seg in (("hip", "femur"), ("knee", "tibia"), ("ankle", "foot")):
+            # down the chain each distal sensor lands in the pelvis sensor's world: psi = d_P - d_i
+            true = pelvis - heading_error(f"{side}_{seg}_imu")
+            err = np.degrees(run.heading_drifts[f"{side}_{joint}"].psi - true)[200:]
+            err -= 360 * np.round(np.median(err) / 360)
+            assert np.sqrt(np.mean(err**2)) < 1.5, (side, joint, np.sqrt(np.mean(err**2)))
+    assert sum("turned into" in n for n in run.notes) == 6
+
+
+def test_the_aligned_knee_angles_are_as_good_as_a_magnetometers(trial, runs):
+    flex, other = _knee_rms_deg(trial, runs["auto"])
+    flex_none, other_none = _knee_rms_deg(trial, runs["none"])
+    flex_9d, other_9d = _knee_rms_deg(trial, process_recording(_raw(trial, mag=True), SUBJECT,
+                                                               filter="vqf"))  # fmt: skip
+    assert flex < 1.0 and 3 * flex < flex_none, (flex, flex_none)
+    assert other < other_none and other < other_9d + 0.5, (other, other_none, other_9d)
+    assert flex < flex_9d + 0.3
+    assert runs["none"].heading_drifts == {}
+
+
+def test_when_the_correction_applies():
+    assert uses_drift_correction("auto", "6-D") and uses_drift_correction("joints", None)
+    assert not uses_drift_correction("auto", "9-D") and not uses_drift_correction("auto", None)
+    assert not uses_drift_correction("none", "6-D")
+    with pytest.raises(Exception, match="drift"):
+        IKOptions(drift="magnetometer")
+
+
+def test_vendor_orientations_are_not_aligned_unless_asked(trial):
+    rec = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(quat=i.recording.quat)
+                                        for f, i in trial.imus.items()})  # fmt: skip
+    run = process_recording(rec, SUBJECT, sensor_to_model=(-np.pi / 2, 0.0, 0.0))
+    assert run.heading_drifts == {}
+    run = process_recording(rec, SUBJECT, sensor_to_model=(-np.pi / 2, 0.0, 0.0), drift="joints")
+    # no gyroscopes: nothing to calibrate the joints from, and the notes say so per joint
+    assert run.heading_drifts == {}
+    assert sum("heading not aligned" in n for n in run.notes) == 6
+
+
+def test_the_summary_reports_each_aligned_joint(runs, tmp_path):
+    from pipeline.commands.ik import summary_text
+
+    text = summary_text(tmp_path / "raw", runs["auto"], SUBJECT)
+    assert "Sensor headings aligned by the joints (`--drift auto`" in text
+    assert all(f"| {s} {j} |" in text for s in ("right", "left") for j in ("hip", "knee", "ankle"))
+    assert "Sensor headings aligned" not in summary_text(tmp_path / "raw", runs["none"], SUBJECT)
