@@ -241,3 +241,21 @@ def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path):
             assert len(files) == 6
             outcomes.add("finished")
     assert "interrupted" in outcomes
+
+
+def test_every_ik_flag_reaches_the_options(monkeypatch, tmp_path):
+    """``--calibration-method`` was once parsed and then dropped on its way to IKOptions."""
+    import pipeline.commands.ik as ik
+
+    seen = {}
+
+    def fake_run_ik(sto, measures, out, options):
+        seen["options"] = options
+        return "ok"
+
+    monkeypatch.setattr(ik, "run_ik", fake_run_ik)
+    assert main(["ik", "--orientations", str(tmp_path / "x.sto"), "--sex", "f", "--height-m",
+                 "1.6", "--out", str(tmp_path / "o"), "--calibration-method", "gn", "--drift",
+                 "none", "--filter", "pi", "--correction", "none"]) == 0  # fmt: skip
+    o = seen["options"]
+    assert (o.calibration_method, o.drift, o.filter, o.correction) == ("gn", "none", "pi", "none")
