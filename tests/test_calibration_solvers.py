@@ -183,3 +183,25 @@ def test_subproblem_is_typed(hinge):
     x = 0.5 * (positions.lo + positions.hi)
     assert positions.population_cost(x[None]).shape == (1,)
     assert positions.jacobian(x).shape == (positions.residual(x).size, 6)
+
+
+def test_ipopt_reuses_one_solver_per_shape_and_its_data_is_a_parameter():
+    """The NLP is built once per (joint, samples, loss): a second trial of the same length
+    solves in it with its own data (its own truth found), a prior switches on by its weight."""
+    import pipeline.calibration.ipopt as ipopt
+
+    ipopt._solver.cache_clear()
+    a, b = hinge_trial("rich", duration=6.0, seed=1), hinge_trial("rich", duration=6.0, seed=2)
+    ra, rb = (calibrate_ipopt(_data(t), "hinge", quat_1=t.imu_1.quat, quat_2=t.imu_2.quat,
+                              reference_1=t.axis_1) for t in (a, b))  # fmt: skip
+    info = ipopt._solver.cache_info()
+    assert info.misses == 1 and info.hits == 1
+    for tr, r in ((a, ra), (b, rb)):
+        e1, e2, *_ = _errors(tr, r)
+        assert max(e1, e2) < 0.5, (e1, e2)
+    # a heavy prior on a wrong axis pulls the fit to it (the weight is live), a zero one does not
+    wrong = exp3(np.array([0.4, 0.0, 0.0])) @ a.axis_1
+    pulled = calibrate_ipopt(_data(a), "hinge", prior_axis_1=wrong, prior_weight=1e4)
+    assert np.degrees(angle_between(pulled.axis_1, wrong)) < 2.0  # the prior is 23 deg off
+    assert np.degrees(angle_between(pulled.axis_1, a.axis_1)) > 20.0
+    assert ipopt._solver.cache_info().misses == 1

@@ -94,8 +94,10 @@ def calibrate_knees(
             continue
 
         halves = (slice(None), slice(0, n // 2), slice(n // 2, None))
-        full, first, second = (fit_joint(trial.time, s1, s2, rows, method, shared_world)
-                               for rows in halves)
+        # the independent start checks the whole trial's fit; the halves only give axes
+        full, first, second = (fit_joint(trial.time, s1, s2, rows, method, shared_world,
+                                         verify_start=rows == slice(None))
+                               for rows in halves)  # fmt: skip
         sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
         split = float(np.degrees(max(angle_between(first.axis_1, sign * second.axis_1),
                                      angle_between(first.axis_2,
