@@ -95,3 +95,26 @@ def test_bad_shapes_are_refused():
         hinge_heading(np.zeros((5, 3, 3)), np.zeros((5, 3)), np.ones(3), np.ones(3), 100.0)
     with pytest.raises(InputError, match="positive rate"):
         heading_between(np.ones((5, 3)), np.ones((5, 3)), 0.0)
+
+
+def test_windows_whose_samples_disagree_are_left_out():
+    # u horizontal and turning; v agrees (heading 0.3) except in the middle second, where every
+    # other sample says -0.9: the mean resultant length there is ~0.6 < MIN_AGREEMENT
+    n = 1000
+    ang = np.linspace(0, 6, n)
+    u = np.stack([np.cos(ang), np.zeros(n), np.sin(ang)], axis=1)
+    turn = np.full(n, -0.3)
+    turn[450:550:2] = 0.9
+    v = np.einsum("nij,nj->ni", rot_y(turn), u)
+    d = heading_between(u, v, 100.0, up=UP)
+    everything = heading_between(u, v, 100.0, up=UP, min_agreement=0.0)
+    assert d.used < d.windows == everything.used
+    # the window centred on the bad second (half its samples contradict) is left out; the ones
+    # reaching into it by a quarter still pass, so psi stays within 0.15 rad there, where
+    # averaging every window swings it by more than 0.2 rad (measured 0.13 and 0.27)
+    assert np.max(np.abs(d.psi - 0.3)) < 0.15 < 0.2 < np.max(np.abs(everything.psi - 0.3))
+    np.testing.assert_allclose(d.psi[:250], 0.3, atol=1e-9)
+    bad = v.copy()
+    bad[::2] = np.einsum("nij,nj->ni", rot_y(np.full(n // 2, 2.0)), u[::2])
+    with pytest.raises(InputError, match="do not agree within any window"):
+        heading_between(u, bad, 100.0, up=UP)

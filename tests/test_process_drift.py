@@ -110,3 +110,37 @@ def test_the_summary_reports_each_aligned_joint(runs, tmp_path):
     assert "Sensor headings aligned by the joints (`--drift auto`" in text
     assert all(f"| {s} {j} |" in text for s in ("right", "left") for j in ("hip", "knee", "ankle"))
     assert "Sensor headings aligned" not in summary_text(tmp_path / "raw", runs["none"], SUBJECT)
+
+
+@pytest.mark.dataset
+def test_the_real_ximu3_recording_without_its_magnetometers():
+    """Real data, 6-D (the magnetometers dropped), the 9-D result as the reference: the knees and
+    ankles hold their constraints well enough to be aligned (residual <= MAX_RESIDUAL_DEG), the
+    hips' windows never agree (their free movements barely accelerate the hip centre) and are
+    refused with the reason; the aligned joint angles are closer to the 9-D ones than without
+    the alignment (median RMS difference measured 4.3 against 8.2 deg)."""
+    from pathlib import Path
+
+    from pipeline.io.imu_folder import read_imu_folder
+    from pipeline.process.drift import MAX_RESIDUAL_DEG
+
+    folder = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ximu3_lower_body"
+    if not folder.exists():
+        pytest.skip("../shared/data/ximu3_lower_body not present")
+    rec = read_imu_folder(folder)
+    six = rec.with_sensors({n: s.replace(mag=None) for n, s in rec.sensors.items()})
+    m = Measures("m", 1.8)
+    ref = process_recording(rec, m, filter="vqf")
+    assert ref.heading_drifts == {}  # 9-D: nothing to align by default
+    runs = {d: process_recording(six, m, filter="vqf", drift=d) for d in ("auto", "none")}
+    aligned = runs["auto"].heading_drifts
+    assert {"right_knee", "left_knee", "right_ankle", "left_ankle"} <= set(aligned)
+    assert all(d.residual_deg <= MAX_RESIDUAL_DEG for d in aligned.values())
+    notes = " ".join(runs["auto"].notes)
+    assert "right hip: heading not aligned" in notes and "left hip: heading not aligned" in notes
+
+    def median_rms(run):
+        return np.median([np.sqrt(np.nanmean(np.degrees(run.joint_angles[k] - v) ** 2))
+                          for k, v in ref.joint_angles.items() if not k.startswith("pelvis")])
+
+    assert median_rms(runs["auto"]) < 0.7 * median_rms(runs["none"])

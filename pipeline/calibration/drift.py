@@ -46,6 +46,7 @@ from pipeline.rotations import normalize
 
 __all__ = [
     "MIN_ACCELERATION",
+    "MIN_AGREEMENT",
     "MIN_HORIZONTAL",
     "WINDOW_S",
     "HeadingDrift",
@@ -64,6 +65,11 @@ MIN_HORIZONTAL = 0.25
 #: is used when the mean product of the two horizontal lengths is at least this squared (standing
 #: still says nothing; walking gives 1-3 m/s^2).
 MIN_ACCELERATION = 0.3
+#: A window is used only when its samples agree on the heading: the weighted mean resultant length
+#: ``|sum_k (cos_k, sin_k)| / sum_k |u_k^h| |v_k^h|`` of eq (1) is at least this (1: every sample
+#: gives the same heading; 0.9: a circular spread of ~26 deg). A joint that breaks the constraint
+#: in a window (impacts, soft tissue, a knee far from a hinge) leaves that window out.
+MIN_AGREEMENT = 0.9
 
 
 @dataclass(frozen=True)
@@ -131,14 +137,16 @@ def heading_between(
     up: np.ndarray = (0.0, 1.0, 0.0),
     window_s: float = WINDOW_S,
     min_weight: float = MIN_HORIZONTAL,
+    min_agreement: float = MIN_AGREEMENT,
 ) -> HeadingDrift:
     """Eq (1) on windows of ``window_s`` (half overlapping) for world vectors ``u`` (N, 3), seen
     by the proximal sensor, and ``v``, the same vector seen by the distal one.
 
     A window is informative when its mean ``|u^h| |v^h|`` is at least ``min_weight`` (units of
-    ``u`` times ``v``); ``psi`` is interpolated linearly between the informative windows'
-    centres (held at the ends). Rows with NaN are ignored. Refused (:class:`InputError`) when no
-    window is informative: the heading is not observable from vectors that stay vertical."""
+    ``u`` times ``v``) and its samples agree (``min_agreement``, :data:`MIN_AGREEMENT`); ``psi``
+    is interpolated linearly between the informative windows' centres (held at the ends). Rows
+    with NaN are ignored. Refused (:class:`InputError`) when no window is informative, saying
+    why. The residuals of :class:`HeadingDrift` are over the informative windows' samples."""
     u, v = np.asarray(u, float), np.asarray(v, float)
     if u.shape != v.shape or u.ndim != 2 or u.shape[1] != 3:
         raise InputError(f"expected two (N, 3) vector series of one length, got {u.shape} and "
@@ -160,27 +168,39 @@ def heading_between(
     hop = max(1, width // 2)
     starts = np.arange(0, max(n - width, 0) + 1, hop)
     centres, angles = [], []
+    used_rows = np.zeros(n, dtype=bool)
+    horizontal = 0
     for s in starts:
         rows = slice(s, min(s + width, n))
         count = int(ok[rows].sum())
         if count == 0 or weight[rows].sum() / count < min_weight:
             continue
+        horizontal += 1
+        # the weighted per-sample headings' mean resultant length: 1 when they all agree
+        if np.hypot(sin_w[rows].sum(), cos_w[rows].sum()) < min_agreement * weight[rows].sum():
+            continue
         angles.append(np.arctan2(sin_w[rows].sum(), cos_w[rows].sum()))
         centres.append(0.5 * (rows.start + rows.stop - 1))
-    if not angles:
+        used_rows[rows] = True
+    if not horizontal:
         raise InputError("the vectors are too close to vertical in every window (mean "
                          f"|u_h||v_h| < {min_weight:g}): the heading between the two sensors is "
                          "not observable", field="orientations")  # fmt: skip
+    if not angles:
+        raise InputError(f"the two sensors' views of it do not agree within any window "
+                         f"(agreement < {min_agreement:g}): the joint does not hold the constraint",
+                         field="orientations")  # fmt: skip
     psi = np.interp(np.arange(n), centres, np.unwrap(angles))
+    sel = ok & used_rows
 
     def rms_deg(turn: np.ndarray) -> float:
-        b = turn_about_vertical(v[ok][..., None], turn[ok], g)[..., 0]
-        c = np.einsum("ni,ni->n", _unit(u[ok]), _unit(b))
+        b = turn_about_vertical(v[sel][..., None], turn[sel], g)[..., 0]
+        c = np.einsum("ni,ni->n", _unit(u[sel]), _unit(b))
         return float(np.degrees(np.sqrt(np.mean(np.arccos(np.clip(c, -1.0, 1.0)) ** 2))))
 
-    mean_psi = np.full(n, np.arctan2(sin_w.sum(), cos_w.sum()))
-    el_u = np.arcsin(np.clip(_unit(u[ok]) @ g, -1, 1))
-    el_v = np.arcsin(np.clip(_unit(v[ok]) @ g, -1, 1))
+    mean_psi = np.full(n, np.arctan2(sin_w[sel].sum(), cos_w[sel].sum()))
+    el_u = np.arcsin(np.clip(_unit(u[sel]) @ g, -1, 1))
+    el_v = np.arcsin(np.clip(_unit(v[sel]) @ g, -1, 1))
     return HeadingDrift(psi, rms_deg(psi), rms_deg(mean_psi),
                         float(np.degrees(np.sqrt(np.mean((el_u - el_v) ** 2)))), len(starts),
                         len(angles))  # fmt: skip

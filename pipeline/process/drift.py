@@ -47,9 +47,12 @@ _SENSOR_OF = {seg: name for name, seg in SENSOR_TO_SEGMENT.items()}
 #: (joint, proximal, distal) from the pelvis down: the order the headings are aligned in.
 JOINT_CHAIN = (("hip", "pelvis", "femur"), ("knee", "femur", "tibia"), ("ankle", "tibia", "foot"))
 #: A joint's heading is not used when the constraint's RMS residual after the turn (the angle
-#: between the two sensors' views of its axis or centre force) exceeds this (deg): the simulated
-#: joints leave 0.1-1 deg.
-MAX_RESIDUAL_DEG = 10.0
+#: between the two sensors' views of its axis or centre force, over the windows used) exceeds
+#: this (deg). The simulated joints leave 0.1-1 deg. On the real x-IMU3 recording (6-D, its 9-D
+#: orientations as the reference) the knees and ankles leave 11-15 deg and aligning them brings
+#: the joint angles closer to the 9-D ones (median RMS difference 4.3 deg against 8.2 unaligned);
+#: no window of the hips agrees (:data:`~pipeline.calibration.drift.MIN_AGREEMENT`).
+MAX_RESIDUAL_DEG = 20.0
 
 
 def uses_drift_correction(mode: str, filtered: str | None) -> bool:
