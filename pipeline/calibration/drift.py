@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.rotations import normalize
+from pipeline.rotations import exp3, normalize
 
 __all__ = [
     "MIN_ACCELERATION",
@@ -96,12 +96,9 @@ class HeadingDrift:
 
 def turn_about_vertical(R: np.ndarray, psi: np.ndarray, up: np.ndarray) -> np.ndarray:
     """``Rz(psi_k) R_k`` for (N, 3, 3) ``R`` and (N,) ``psi`` (rad), the turn about the unit
-    world vertical ``up`` (Rodrigues)."""
+    world vertical ``up`` (:func:`pipeline.rotations.exp3` of ``psi_k up``)."""
     g = normalize(np.asarray(up, float))
-    K = np.array([[0.0, -g[2], g[1]], [g[2], 0.0, -g[0]], [-g[1], g[0], 0.0]])
-    s, c = np.sin(psi)[:, None, None], np.cos(psi)[:, None, None]
-    Rz = np.eye(3) + s * K + (1.0 - c) * (K @ K)
-    return Rz @ R
+    return exp3(np.outer(psi, g)) @ R
 
 
 def hinge_heading(

@@ -124,7 +124,8 @@ def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> Head
         raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
     from pipeline.calibration.joint_constraints import joint_data, joint_force
 
-    fit = fit_joint(trial.time, s1, s2, slice(None), method, False, "spherical", False)
+    fit = fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
+                    joint="spherical", verify_start=False)
     # no observability test: a direction the fit leaves free (a pelvis that hardly turns, a
     # centre anywhere on a hinge-like ankle's axis) moves the centre without changing its force
     # much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)

@@ -95,7 +95,8 @@ def calibrate_knees(
 
         halves = (slice(None), slice(0, n // 2), slice(n // 2, None))
         # the independent start checks the whole trial's fit; the halves only give axes
-        full, first, second = (fit_joint(trial.time, s1, s2, rows, method, shared_world,
+        full, first, second = (fit_joint(trial.time, s1, s2, rows, method,
+                                         shared_world=shared_world,
                                          verify_start=rows == slice(None))
                                for rows in halves)  # fmt: skip
         sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
@@ -141,11 +142,10 @@ def _vs_model(axis_thigh, axis_shank, placements, side, model_axes):
     seg_F = placements[f"{side}_femur_imu"][:3, :3] @ axis_thigh
     seg_T = placements[f"{side}_tibia_imu"][:3, :3] @ axis_shank
     s = 1.0 if float(seg_F @ a_F) >= 0 else -1.0
-    vs = float(np.degrees(max(angle_between(s * seg_F, a_F), angle_between(s * seg_T, a_T))))
-    return vs
+    return float(np.degrees(max(angle_between(s * seg_F, a_F), angle_between(s * seg_T, a_T))))
 
 
-def fit_joint(time, s1, s2, rows: slice, method: str, shared_world: bool, joint: str = "hinge",
+def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joint: str = "hinge",
               verify_start: bool = True):  # fmt: skip
     """Hu 2021's calibration of one joint between sensors ``s1`` and ``s2``
     (:class:`~pipeline.io.recording.SensorSignals`) on the samples ``rows``, at most

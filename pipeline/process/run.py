@@ -42,6 +42,7 @@ import numpy as np
 
 from pipeline.analysis.landmarks import frame_trajectories, joint_angles, landmark_trajectories
 from pipeline.analysis.quality import quality_flags
+from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import (
     KneeCorrection,
     correct_knee,
@@ -191,18 +192,9 @@ def process_recording(
     if opts.heading != "anatomical" and not sensors.pelvis:
         raise InputError(f"heading {opts.heading!r} needs a pelvis sensor (pelvis_imu)",
                          file=trial.source, field="heading")  # fmt: skip
-    # the calibration pose: the first sample, or the mean of the static trial, put in front of
-    # the motion so that the heading is found from the motion relative to that pose
+    static_pose = None
     if static is not None:
-        at_pose = _static_orientations(static, rotations, notes, opts.calibration_pose)
-        cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
-    else:
-        at_pose = {seg: R[0] for seg, R in rotations.items()}
-        cue = rotations
-    start = (np.pi / 2, np.pi / 2) if opts.calibration_pose == "seated" else (0.0, 0.0)
-    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start)
-    H = heading_rotation(right)
-
+        static_pose = _static_orientations(static, rotations, notes, opts.calibration_pose)
     axes = {}
     if opts.knee_axis_femur is not None:
         axes = dict(knee_axis_femur=np.array(opts.knee_axis_femur),
@@ -212,10 +204,11 @@ def process_recording(
     # the model's segment orientations in the calibration pose (free knee: the heading; a hinge
     # about a tilted AoR turns the tibia and foot by the aligning rotation)
     pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
-    pose = pose_rotations(pose_model, opts.calibration_pose, H)
-    if opts.segment_orientations:
-        at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
-    placements = placements_from_pose(pose, geometry, at_pose, legs)
+
+    def read_pose(rotations, notes):
+        return _calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs, notes)
+
+    right, H, pose, placements = read_pose(rotations, notes)
 
     knee_cal = []
     axes_by_side = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
@@ -225,18 +218,10 @@ def process_recording(
                                    shared_world=filtered != "6-D")  # fmt: skip
     drifts = {}
     if uses_drift_correction(opts.drift, filtered):
-        method = "ipopt" if opts.calibration_method == "none" else opts.calibration_method
+        method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
         rotations, drifts = align_headings(trial, rotations, knee_cal, legs, method, notes)
         if drifts:  # the calibration pose read again from the aligned orientations
-            if static is None:
-                at_pose = {seg: R[0] for seg, R in rotations.items()}
-                cue = rotations
-            else:
-                cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
-            right = subject_right(cue, opts.heading, start_flexion=start)
-            H = heading_rotation(right)
-            pose = pose_rotations(pose_model, opts.calibration_pose, H)
-            placements = placements_from_pose(pose, geometry, at_pose, legs)
+            right, H, pose, placements = read_pose(rotations, None)
             knee_cal = with_placements(knee_cal, placements, axes_by_side)
     functional = {c.side: c for c in knee_cal if c.trusted}
 
@@ -333,6 +318,25 @@ def _pose_q(sk: Skeleton, pose: str, pelvis: np.ndarray | None) -> np.ndarray:
     if pelvis is not None:
         q[:4] = quat_xyzw_from_matrix(pelvis)
     return q
+
+
+def _calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs, notes):
+    """``(right, H, pose, placements)`` from the calibration pose: the first sample, or the
+    static trial's mean orientations ``static_pose`` put in front of the motion so that the
+    heading is found from the motion relative to that pose (steps 3-4)."""
+    if static_pose is not None:
+        at_pose = dict(static_pose)
+        cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
+    else:
+        at_pose = {seg: R[0] for seg, R in rotations.items()}
+        cue = rotations
+    start = (np.pi / 2, np.pi / 2) if opts.calibration_pose == "seated" else (0.0, 0.0)
+    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start)
+    H = heading_rotation(right)
+    pose = pose_rotations(pose_model, opts.calibration_pose, H)
+    if opts.segment_orientations:
+        at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
+    return right, H, pose, placements_from_pose(pose, geometry, at_pose, legs)
 
 
 def _static_orientations(static, rotations, notes, pose_name):
