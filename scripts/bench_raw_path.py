@@ -16,9 +16,12 @@ Printed: RMS errors over the motion (after the standing phase) of the ISB joint 
 (flexion and the other two axes, hip, knee, ankle, both legs pooled) and of the landmarks, each
 expressed in its own pelvis frame (what IMUs observe: no heading, no translation; leg landmarks
 EFM, EFL, KJC, AJC, MM, LM and the foot's HEE, MT1, MT5, TOE apart), and the compute time of the
-whole ``process_recording`` call (filtering included). The simulated knee is a hinge about the
-population AoR, whose straight pose turns the tibia and foot by ~10 deg from the femur's frame: the
-"orientations" rows show that floor (knee other ~3 deg, ankle other ~9 deg, foot landmarks).
+whole ``process_recording`` call (filtering included). The simulated subject stands upright with
+the joints at zero; its knee is a hinge about the population AoR, whose straight pose turns the
+tibia and foot by ~12 deg from the femur's frame: the default free knee assumes them aligned, the
+AoR correction (eq 9-12) finds the tibia's turn and the foot follows it
+(:func:`pipeline.calibration.correction.carried_correction`). The "orientations" rows are the floor
+the calibration leaves with exact sensor orientations (about 1-3 mm).
 
 Usage: ``python scripts/bench_raw_path.py [--seeds 0 1 2] [--motions gait] [--no-mag]
 [--correction aor|functional]``

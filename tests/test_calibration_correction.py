@@ -3,9 +3,14 @@
 import numpy as np
 import pytest
 
-from pipeline.calibration.correction import correct_knee, corrected_placement, knee_hinge_residual
+from pipeline.calibration.correction import (
+    carried_correction,
+    correct_knee,
+    corrected_placement,
+    knee_hinge_residual,
+)
 from pipeline.errors import InputError
-from pipeline.rotations import exp3, normalize, rot_x, rot_z
+from pipeline.rotations import exp3, normalize, rot_x, rot_y, rot_z
 
 
 def _knee_about(axis_f, axis_t, n=400, seed=0):
@@ -75,6 +80,17 @@ def test_corrected_placement_keeps_the_sensor_where_it_is():
     P2 = corrected_placement(P, C)
     np.testing.assert_allclose((e_hat @ C) @ P2[:3, :3], e_hat @ P[:3, :3], atol=1e-12)
     np.testing.assert_allclose(P2[:3, 3], P[:3, 3])
+
+
+def test_carried_correction_by_hand():
+    """A child aligned with its parent inherits R_co itself; a child turned 90 deg about z (its x
+    is the parent's y) sees a turn about the parent's x as a turn about its own -y."""
+    C = rot_x(0.2)
+    np.testing.assert_allclose(carried_correction(C, np.eye(3)), C, atol=1e-15)
+    np.testing.assert_allclose(carried_correction(C, rot_z(np.pi / 2)), rot_y(-0.2), atol=1e-15)
+    # and it is what keeps the child's pose in the parent: e_parent R_co R_c = e_child C_child
+    e, R_c, C = exp3([0.4, -0.2, 0.9]), exp3([0.1, 0.3, -0.2]), exp3([-0.05, 0.15, 0.1])
+    np.testing.assert_allclose(e @ C @ R_c, (e @ R_c) @ carried_correction(C, R_c), atol=1e-14)
 
 
 def test_hinge_residual_is_the_rms_angle_between_the_carried_axes():

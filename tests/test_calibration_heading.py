@@ -51,3 +51,24 @@ def test_turning_axis_and_vertical_check_by_hand():
     notes: list[str] = []
     check_vertical(rot_y(0.1 * np.sin(yaw)), notes=notes)
     assert notes and "not checked" in notes[0]
+
+
+def test_knee_cue_takes_out_the_tilt_of_the_knee_axis_by_hand():
+    """A standing right knee (no hip motion) flexing about an axis turned 10 deg about the vertical
+    from the right (world z at zero heading): taken as the femur's z the
+    right comes out turned by 10 deg; told the axis (``knee_axes``), exactly the right."""
+    from pipeline.calibration.heading import anatomical_right
+    from pipeline.rotations import exp3
+
+    psi = np.radians(10.0)
+    axis = rot_y(psi) @ [0, 0, 1.0]  # the knee axis in the world at t0 (pointing right)
+    flex = np.radians(60.0) * np.sin(np.linspace(0, np.pi, 200)) ** 2
+    femur = np.repeat(np.eye(3)[None], 200, axis=0)
+    tibia = exp3(-flex[:, None] * axis)  # the knee flexes about -right
+    rot = {"right_femur": femur, "right_tibia": tibia}
+    plain = anatomical_right(rot)
+    np.testing.assert_allclose(plain, axis, atol=1e-9)  # turned by psi
+    told = anatomical_right(rot, knee_axes={"right": axis})
+    np.testing.assert_allclose(told, [0, 0, 1.0], atol=1e-9)
+    # a cue of a side not told stays as it was
+    np.testing.assert_allclose(anatomical_right(rot, knee_axes={"left": axis}), axis, atol=1e-9)

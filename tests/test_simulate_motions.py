@@ -10,7 +10,7 @@ from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat
 from pipeline.simulate.conventions import MOTIONS
-from pipeline.simulate.motions import joint_trajectories
+from pipeline.simulate.motions import RAMP_S, joint_trajectories, standing_start
 
 
 @pytest.fixture(scope="module")
@@ -42,19 +42,30 @@ def test_joint_limits_respected(tmp_path, knee):
             np.testing.assert_allclose(np.linalg.norm(q[:, 3:7], axis=1), 1.0)
 
 
+@pytest.mark.parametrize("standing_s", [0.0, 0.3])
 @pytest.mark.parametrize("motion", MOTIONS)
-def test_v_and_a_are_the_time_derivatives_of_q(skeleton, motion):
+def test_v_and_a_are_the_time_derivatives_of_q(skeleton, motion, standing_s):
     rate = 1000.0
     h = 1.0 / rate
-    t = np.arange(2000) / rate
-    q, v, a = joint_trajectories(skeleton, motion, t, seed=1)
+    t = np.arange(2000) / rate  # with standing_s 0.3: still, the whole ramp, 0.2 s of motion
+    if standing_s:
+        q, v, a = standing_start(skeleton, motion, t, standing_s, seed=1)
+    else:
+        q, v, a = joint_trajectories(skeleton, motion, t, seed=1)
     nq, nv = skeleton.model.nq, skeleton.model.nv
     assert q.shape == (2000, nq) and v.shape == a.shape == (2000, nv)
     assert nq - 7 == nv - 6  # 1-DoF joints after the free flyer
 
+    # the ramp is C2: its third derivative jumps at both ends, where a central difference errs
+    # by ~h |jump| / 4; those two samples apart, central differences err by h^2/6 |x'''| (at
+    # most 2e-5 of the largest value here)
+    ends = np.isclose(t[1:-1], standing_s) | np.isclose(t[1:-1], standing_s + RAMP_S)
+    keep = ~ends if standing_s else np.ones(t.size - 2, bool)
+
     def close(fd, exact):
-        # central differences err by h^2/6 |x'''| (at most 2e-5 of the largest value here)
-        np.testing.assert_allclose(fd, exact, atol=1e-4 * max(1.0, np.abs(exact).max()))
+        np.testing.assert_allclose(
+            fd[keep], exact[keep], atol=1e-4 * max(1.0, np.abs(exact).max())
+        )
 
     # a = dv/dt for every component (the root velocity is in the pelvis frame, as in Pinocchio)
     close((v[2:] - v[:-2]) / (2 * h), a[1:-1])
@@ -65,6 +76,24 @@ def test_v_and_a_are_the_time_derivatives_of_q(skeleton, motion):
     dp = (q[2:, :3] - q[:-2, :3]) / (2 * h)
     close(np.einsum("nji,nj->ni", R[1:-1], dp), v[1:-1, :3])
     close(_vee(np.swapaxes(R[1:-1], 1, 2) @ (R[2:] - R[:-2]) / (2 * h)), v[1:-1, 3:6])
+
+
+def test_standing_start_is_upright_then_the_motion(skeleton):
+    t = np.arange(600) / 100.0
+    q, v, a = standing_start(skeleton, "gait", t, 1.0, seed=2)
+    still = t < 1.0
+    np.testing.assert_allclose(v[still], 0.0, atol=1e-12)
+    np.testing.assert_allclose(a[still], 0.0, atol=1e-12)
+    np.testing.assert_allclose(q[still, 7:], 0.0, atol=1e-12)
+    R = matrix_from_quat(q[:, [6, 3, 4, 5]])
+    # upright: the pelvis y axis up and its z axis (right) horizontal, facing the path's heading
+    np.testing.assert_allclose(R[still, :, 1], np.tile([0, 0, 1.0], (still.sum(), 1)), atol=1e-12)
+    # after the ramp: the motion itself, delayed by half the ramp (tau = t - start - RAMP_S / 2)
+    q_m, _, _ = joint_trajectories(skeleton, "gait", t - 1.0 - RAMP_S / 2, seed=2)
+    after = t > 1.0 + RAMP_S
+    np.testing.assert_allclose(q[after, 7:], q_m[after, 7:], atol=1e-12)
+    np.testing.assert_allclose(np.abs(np.sum(q[after, 3:7] * q_m[after, 3:7], axis=1)), 1.0)
+    np.testing.assert_allclose(q[after, :3], q_m[after, :3], atol=1e-12)
 
 
 def test_static_is_the_neutral_pose_at_rest(skeleton):

@@ -31,6 +31,7 @@ _EXPORTS = {
     "consistent_axis_signs": "joint_constraints",
     "correct_knee": "correction",
     "correct_knee_to_axes": "correction",
+    "carried_correction": "correction",
     "corrected_placement": "correction",
     "correction_priors": "priors",
     "correction_rotations": "aor",

@@ -12,7 +12,8 @@ each segment frame in itself, ``e = ê R_co`` (eq 13):
 
 A sensor ``s`` placed on its segment with rotation ``P`` (``R_s = ê P``) then has the placement
 ``P' = R_coᵀ P``, so the correction is a change of the IMU frames of the model and the IK is
-unchanged (:func:`corrected_placement`).
+unchanged (:func:`corrected_placement`). The foot's sensor, placed in the same calibration pose
+with the ankle at neutral, follows the tibia's correction (:func:`carried_correction`).
 
 What is reported (:class:`KneeCorrection`): the AoR the recording shows (eq 1-8, in the femoral and
 tibial frames), each correction as an axis and angle, and the hinge residual about the reference
@@ -32,8 +33,8 @@ from pipeline.calibration.aor import MIN_AXIS_Z, correction_rotations, knee_aor
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
-__all__ = ["KneeCorrection", "correct_knee", "correct_knee_to_axes", "corrected_placement",
-           "knee_hinge_residual"]
+__all__ = ["KneeCorrection", "carried_correction", "correct_knee", "correct_knee_to_axes",
+           "corrected_placement", "knee_hinge_residual"]
 
 #: The corrections :func:`correct_knee` computes from the orientations themselves (eq 1-8 first).
 _FROM_ORIENTATIONS = ("aor", "aor-ipopt")
@@ -192,6 +193,20 @@ def _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before) 
     after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
     return KneeCorrection(side, method, True, "", C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before,
                           after)  # fmt: skip
+
+
+def carried_correction(R_co: np.ndarray, R_child: np.ndarray) -> np.ndarray:
+    """The correction a child segment inherits from its parent's: ``R_cᵀ R_co R_c``.
+
+    ``R_child`` (``R_c``) is the child's frame in the parent's in the calibration pose. A sensor
+    placement read off that pose assumes ``e_child = e_parent R_c``; when the parent's frame
+    turns out to be ``e_parent R_co`` (eq 13) and the joint was at the pose's angle, the child's
+    frame is ``e_parent R_co R_c = e_child (R_cᵀ R_co R_c)``. The foot follows the tibia so: its
+    sensor was placed in the same standing pose with the ankle at neutral, as the hinge model's
+    own neutral pose turns the tibia and the foot together.
+    """
+    R_c = np.asarray(R_child, dtype=float)
+    return R_c.T @ np.asarray(R_co, dtype=float) @ R_c
 
 
 def corrected_placement(placement: np.ndarray, R_co: np.ndarray) -> np.ndarray:

@@ -159,8 +159,18 @@ def anatomical_right(
     min_excursion: float = 0.35,
     notes: list[str] | None = None,
     start_flexion: tuple[float, float] = (0.0, 0.0),
+    knee_axes: dict[str, np.ndarray] | None = None,
 ) -> np.ndarray:
     """The subject's right at t0 from hip (+right) and knee (-right) flexion (module doc, step 3).
+
+    ``knee_axes``: per side, the knee's flexion axis (pointing right) in the world of the
+    calibration pose at zero heading, e.g. the femur's orientation in that pose times the
+    reference AoR ``a_F`` (None: the model's right, a knee flexing about the femur's z). The knee
+    AoR is tilted from the femur's z (Wang 2023: ~10 deg in the femur's frontal plane, ~9 deg
+    in its transverse plane); seen from above, its tilt turns the knee's cue by the angle
+    between the horizontal part of that axis and the right, which is taken out here (standing,
+    the transverse tilt shows and cancels between two legs that both move; lying supine, the
+    frontal tilt shows, and a single moving leg would turn the heading by half of it).
 
     ``start_flexion``: the hip and knee flexion at t0 (rad): zero standing or supine, 90 deg
     seated. Each cue's line is the dominant axis of the relative rotation since t0; its sign is
@@ -185,7 +195,11 @@ def anatomical_right(
                     phi = _signed_excursion(rotations[ref], rotations[mov], sign * axis)
                     keep = _range_violation(start + sign * phi, joint)
                     flip = _range_violation(start - sign * phi, joint)  # about -sign * axis
-                    cues.append(-sign * axis if flip < keep else sign * axis)
+                    cue = -sign * axis if flip < keep else sign * axis
+                    if joint == "knee" and knee_axes is not None and side in knee_axes:
+                        k = np.asarray(knee_axes[side], dtype=float)
+                        cue = rot_y(-np.arctan2(k[0], k[2])) @ cue  # k's heading taken out
+                    cues.append(cue)
     if not cues:
         raise InputError(
             "the hips and knees barely move: the subject's right cannot be found from the motion; "
@@ -233,11 +247,13 @@ def pelvis_axis_right(rotations: dict[str, np.ndarray], spec: str) -> np.ndarray
 
 def subject_right(rotations: dict[str, np.ndarray], heading: str = "anatomical",
                   notes: list[str] | None = None,
-                  start_flexion: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:  # fmt: skip
+                  start_flexion: tuple[float, float] = (0.0, 0.0),
+                  knee_axes: dict[str, np.ndarray] | None = None) -> np.ndarray:  # fmt: skip
     """The subject's horizontal right at t0 by the ``heading`` method (one of :data:`HEADINGS`;
-    ``start_flexion`` as :func:`anatomical_right`)."""
+    ``start_flexion`` and ``knee_axes`` as :func:`anatomical_right`)."""
     if heading not in HEADINGS:
         raise InputError(f"expected one of {HEADINGS}, got {heading!r}", field="heading")
     if heading == "anatomical":
-        return anatomical_right(rotations, notes=notes, start_flexion=start_flexion)
+        return anatomical_right(rotations, notes=notes, start_flexion=start_flexion,
+                                knee_axes=knee_axes)  # fmt: skip
     return pelvis_axis_right(rotations, heading)

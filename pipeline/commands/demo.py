@@ -230,10 +230,10 @@ def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
         "is not the ISB zero (knee rotation / "
         f"adduction {knee_offset[2]:.1f} / {knee_offset[1]:.1f} deg: the hinge turns the tibia "
         "by the rotation that aligns the tibial AoR onto the femoral one); the AoR correction "
-        "removes most of it. The gap between the raw and the orientation column is the "
-        "filter's. Without magnetometers (6-D) each sensor's filter has a heading of its own, "
-        "which a calibration pose cannot align: knee flexion errors grow to 1.4-4.5 deg "
-        "(scripts/bench_raw_path.py, results/bench_raw_path.txt).",
+        "finds that turn and the foot sensor, placed with the ankle at neutral, follows the "
+        "tibia. The gap between the raw and the orientation column is the filter's. Without "
+        "magnetometers (6-D) each sensor's filter has a heading of its own, which the joints "
+        "align (--drift; scripts/bench_raw_path.py --no-mag, results/bench_raw_path.txt).",
         "",
         f"Total {total:.1f} s (scale {timings['scale']:.2f} s, simulate "
         f"{timings['simulate']:.2f} s, calibrate {timings['calibrate']:.2f} s, IK "

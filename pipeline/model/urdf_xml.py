@@ -12,7 +12,6 @@ model in Python (:func:`pipeline.model.builder.urdf_object`).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,11 +84,14 @@ def rpy_from_matrix(T: np.ndarray) -> tuple[float, float, float]:
     with trimesh's branch for ``cos(pitch) ~ 0`` and its signs (the identity gives
     ``(0.0, -0.0, 0.0)``)."""
     M = np.asarray(T, dtype=float)[:3, :3]
-    cy = math.sqrt(M[0, 0] * M[0, 0] + M[1, 0] * M[1, 0])
+    # NumPy's arctan2 and sqrt, as trimesh calls them: they may round differently from libm's
+    # (NumPy 2.4 does in the last digit), and the text is to be the same byte for byte
+    atan2 = np.arctan2
+    cy = np.sqrt(M[0, 0] * M[0, 0] + M[1, 0] * M[1, 0])
     if cy > _EPS:
-        return (math.atan2(M[2, 1], M[2, 2]), math.atan2(-M[2, 0], cy),
-                math.atan2(M[1, 0], M[0, 0]))  # fmt: skip
-    return math.atan2(-M[1, 2], M[1, 1]), math.atan2(-M[2, 0], cy), 0.0
+        return (float(atan2(M[2, 1], M[2, 2])), float(atan2(-M[2, 0], cy)),
+                float(atan2(M[1, 0], M[0, 0])))  # fmt: skip
+    return float(atan2(-M[1, 2], M[1, 1])), float(atan2(-M[2, 0], cy)), 0.0
 
 
 def _num(values) -> str:

@@ -45,6 +45,7 @@ from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import (
     KneeCorrection,
+    carried_correction,
     correct_knee,
     correct_knee_to_axes,
     corrected_placement,
@@ -265,6 +266,10 @@ def process_recording(
                                                            c.femur_rotation)  # fmt: skip
             placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
                                                            c.tibia_rotation)  # fmt: skip
+            if f"{side}_foot_imu" in placements:  # placed with the ankle at neutral
+                R_c = pose_model.relative_pose(f"{side}_foot", tib, pose_model.neutral())[:3, :3]
+                placements[f"{side}_foot_imu"] = corrected_placement(
+                    placements[f"{side}_foot_imu"], carried_correction(c.tibia_rotation, R_c))
 
     targets = {f"{seg}_imu": R for seg, R in rotations.items()}
     t0 = _time.perf_counter()
@@ -331,7 +336,10 @@ def _calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs, 
         at_pose = {seg: R[0] for seg, R in rotations.items()}
         cue = rotations
     start = (np.pi / 2, np.pi / 2) if opts.calibration_pose == "seated" else (0.0, 0.0)
-    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start)
+    pose0 = pose_rotations(pose_model, opts.calibration_pose, np.eye(3))  # zero heading
+    knee_axes = {s: pose0[f"{s}_femur"] @ geometry.for_side(s).knee_axis_femur for s in legs}
+    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start,
+                          knee_axes=knee_axes)  # fmt: skip
     H = heading_rotation(right)
     pose = pose_rotations(pose_model, opts.calibration_pose, H)
     if opts.segment_orientations:

@@ -74,6 +74,8 @@ _STILL_RIGHT: _Spec = {
 _STATIC = {"knee": 0.0}
 _STILL_LEFT = {"hip_Z": 90.0, "knee": 90.0}
 _SUPINE_LEFT = {"knee": 5.0}
+#: ``s, s', s'', tau`` of :func:`_ramp` on the trial's samples.
+_Clock = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 _BASE_HZ = {"gait": (0.85, 1.0), "supine_hip_flexion": (0.22, 0.28), "still_thigh": (0.45, 0.55)}
 
 
@@ -131,8 +133,42 @@ def _heading(amp_m: float, freq: float, phase: float, speed: float) -> Callable:
     return fn
 
 
-def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float, f: float):
-    """Pelvis ``R (N,3,3)``, body ``w``, ``dw``, world ``p``, ``dp``, ``ddp`` (N,3)."""
+def _follow(fn: Callable, clock: _Clock | None) -> Callable:
+    """``fn`` on the motion clock: ``g(tau)``, ``s g'``, ``s' g' + s^2 g''`` (None: ``fn``)."""
+    if clock is None:
+        return fn
+    s, ds, _, tau = clock
+
+    def warped(_t: np.ndarray):
+        g, dg, ddg = fn(tau)
+        return g, s * dg, ds * dg + s * s * ddg
+
+    return warped
+
+
+def _grow(fn: Callable, clock: _Clock | None) -> Callable:
+    """``fn`` grown from zero by the ramp: ``s g(tau)``, ``s' g + s^2 g'``,
+    ``s'' g + 3 s s' g' + s^3 g''`` (None: ``fn``)."""
+    if clock is None:
+        return fn
+    s, ds, dds, tau = clock
+
+    def warped(_t: np.ndarray):
+        g, dg, ddg = fn(tau)
+        return s * g, ds * g + s * s * dg, dds * g + 3 * s * ds * dg + s**3 * ddg
+
+    return warped
+
+
+def _pelvis(
+    motion: str, t: np.ndarray, rng: np.random.Generator, height: float, f: float,
+    clock: _Clock | None = None,
+):  # fmt: skip
+    """Pelvis ``R (N,3,3)``, body ``w``, ``dw``, world ``p``, ``dp``, ``ddp`` (N,3).
+
+    With a ``clock`` (:func:`standing_start`) the heading and the path follow the motion clock
+    and the pelvis's own rotation, obliquity and tilt grow from zero with the ramp: the subject
+    stands upright before walking."""
     n = t.size
     if motion != "gait":
         R0 = {"supine_hip_flexion": _SUPINE, "still_thigh": _STANDING}.get(motion, _STANDING)
@@ -145,11 +181,11 @@ def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float,
     R, w, dw = chain_kinematics(
         t,
         [
-            (_Z, _heading(weave, fw, ph[0], speed)),
+            (_Z, _follow(_heading(weave, fw, ph[0], speed), clock)),
             _STANDING,
-            (_Y, Sinusoids(0.0, [np.deg2rad(5.0)], [f], ph[1:2])),  # pelvis rotation (yaw)
-            (_X, Sinusoids(0.0, [np.deg2rad(4.0)], [f], ph[2:3])),  # obliquity
-            (_Z, Sinusoids(np.deg2rad(3.0), [np.deg2rad(2.0)], [2 * f], ph[3:4])),  # tilt
+            (_Y, _grow(Sinusoids(0.0, [np.deg2rad(5.0)], [f], ph[1:2]), clock)),  # rotation
+            (_X, _grow(Sinusoids(0.0, [np.deg2rad(4.0)], [f], ph[2:3]), clock)),  # obliquity
+            (_Z, _grow(Sinusoids(np.deg2rad(3.0), [np.deg2rad(2.0)], [2 * f], ph[3:4]), clock)),
         ],
     )
     xyz = [
@@ -157,7 +193,7 @@ def _pelvis(motion: str, t: np.ndarray, rng: np.random.Generator, height: float,
         Sinusoids(0.0, [weave, 0.02], [fw, f], [ph[0], ph[5]]),
         Sinusoids(height, [0.02], [2 * f], ph[3:4]),
     ]
-    p, dp, ddp = (np.stack([c(t)[k] for c in xyz], axis=1) for k in range(3))
+    p, dp, ddp = (np.stack([_follow(c, clock)(t)[k] for c in xyz], axis=1) for k in range(3))
     return R, w, dw, p, dp, ddp
 
 
@@ -176,6 +212,13 @@ def joint_trajectories(
     Free-flyer: ``q[:3] = p``, ``q[3:7]`` = quaternion (x, y, z, w) of ``R``; ``v[:3] = R^T p'``,
     ``v[3:6] = w`` (body); ``a[:3] = R^T p'' - w x v[:3]``, ``a[3:6] = w'``.
     """
+    return _trajectories(skeleton, motion, time, seed, None)
+
+
+def _trajectories(
+    skeleton: Skeleton, motion: str, time: np.ndarray, seed: int | np.random.Generator,
+    clock: _Clock | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if skeleton.root != "freeflyer":
         raise InputError("expected a skeleton with root='freeflyer'", field="root")
     motion = motion_name(motion)
@@ -187,7 +230,7 @@ def joint_trajectories(
     a = np.zeros((t.size, model.nv))
     base = rng.uniform(*_BASE_HZ[motion]) if motion in _BASE_HZ else 1.0  # stride rate, Hz
     phase = rng.uniform(0, 2 * np.pi)
-    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton), base)
+    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton), base, clock)
     vl = np.einsum("nji,nj->ni", R, dp)
     q[:, :3], q[:, 3:7] = p, quat_xyzw_from_matrix(R)
     v[:, :3], v[:, 3:6] = vl, w
@@ -199,7 +242,7 @@ def joint_trajectories(
                 continue
             j = model.joints[model.getJointId(name)]
             fn = fns.get(name[len(side) + 1 :], Sinusoids(0.0))
-            q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v] = fn(t)
+            q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v] = _grow(fn, clock)(t)
     return q, v, a
 
 
@@ -224,22 +267,16 @@ def standing_start(
     seed: int | np.random.Generator = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``q, v, a`` of ``motion`` preceded by ``standing_s`` s still in the neutral pose (the
-    joints at zero, the pelvis as at the motion's start), then a :data:`RAMP_S` s transition.
+    joints at zero, the pelvis upright at the motion's starting place and heading), then a
+    :data:`RAMP_S` s transition.
 
     Exact: with the ramp ``s(t)`` and the motion clock ``tau(t) = int s`` (:func:`_ramp`), the
-    root follows the motion at ``tau`` (``v = s v_m(tau)``, ``a = s' v_m + s^2 a_m``; the
-    free-flyer's body-frame velocity and acceleration scale so) and each joint is ``s g(tau)``
-    (``v = s' g + s^2 g'``, ``a = s'' g + 3 s s' g' + s^3 g''``).
+    path and heading follow the motion at ``tau`` (``x' = s x_m'(tau)``,
+    ``x'' = s' x_m' + s^2 x_m''``) and each joint angle and the pelvis's own rotation,
+    obliquity and tilt are ``s g(tau)`` (``g' -> s' g + s^2 g'``,
+    ``g'' -> s'' g + 3 s s' g' + s^3 g''``); the pelvis chain composes them exactly
+    (:func:`pipeline.simulate.chain.chain_kinematics`). Standing upright, not leaning with the
+    gait's pelvis tilt: the posture a standing calibration asks of the subject.
     """  # fmt: skip
     t = np.asarray(time, dtype=float)
-    s, ds, dds, tau = _ramp(t, float(standing_s))
-    q, v, a = joint_trajectories(skeleton, motion, tau, seed)
-    q, v, a = q.copy(), v.copy(), a.copy()
-    v_root, a_root = v[:, :6], a[:, :6]
-    a[:, :6] = ds[:, None] * v_root + (s**2)[:, None] * a_root
-    v[:, :6] = s[:, None] * v_root
-    g, dg, ddg = q[:, 7:].copy(), v[:, 6:].copy(), a[:, 6:].copy()
-    q[:, 7:] = s[:, None] * g
-    v[:, 6:] = ds[:, None] * g + (s**2)[:, None] * dg
-    a[:, 6:] = dds[:, None] * g + (3 * s * ds)[:, None] * dg + (s**3)[:, None] * ddg
-    return q, v, a
+    return _trajectories(skeleton, motion, t, seed, _ramp(t, float(standing_s)))
