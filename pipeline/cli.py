@@ -306,9 +306,9 @@ def main(argv: list[str] | None = None) -> int:
     import signal
 
     if argv is None and args.func in _RECORDING_COMMANDS:
-        from pipeline.viz.recording import pyarrow_without_pandas
+        from pipeline.viz.recording import avoid_pandas_when_recording
 
-        pyarrow_without_pandas()  # saves each recording command ~0.5 s (see its docstring)
+        avoid_pandas_when_recording()  # saves each recording ~0.5 s (see its docstring)
 
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:

@@ -80,3 +80,80 @@ def test_an_unmatched_sensor_name_is_refused_before_anything_is_written(tmp_path
     err = capsys.readouterr().err
     assert "field sensors.pelvis_imu" in err and "hip_sensor" in err and WALK.name in err
     assert not any(out.glob("*")) if out.exists() else True
+
+
+def _chunk_columns(path: Path) -> dict[str, list]:
+    """Per entity, each chunk's columns (the row ids, new on every run, left out)."""
+    from rerun.chunk import RrdReader
+
+    out: dict[str, list] = {}
+    for c in RrdReader(path).stream().to_chunks():
+        if c.entity_path.startswith("/__"):
+            continue
+        rb = c.to_record_batch()
+        out.setdefault(c.entity_path, []).append(
+            {n: rb.column(n) for n in rb.schema.names if "RowId" not in n})
+    return out
+
+
+@pytest.mark.dataset
+def test_the_recording_written_by_the_child_is_the_one_written_in_process(tmp_path, monkeypatch):
+    """A short recording is logged by a forked child (pipeline.viz.background) while the other
+    files are written; the .rrd holds exactly what logging in the process writes, and the child
+    is gone when the command returns."""
+    import os
+    import sys
+
+    import pipeline.commands.ik as ik
+    from pipeline.model.anthropometry import Measures
+    from pipeline.viz.background import BackgroundRecording
+
+    sto = OPENSIM / "quaternions_4_ik.sto"
+    if not sto.exists():
+        pytest.skip("../shared/data/opensim not present")
+    if not hasattr(os, "fork") or sys.platform == "darwin":
+        pytest.skip("forks only where fork is safe")
+    pids = []
+    real_start = BackgroundRecording.start
+
+    def start(**kw):
+        worker = real_start(**kw)
+        pids.append(worker.pid)
+        return worker
+
+    monkeypatch.setattr(BackgroundRecording, "start", staticmethod(start))
+    ik.run_ik(sto, Measures("m", 1.8), tmp_path / "child")
+    assert len(pids) == 1
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pids[0], os.WNOHANG)  # reaped already
+    monkeypatch.setattr(ik, "BACKGROUND_FRAMES", 0)
+    ik.run_ik(sto, Measures("m", 1.8), tmp_path / "process")
+    assert len(pids) == 1  # no child this time
+    a = _chunk_columns(tmp_path / "child" / "quaternions_4_ik.rrd")
+    b = _chunk_columns(tmp_path / "process" / "quaternions_4_ik.rrd")
+    assert sorted(a) == sorted(b) and len(a) > 20
+    for entity, chunks in a.items():
+        assert len(chunks) == len(b[entity])
+        for ca, cb in zip(chunks, b[entity], strict=True):
+            assert ca.keys() == cb.keys()
+            assert all(ca[n].equals(cb[n]) for n in ca), entity
+
+
+def _broken_recording(*args) -> None:  # module level: the child's job is pickled by name
+    raise ValueError("the viewer's format changed")
+
+
+def test_a_failing_recording_leaves_no_output(tmp_path, monkeypatch):
+    """The child's error reaches the caller and no file (nor temporary) is left."""
+    import pipeline.commands.ik as ik
+    from pipeline.model.anthropometry import Measures
+
+    sto = OPENSIM / "quaternions_4_ik.sto"
+    if not sto.exists():
+        pytest.skip("../shared/data/opensim not present")
+
+    monkeypatch.setattr(ik, "log_recording", _broken_recording)
+    out = tmp_path / "out"
+    with pytest.raises((RuntimeError, ValueError), match="format changed"):
+        ik.run_ik(sto, Measures("m", 1.8), out)
+    assert list(out.glob("*")) == []

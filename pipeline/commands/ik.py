@@ -132,29 +132,62 @@ def run_ik(
     run_opts = opts.replace(sensor_map={}) if folder else opts
     name = recording_name(orientations)
     output_dir(out_dir)
-    with output_set() as out:
-        run = process_recording(trial, measures, run_opts, static=static)
-        if run.flags and opts.strict:
-            raise QualityError(run.flags, file=orientations)
-        for flag in run.flags:
-            print(f"warning: {flag}", file=sys.stderr)
-        run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
-        write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
-        with out.open(out_dir / f"{name}_landmarks.csv") as fh:
-            write_landmarks_csv(fh, run)
-        if opts.rerun:
-            _log(run, out.path(out_dir / f"{name}.rrd"), name)
-        if opts.osim:
-            from pipeline.model.osim import osim_text
+    worker = None
+    if opts.rerun and trial.n_samples <= BACKGROUND_FRAMES:
+        from pipeline.viz.background import BackgroundRecording
 
-            with out.open(out_dir / f"{name}.osim") as fh:
-                fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
-                                   name=name))  # fmt: skip
-        summary = summary_text(orientations, run, measures)
-        with out.open(out_dir / f"{name}_summary.md") as fh:
-            fh.write(summary)
-        with out.open(out_dir / f"{name}_config.toml") as fh:
-            fh.write(_config(measures, opts, orientations, name))
+        worker = BackgroundRecording.start(warm=_warm_recording)
+    try:
+        with output_set() as out:
+            try:
+                summary = _outputs(out, out_dir, name, orientations, trial, static, measures,
+                                   opts, run_opts, worker)  # fmt: skip
+            except BaseException:
+                if worker is not None:
+                    worker.close()  # the child is gone before its temporary file is removed
+                raise
+    finally:
+        if worker is not None:
+            worker.close()
+    return summary
+
+
+#: Recordings up to this many frames are logged by a forked child
+#: (:mod:`pipeline.viz.background`), whose ~0.4 s import of rerun then overlaps the calibration
+#: and the IK; longer ones log in the process, where that import is a small part of the time and
+#: one process bounds the memory (``results/bench_long.txt``).
+BACKGROUND_FRAMES = 20_000
+
+
+def _outputs(out, out_dir, name, orientations, trial, static, measures, opts, run_opts, worker):
+    run = process_recording(trial, measures, run_opts, static=static)
+    if run.flags and opts.strict:
+        raise QualityError(run.flags, file=orientations)
+    for flag in run.flags:
+        print(f"warning: {flag}", file=sys.stderr)
+    if opts.rerun:  # first: the child writes it while the other files are written
+        job = _log_args(run, out.path(out_dir / f"{name}.rrd"), name)
+        if worker is None:
+            log_recording(*job)
+        else:
+            worker.submit(log_recording, *job)
+    run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
+    write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
+    with out.open(out_dir / f"{name}_landmarks.csv") as fh:
+        write_landmarks_csv(fh, run)
+    if opts.osim:
+        from pipeline.model.osim import osim_text
+
+        with out.open(out_dir / f"{name}.osim") as fh:
+            fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
+                               name=name))  # fmt: skip
+    summary = summary_text(orientations, run, measures)
+    with out.open(out_dir / f"{name}_summary.md") as fh:
+        fh.write(summary)
+    with out.open(out_dir / f"{name}_config.toml") as fh:
+        fh.write(_config(measures, opts, orientations, name))
+    if worker is not None:
+        worker.wait()
     return summary
 
 
@@ -176,12 +209,38 @@ def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
         write_array_csv(fh, columns, data, digits=6, header=start == 0)
 
 
-def _log(run: IKRun, path: Path, name: str) -> None:
+def _warm_recording() -> None:
+    """What the recording's first call would otherwise do on the critical path, done in the
+    child while the parent works: rerun's import, pyarrow's pandas check (our own child: nothing
+    else runs in it), the shipped meshes read (cached), and a blueprint converted once."""
+    from pipeline.viz.recording import pyarrow_without_pandas
+
+    pyarrow_without_pandas()
+    from pipeline.model.geometry import SubjectGeometry
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.viz.layout import default_blueprint
+    from pipeline.viz.model import segment_meshes
+
+    segment_meshes(Skeleton.build(SubjectGeometry.default()))
+    default_blueprint([("knee", "/plots/right_knee")], "y", (np.ones(3), np.zeros(3)), 0.0)
+
+
+def _log_args(run: IKRun, path: Path, name: str) -> tuple:
+    angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
+    return (str(path), run.time - run.time[0], run.skeleton.urdf, run.skeleton.root, run.q, name,
+            list(run.landmarks), angles)  # fmt: skip
+
+
+def log_recording(path: str, time: np.ndarray, urdf: str, root: str, q: np.ndarray, name: str,
+                  landmarks: list[str], angles: list[str]) -> None:  # fmt: skip
+    """The run's ``.rrd``: the model rebuilt from its URDF text (so that the job pickles, for
+    :mod:`pipeline.viz.background`) and :func:`pipeline.viz.model.log_motion`."""
+    from pipeline.model.skeleton import Skeleton
     from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
 
-    angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
-    log_motion(path, run.time - run.time[0], run.skeleton, run.q, recording_name=name,
-               landmarks=list(run.landmarks) or False, joint_angles=angles)  # fmt: skip
+    skeleton = Skeleton.from_urdf_text(urdf, root)
+    log_motion(Path(path), time, skeleton, q, recording_name=name, landmarks=landmarks or False,
+               joint_angles=angles)  # fmt: skip
 
 
 def summary_text(source: Path, run: IKRun, measures: Measures) -> str:

@@ -1,0 +1,142 @@
+"""A rerun recording written by a forked child, so that importing rerun overlaps the work.
+
+Importing ``rerun`` and its blueprint module takes ~0.4 s, the largest single part of a short
+``pipeline ik`` (the IK of a 1,400-frame trial takes ~0.1 s). :class:`BackgroundRecording` forks
+the command right after it has read its input: the child imports rerun on the machine's second
+core while the parent calibrates, solves and writes; the parent then hands it the job
+(:meth:`~BackgroundRecording.submit`: a module-level function and its arguments, pickled through
+a pipe) and waits for it (:meth:`~BackgroundRecording.wait`) before its outputs are committed.
+The recording is the one the same function writes in the process itself: only where the work
+runs differs.
+
+Where ``os.fork`` is missing or unsafe (Windows; macOS, whose system libraries do not survive
+``fork``; a process running other Python threads, such as a notebook kernel or a Dask worker, whose
+locks the child could inherit held) :meth:`BackgroundRecording.start` returns None and the caller
+logs in its own process.
+The child never returns into the caller's code: it ends by ``os._exit``, on success, on error
+(its message is sent back and raised in the parent as :class:`RuntimeError`) and when the parent
+goes away (the pipe's end of file). :meth:`~BackgroundRecording.close` kills and reaps a child
+that is still running: call it before removing the files the child may be writing.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import sys
+import threading
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["BackgroundRecording"]
+
+
+def _read_all(fd: int) -> bytes:
+    chunks = []
+    while True:
+        b = os.read(fd, 1 << 20)
+        if not b:
+            return b"".join(chunks)
+        chunks.append(b)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view) :]
+
+
+class BackgroundRecording:
+    """A forked child that imports rerun now and runs one logging job later (module doc)."""
+
+    def __init__(self, pid: int, job_fd: int, status_fd: int) -> None:
+        self.pid, self._job_fd, self._status_fd = pid, job_fd, status_fd
+        self._done = False
+        self._feeder: threading.Thread | None = None
+
+    @classmethod
+    def start(cls, warm: Callable[[], Any] | None = None) -> BackgroundRecording | None:
+        """Fork the child (None where fork is unavailable); it calls ``warm`` (e.g. the imports
+        the job needs) while the parent goes on."""
+        if not hasattr(os, "fork") or sys.platform == "darwin" or threading.active_count() > 1:
+            return None
+        job_r, job_w = os.pipe()
+        status_r, status_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: never returns
+            code = 1
+            try:
+                os.close(job_w)
+                os.close(status_r)
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+                signal.signal(signal.SIGINT, signal.SIG_DFL)
+                if warm is not None:
+                    warm()
+                data = _read_all(job_r)
+                if data:  # empty: the parent closed the pipe without a job (or went away)
+                    fn, args, kwargs = pickle.loads(data)
+                    fn(*args, **kwargs)
+                    _write_all(status_w, b"ok")
+                code = 0
+            except BaseException as exc:  # noqa: BLE001 - reported to the parent
+                try:
+                    _write_all(status_w, f"{type(exc).__name__}: {exc}".encode())
+                except BaseException:  # noqa: BLE001, S110 - nothing left to tell
+                    pass
+            finally:
+                os._exit(code)
+        os.close(job_r)
+        os.close(status_w)
+        return cls(pid, job_w, status_r)
+
+    def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
+        """Hand the child its job: ``fn(*args, **kwargs)`` (``fn`` importable by name). The
+        pickle is fed to the pipe by a thread: the child reads it only once warm, and a pipe
+        holds 64 KiB, so writing it here would hold the caller up until then."""
+        data = pickle.dumps((fn, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL)
+        fd, self._job_fd = self._job_fd, -1
+
+        def feed() -> None:
+            try:
+                _write_all(fd, data)
+            except OSError:  # the child is gone (killed): wait() or close() says so
+                pass
+            finally:
+                os.close(fd)
+
+        self._feeder = threading.Thread(target=feed, name="recording-job", daemon=True)
+        self._feeder.start()
+
+    def wait(self) -> None:
+        """Wait for the job; raise :class:`RuntimeError` with the child's error if it failed."""
+        if self._job_fd >= 0:  # no job was submitted: let the child end
+            os.close(self._job_fd)
+            self._job_fd = -1
+        status = _read_all(self._status_fd)
+        if self._feeder is not None:
+            self._feeder.join()
+        os.close(self._status_fd)
+        self._status_fd = -1
+        _, code = os.waitpid(self.pid, 0)
+        self._done = True
+        if status != b"ok" and (status or code != 0):
+            raise RuntimeError(f"the rerun recording failed: {status.decode() or code}")
+
+    def close(self) -> None:
+        """Kill and reap the child if it is still running; close the pipes (idempotent)."""
+        for name in ("_job_fd", "_status_fd"):
+            fd = getattr(self, name)
+            if fd >= 0:
+                os.close(fd)
+                setattr(self, name, -1)
+        if not self._done:
+            try:
+                os.kill(self.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            os.waitpid(self.pid, 0)
+            self._done = True
+        if self._feeder is not None:
+            self._feeder.join()  # the pipe broke with the child
+            self._feeder = None

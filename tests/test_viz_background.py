@@ -1,0 +1,79 @@
+"""pipeline.viz.background: a job run by a forked child, its errors raised in the parent, a
+child still running killed and reaped, and nothing forked where it is unsafe."""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from pipeline.viz.background import BackgroundRecording
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "fork") or sys.platform == "darwin",
+                                reason="forks only where fork is safe")  # fmt: skip
+
+
+def _write(path: str, text: str) -> None:
+    Path(path).write_text(f"{text} from {os.getpid()}")
+
+
+def _fail(message: str) -> None:
+    raise ValueError(message)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def test_the_job_runs_in_the_child(tmp_path):
+    warmed = tmp_path / "warm"
+    worker = BackgroundRecording.start(warm=lambda: warmed.write_text("x"))
+    assert worker is not None and worker.pid != os.getpid()
+    worker.submit(_write, str(tmp_path / "out.txt"), "written")
+    worker.wait()
+    assert (tmp_path / "out.txt").read_text() == f"written from {worker.pid}"
+    assert warmed.read_text() == "x"
+    worker.close()  # after wait: nothing left to do
+    assert not _alive(worker.pid)
+
+
+def test_the_childs_error_is_raised_in_the_parent(tmp_path):
+    worker = BackgroundRecording.start()
+    worker.submit(_fail, "no such entity")
+    with pytest.raises(RuntimeError, match="ValueError: no such entity"):
+        worker.wait()
+    assert not _alive(worker.pid)
+
+
+def test_without_a_job_the_child_just_ends():
+    worker = BackgroundRecording.start()
+    worker.wait()
+    assert not _alive(worker.pid)
+
+
+def test_close_kills_and_reaps_a_running_child(tmp_path):
+    worker = BackgroundRecording.start(warm=lambda: time.sleep(60))
+    t0 = time.monotonic()
+    worker.close()
+    assert time.monotonic() - t0 < 10
+    assert not _alive(worker.pid)  # reaped: no zombie either
+    worker.close()  # idempotent
+
+
+def test_nothing_is_forked_while_other_threads_run():
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        assert BackgroundRecording.start() is None
+    finally:
+        stop.set()
+        t.join()
