@@ -306,7 +306,7 @@ def main(argv: list[str] | None = None) -> int:
     import signal
 
     if argv is None and args.func in _RECORDING_COMMANDS:
-        from pipeline.viz.recording import avoid_pandas_when_recording
+        from pipeline.viz.arrow import avoid_pandas_when_recording
 
         avoid_pandas_when_recording()  # saves each recording ~0.5 s (see its docstring)
 

@@ -17,6 +17,15 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "fork") or sys.platform == "darw
                                 reason="forks only where fork is safe")  # fmt: skip
 
 
+@pytest.fixture(autouse=True)
+def _single_threaded(monkeypatch, request):
+    """The test suite runs threads of its own (Dask's, earlier tests'), which start() refuses to
+    fork beside; these jobs take no lock, so the tests pretend to be alone, except the one that
+    checks the refusal."""
+    if request.node.name != "test_nothing_is_forked_while_other_threads_run":
+        monkeypatch.setattr(threading, "active_count", lambda: 1)
+
+
 def _write(path: str, text: str) -> None:
     Path(path).write_text(f"{text} from {os.getpid()}")
 

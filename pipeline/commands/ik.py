@@ -213,7 +213,7 @@ def _warm_recording() -> None:
     """What the recording's first call would otherwise do on the critical path, done in the
     child while the parent works: rerun's import, pyarrow's pandas check (our own child: nothing
     else runs in it), the shipped meshes read (cached), and a blueprint converted once."""
-    from pipeline.viz.recording import pyarrow_without_pandas
+    from pipeline.viz.arrow import pyarrow_without_pandas
 
     pyarrow_without_pandas()
     from pipeline.model.geometry import SubjectGeometry

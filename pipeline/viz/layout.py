@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.viz.arrow import pandas_shortcut_if_asked
 
 __all__ = ["default_blueprint", "up_axis_index"]
 
@@ -41,8 +42,6 @@ def default_blueprint(
     (default: the plane through the origin). The selection panel starts collapsed.
     Returns a ``rerun.blueprint.Blueprint``.
     """
-    from pipeline.viz.recording import pandas_shortcut_if_asked
-
     pandas_shortcut_if_asked()  # before rerun converts the blueprint's first list
     import rerun as rr  # deferred: importing rerun costs ~0.3 s
     import rerun.blueprint as rrb
