@@ -185,9 +185,9 @@ def process_recording(
     if unused:
         notes.append(f"segments whose sensor observes no joint, ignored: {unused}")
     rotations = {s: R for s, R in rotations.items() if s == "pelvis" or _side(s) in sensors.legs}
-    if sensors.pelvis:
+    if sensors.pelvis and not filtered:  # the filter's world is vertical by construction
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
-    else:
+    elif not sensors.pelvis:
         notes.append("no pelvis sensor: hip and pelvis angles are not observed; landmarks are "
                      "relative to each leg's hip centre")  # fmt: skip
     if opts.heading != "anatomical" and not sensors.pelvis:
