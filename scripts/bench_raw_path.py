@@ -20,8 +20,10 @@ whole ``process_recording`` call (filtering included). The simulated subject sta
 the joints at zero; its knee is a hinge about the population AoR, whose straight pose turns the
 tibia and foot by ~12 deg from the femur's frame: the default free knee assumes them aligned, the
 AoR correction (eq 9-12) finds the tibia's turn and the foot follows it
-(:func:`pipeline.calibration.correction.carried_correction`). The "orientations" rows are the floor
-the calibration leaves with exact sensor orientations (about 1-3 mm).
+(:func:`pipeline.calibration.correction.carried_correction`). In ``supine_hip_flexion`` the left
+leg lies still (its knee moves 5 deg): its AoR cannot be seen and it is corrected as the reference
+population's knee (:func:`pipeline.calibration.correction.population_correction`). The
+"orientations" rows are the floor the calibration leaves with exact sensor orientations (1-3 mm).
 
 Usage: ``python scripts/bench_raw_path.py [--seeds 0 1 2] [--motions gait] [--no-mag]
 [--correction aor|functional]``

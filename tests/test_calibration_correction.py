@@ -4,10 +4,13 @@ import numpy as np
 import pytest
 
 from pipeline.calibration.correction import (
+    MIN_EXCURSION,
     carried_correction,
     correct_knee,
     corrected_placement,
+    knee_excursion,
     knee_hinge_residual,
+    population_correction,
 )
 from pipeline.errors import InputError
 from pipeline.rotations import exp3, normalize, rot_x, rot_y, rot_z
@@ -80,6 +83,41 @@ def test_corrected_placement_keeps_the_sensor_where_it_is():
     P2 = corrected_placement(P, C)
     np.testing.assert_allclose((e_hat @ C) @ P2[:3, :3], e_hat @ P[:3, :3], atol=1e-12)
     np.testing.assert_allclose(P2[:3, 3], P[:3, 3])
+
+
+def test_knee_excursion_and_a_knee_that_moves_too_little():
+    """The excursion is the largest shank-in-thigh rotation between two samples (here the knee
+    swings 10 -> 40 -> 25 deg about a fixed axis: 30 deg); a knee moving 5 deg defines no axis
+    for eq 1-8 (MIN_EXCURSION 10 deg) and is left to the caller, with the reason."""
+    a = normalize(np.array([0.1, -0.2, 1.0]))
+    flex = np.radians(np.concatenate([np.linspace(10, 40, 100), np.linspace(40, 25, 50)]))
+    F = np.repeat(rot_x(0.3)[None], flex.size, axis=0)
+    T = F @ exp3(-flex[:, None] * a)
+    np.testing.assert_allclose(knee_excursion(F, T), np.radians(30.0), atol=1e-9)
+    small = F @ exp3(-np.radians(np.linspace(0, 5, 150))[:, None] * a)
+    c = correct_knee(F, small, a, a)
+    assert np.degrees(MIN_EXCURSION) == 10.0
+    assert not c.applied and "moves 5 deg" in c.reason and "10 deg" in c.reason
+
+
+def test_population_correction_by_hand():
+    """No AoR seen: the free knee's pose (tibia aligned with the femur) gets the turn that aligns
+    a_T onto a_F, as eq 10-12 would for a knee of the population; the hinge model's own pose
+    (that turn already in it) gets none; the femur is never turned."""
+    from pipeline.rotations import rotation_aligning
+
+    a_F, a_T = normalize(np.array([-0.15, -0.18, 0.97])), normalize(np.array([0.0, -0.04, 1.0]))
+    F = np.repeat(np.eye(3)[None], 50, axis=0)
+    free = population_correction(F, F, a_F, a_T, np.eye(3), reason="still")
+    R0 = rotation_aligning(a_T, a_F)
+    np.testing.assert_allclose(free.tibia_rotation, R0, atol=1e-12)
+    np.testing.assert_allclose(free.femur_rotation, np.eye(3), atol=1e-15)
+    assert free.applied and free.method == "population" and free.reason == "still"
+    assert free.measured_femur_axis is None and free.measured_tibia_axis is None
+    hinge = population_correction(F, F @ R0, a_F, a_T, R0, reason="still")
+    np.testing.assert_allclose(hinge.tibia_rotation, np.eye(3), atol=1e-12)
+    # after it the reference axis is carried alike by both (a knee of the population)
+    assert np.degrees(free.hinge_residual_after) < 1e-6
 
 
 def test_carried_correction_by_hand():

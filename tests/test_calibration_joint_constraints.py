@@ -138,3 +138,27 @@ def test_axis_signs_made_consistent():
         np.testing.assert_allclose([j1, j2], [tr.axis_1, tr.axis_2])
         j1, j2 = consistent_axis_signs(-tr.axis_1, tr.axis_2, reference_1=tr.axis_1, **kw)
         np.testing.assert_allclose([j1, j2], [tr.axis_1, tr.axis_2])
+
+
+def test_savgol_derivative_is_scipys_and_exact_on_cubics():
+    """The hand-written Savitzky-Golay derivative (scipy.signal's import costs a command ~1 s)
+    returns what scipy.signal.savgol_filter(..., deriv=1) does, edges included, and is exact on
+    a cubic (a degree-3 fit reproduces it, so its derivative is exact at every sample)."""
+    from scipy.signal import savgol_filter
+
+    from pipeline.calibration.joint_constraints import savgol_derivative
+
+    rng = np.random.default_rng(0)
+    for n, window, order in ((200, 11, 3), (50, 7, 2), (11, 11, 3), (300, 21, 4)):
+        y = rng.normal(size=(n, 3)).cumsum(axis=0)
+        ours = savgol_derivative(y, window, order, 0.01)
+        theirs = savgol_filter(y, window, order, deriv=1, delta=0.01, axis=0)
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
+    t = np.arange(40) * 0.01
+    cubic = np.stack([2 - t + 3 * t**2 - 5 * t**3, t**3], axis=1)
+    slope = np.stack([-1 + 6 * t - 15 * t**2, 3 * t**2], axis=1)
+    np.testing.assert_allclose(savgol_derivative(cubic, 9, 3, 0.01), slope, atol=1e-9)
+    with pytest.raises(InputError, match="odd window"):
+        savgol_derivative(cubic, 8, 3, 0.01)
+    with pytest.raises(InputError, match="odd window"):
+        savgol_derivative(cubic[:5], 9, 3, 0.01)

@@ -25,7 +25,7 @@ result says so (``applied = False`` and ``reason``) instead of raising.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,11 +33,34 @@ from pipeline.calibration.aor import MIN_AXIS_Z, correction_rotations, knee_aor
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
-__all__ = ["KneeCorrection", "carried_correction", "correct_knee", "correct_knee_to_axes",
-           "corrected_placement", "knee_hinge_residual"]
+__all__ = ["MIN_EXCURSION", "KneeCorrection", "carried_correction", "correct_knee",
+           "correct_knee_to_axes", "corrected_placement", "knee_excursion", "knee_hinge_residual",
+           "population_correction"]
 
 #: The corrections :func:`correct_knee` computes from the orientations themselves (eq 1-8 first).
 _FROM_ORIENTATIONS = ("aor", "aor-ipopt")
+#: Least knee excursion (rad, largest rotation between two samples of the shank relative to the
+#: thigh) from which eq 1-8 define an axis: below it the axis error is the orientation error
+#: divided by the excursion (a knee held still by a leg at rest moved 5 deg in a simulated
+#: supine trial, and its axis came out 18 deg off). Gait and the Wang 2023 trials move 60-90 deg.
+MIN_EXCURSION = np.radians(10.0)
+
+
+def knee_excursion(femur_R: np.ndarray, tibia_R: np.ndarray) -> float:
+    """The largest rotation (rad) of the shank relative to the thigh between two samples,
+    approximated from the sample farthest from the first one (a lower bound of at least half of
+    it). Non-finite samples are ignored."""
+    rel = np.einsum("nji,njk->nik", femur_R, tibia_R)
+    rel = rel[np.all(np.isfinite(rel), axis=(1, 2))]
+    if len(rel) < 2:
+        return 0.0
+
+    def angles_from(k: int) -> np.ndarray:
+        tr = np.einsum("nij,ij->n", rel, rel[k])  # tr(rel_k^T rel_n)
+        return np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
+
+    far = int(np.argmax(angles_from(0)))
+    return float(angles_from(far).max())
 
 
 @dataclass(frozen=True)
@@ -133,9 +156,13 @@ def correct_knee(
     a_T = np.asarray(reference_tibia_axis, dtype=float)
     before = knee_hinge_residual(F, T, a_F, a_T)
     try:
+        excursion = knee_excursion(F, T)
+        if excursion < MIN_EXCURSION:
+            raise InputError(f"the knee moves {np.degrees(excursion):.0f} deg, less than the "
+                             f"{np.degrees(MIN_EXCURSION):.0f} deg that define an axis")
         measured = knee_aor(F, T)
     except InputError as exc:
-        reason = f"the knee AoR could not be estimated: {exc}"
+        reason = f"the knee AoR could not be estimated: {exc.message}"
         I3 = np.eye(3)
         return KneeCorrection(side, method, False, reason, I3, I3, None, None, a_F, a_T, 0,
                               before, before)  # fmt: skip
@@ -186,6 +213,31 @@ def correct_knee_to_axes(
                               before)  # fmt: skip
     C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)  # as eq 10-12
     return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0, before)
+
+
+def population_correction(
+    femur_R: np.ndarray, tibia_R: np.ndarray, reference_femur_axis: np.ndarray,
+    reference_tibia_axis: np.ndarray, pose_tibia_in_femur: np.ndarray, *, side: str = "right",
+    reason: str,
+) -> KneeCorrection:
+    """A knee whose AoR the recording cannot show (``reason``): corrected as a knee of the
+    reference population would be, so that a still leg's tibia is turned as a moving one's.
+
+    In the calibration pose the tibia's frame is ``R_ft`` (``pose_tibia_in_femur``) in the
+    femur's; a knee turning about the reference axis ``a_F`` would show ``v_F = a_F`` and
+    ``v_T = R_ftᵀ a_F``, and eq 10-12 then give ``R_co_femur = I`` and ``R_co_tibia`` the
+    smallest rotation with ``R_co v_T = ...`` as :func:`correction_rotations`: for a free knee
+    (``R_ft = I``) the turn that aligns ``a_T`` onto ``a_F`` (~12 deg), for the hinge model's own
+    pose (``R_ft`` that turn already) none. ``method`` is ``'population'``; no axis was seen.
+    """
+    a_F = np.asarray(reference_femur_axis, dtype=float)
+    a_T = np.asarray(reference_tibia_axis, dtype=float)
+    v_T = np.asarray(pose_tibia_in_femur, dtype=float).T @ a_F
+    F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
+    before = knee_hinge_residual(F, T, a_F, a_T)
+    c = _applied(side, "population", F, T, np.eye(3), rotation_aligning(a_T, v_T), a_F, v_T, a_F,
+                 a_T, 0, before)  # fmt: skip
+    return replace(c, reason=reason, measured_femur_axis=None, measured_tibia_axis=None)
 
 
 def _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before) -> KneeCorrection:

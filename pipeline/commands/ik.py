@@ -328,6 +328,8 @@ def _correction_table(run: IKRun) -> list[str]:
         seen = f"{vec(c.measured_femur_axis)}; {vec(c.measured_tibia_axis)}"
         if c.method == "functional":
             seen += " (functional calibration)"
+        elif c.method == "population":
+            seen = f"not seen ({c.reason}): corrected as the reference population's knee"
         ref = f"{vec(c.reference_femur_axis)}; {vec(c.reference_tibia_axis)}"
         if c.applied:
             fem, tib = rot(c.femur_axis_angle), rot(c.tibia_axis_angle)

@@ -49,6 +49,7 @@ from pipeline.calibration.correction import (
     correct_knee,
     correct_knee_to_axes,
     corrected_placement,
+    population_correction,
 )
 from pipeline.calibration.drift import HeadingDrift
 from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
@@ -235,8 +236,11 @@ def process_recording(
             S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
             S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
             g = geometry.for_side(side)
-            c, method = None, opts.correction
-            if method == "functional":
+            c, method, unseen = None, opts.correction, None
+            if uses_drift_correction(opts.drift, filtered) and f"{side}_knee" not in drifts:
+                unseen = ("its thigh and shank sensors' headings were not aligned: the AoR seen "
+                          "across two worlds is turned by their heading difference")
+            elif method == "functional":
                 if side in functional:
                     # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
                     # show (eq 1-8): the sensor placement is right, but the filter's heading
@@ -255,13 +259,16 @@ def process_recording(
                 if c is None or not c.applied:
                     notes.append(f"{side} knee: {why}; corrected by eq 1-8 ('aor') instead")
                     c, method = None, "aor"
-            if c is None:
+            if c is None and unseen is None:
                 c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
                                  method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
+            if unseen is not None or not c.applied:  # as the reference population's knee
+                R_ft = pose_model.relative_pose(tib, fem, pose_model.neutral())[:3, :3]
+                c = population_correction(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia, R_ft,
+                                          side=side, reason=unseen or c.reason)  # fmt: skip
+                notes.append(f"{side} knee: its AoR is not seen ({c.reason}); corrected as the "
+                             "reference population's knee")  # fmt: skip
             corrections[side] = c
-            if not c.applied:
-                notes.append(f"{side} knee not corrected: {c.reason}")
-                continue
             placements[f"{fem}_imu"] = corrected_placement(placements[f"{fem}_imu"],
                                                            c.femur_rotation)  # fmt: skip
             placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
