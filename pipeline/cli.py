@@ -230,7 +230,7 @@ def _cmd_ik(args) -> int:
     flags.update({k: str(v) for k, v in flags.items() if isinstance(v, Path)})
     sto, out, measures, options = resolve_ik(args.config, flags,
                                              _pairs(args.sensor_map, "--sensor-map"))  # fmt: skip
-    summary = run_ik(sto, measures, out, options)
+    summary = run_ik(sto, measures, out, options, recorder=args.recorder)
     print(summary)
     return 0
 
@@ -301,20 +301,44 @@ _RECORDING_COMMANDS = {_cmd_ik, _cmd_demo}
 
 def main(argv: list[str] | None = None) -> int:
     """The ``pipeline`` program (``argv=None``: ``sys.argv``, run as a program)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    import signal
-
-    if argv is None and args.func in _RECORDING_COMMANDS:
-        from pipeline.viz.arrow import avoid_pandas_when_recording
-
-        avoid_pandas_when_recording()  # saves each recording ~0.5 s (see its docstring)
-
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    recorder = _recording_writer(argv)
     try:
-        return _run(args)
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        args.recorder = recorder
+        import signal
+
+        if argv is None and args.func in _RECORDING_COMMANDS:
+            from pipeline.viz.arrow import avoid_pandas_when_recording
+
+            avoid_pandas_when_recording()  # saves each recording ~0.5 s (see its docstring)
+
+        previous = signal.signal(signal.SIGTERM, _terminate)
+        try:
+            return _run(args)
+        finally:
+            signal.signal(signal.SIGTERM, previous)
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if recorder is not None:
+            recorder.close()
+
+
+def _recording_writer(argv: list[str] | None):
+    """``pipeline ik`` run as the program, its recording wanted: the recording's writer forked
+    first, before the parser and the heavy imports, so that it imports rerun on the second core
+    meanwhile (:mod:`pipeline.viz.background`; ``run_ik`` hands it the job or closes it)."""
+    words = sys.argv[1:] if argv is None else []
+    if words[:1] != ["ik"] or any(w in ("--no-rerun", "-h", "--help") for w in words):
+        return None
+    from pipeline.viz.background import BackgroundRecording
+
+    return BackgroundRecording.start(warm=_warm_recording)
+
+
+def _warm_recording() -> None:
+    from pipeline.viz.scene import warm_recording  # no Pinocchio: the child only logs
+
+    warm_recording()
 
 
 def _run(args) -> int:

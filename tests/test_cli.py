@@ -265,7 +265,7 @@ def test_every_ik_flag_reaches_the_options(monkeypatch, tmp_path):
 
     seen = {}
 
-    def fake_run_ik(sto, measures, out, options):
+    def fake_run_ik(sto, measures, out, options, recorder=None):
         seen["options"] = options
         return "ok"
 

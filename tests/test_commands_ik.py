@@ -149,7 +149,7 @@ def test_the_recording_written_by_the_child_is_the_one_written_in_process(tmp_pa
             assert all(ca[n].equals(cb[n]) for n in ca), entity
 
 
-def _broken_recording(*args) -> None:  # module level: the child's job is pickled by name
+def _broken_recording(*args) -> None:
     raise ValueError("the viewer's format changed")
 
 
@@ -162,7 +162,7 @@ def test_a_failing_recording_leaves_no_output(tmp_path, monkeypatch):
     if not sto.exists():
         pytest.skip("../shared/data/opensim not present")
 
-    monkeypatch.setattr(ik, "log_recording", _broken_recording)
+    monkeypatch.setattr(ik, "_record", _broken_recording)
     out = tmp_path / "out"
     with pytest.raises((RuntimeError, ValueError), match="format changed"):
         ik.run_ik(sto, Measures("m", 1.8), out)

@@ -113,11 +113,16 @@ def run_ik(
     measures: Measures,
     out_dir: str | Path,
     options: IKOptions | None = None,
+    *,
+    recorder=None,
     **changes: object,
 ) -> str:
     """``pipeline ik``: read, calibrate, correct, IK; write the files of the module docstring.
 
-    ``options`` (default :class:`IKOptions`) with fields overridden by keyword. Implausible
+    ``options`` (default :class:`IKOptions`) with fields overridden by keyword. ``recorder``: a
+    :class:`~pipeline.viz.background.BackgroundRecording` the caller started early (the
+    command-line program, before its imports; run_ik closes it), else one is started here for a
+    short recording where forking is safe. Implausible
     results (:mod:`pipeline.analysis.quality`) open the summary and go to stderr; with
     ``strict`` they raise :class:`~pipeline.errors.QualityError` and nothing is written.
     """
@@ -132,11 +137,15 @@ def run_ik(
     run_opts = opts.replace(sensor_map={}) if folder else opts
     name = recording_name(orientations)
     output_dir(out_dir)
-    worker = None
-    if opts.rerun and trial.n_samples <= BACKGROUND_FRAMES:
+    if recorder is not None and not (opts.rerun and trial.n_samples <= BACKGROUND_FRAMES):
+        recorder.close()  # a long recording logs here (one process bounds the memory)
+        recorder = None
+    worker = recorder
+    if worker is None and opts.rerun and trial.n_samples <= BACKGROUND_FRAMES:
         from pipeline.viz.background import BackgroundRecording
+        from pipeline.viz.scene import warm_recording
 
-        worker = BackgroundRecording.start(warm=_warm_recording)
+        worker = BackgroundRecording.start(warm=warm_recording)
     try:
         with output_set() as out:
             try:
@@ -166,11 +175,7 @@ def _outputs(out, out_dir, name, orientations, trial, static, measures, opts, ru
     for flag in run.flags:
         print(f"warning: {flag}", file=sys.stderr)
     if opts.rerun:  # first: the child writes it while the other files are written
-        job = _log_args(run, out.path(out_dir / f"{name}.rrd"), name)
-        if worker is None:
-            log_recording(*job)
-        else:
-            worker.submit(log_recording, *job)
+        _record(run, out.path(out_dir / f"{name}.rrd"), name, worker)
     run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
     write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
     with out.open(out_dir / f"{name}_landmarks.csv") as fh:
@@ -209,38 +214,26 @@ def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
         write_array_csv(fh, columns, data, digits=6, header=start == 0)
 
 
-def _warm_recording() -> None:
-    """What the recording's first call would otherwise do on the critical path, done in the
-    child while the parent works: rerun's import, pyarrow's pandas check (our own child: nothing
-    else runs in it), the shipped meshes read (cached), and a blueprint converted once."""
-    from pipeline.viz.arrow import pyarrow_without_pandas
-
-    pyarrow_without_pandas()
-    from pipeline.model.geometry import SubjectGeometry
-    from pipeline.model.skeleton import Skeleton
-    from pipeline.viz.layout import default_blueprint
-    from pipeline.viz.model import segment_meshes
-
-    segment_meshes(Skeleton.build(SubjectGeometry.default()))
-    default_blueprint([("knee", "/plots/right_knee")], "y", (np.ones(3), np.zeros(3)), 0.0)
-
-
-def _log_args(run: IKRun, path: Path, name: str) -> tuple:
+def _recording_args(run: IKRun, name: str) -> tuple:
     angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
-    return (str(path), run.time - run.time[0], run.skeleton.urdf, run.skeleton.root, run.q, name,
-            list(run.landmarks), angles)  # fmt: skip
+    return (run.time - run.time[0], run.skeleton, run.q), dict(
+        recording_name=name, landmarks=list(run.landmarks) or False, joint_angles=angles)
 
 
-def log_recording(path: str, time: np.ndarray, urdf: str, root: str, q: np.ndarray, name: str,
-                  landmarks: list[str], angles: list[str]) -> None:  # fmt: skip
-    """The run's ``.rrd``: the model rebuilt from its URDF text (so that the job pickles, for
-    :mod:`pipeline.viz.background`) and :func:`pipeline.viz.model.log_motion`."""
-    from pipeline.model.skeleton import Skeleton
-    from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
+def _record(run: IKRun, path: Path, name: str, worker) -> None:
+    """The run's ``.rrd`` (:func:`pipeline.viz.model.log_motion`), or, with a ``worker``, its
+    scene computed here (:func:`pipeline.viz.model.motion_scene`) and written by the child
+    (:func:`pipeline.viz.scene.log_scene`, no Pinocchio there): the same recording."""
+    args, kwargs = _recording_args(run, name)
+    if worker is None:
+        from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
 
-    skeleton = Skeleton.from_urdf_text(urdf, root)
-    log_motion(Path(path), time, skeleton, q, recording_name=name, landmarks=landmarks or False,
-               joint_angles=angles)  # fmt: skip
+        log_motion(path, *args, **kwargs)
+        return
+    from pipeline.viz.model import motion_scene
+    from pipeline.viz.scene import log_scene
+
+    worker.submit(log_scene, str(path), motion_scene(*args, **kwargs))
 
 
 def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
