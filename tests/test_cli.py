@@ -209,22 +209,8 @@ def test_every_option_states_its_default_or_that_it_is_required():
     assert missing == []
 
 
-def _processes_with(arg: str) -> list[int]:
-    """Pids of the running processes whose command line holds ``arg`` (Linux /proc)."""
-    pids = []
-    for d in Path("/proc").glob("[0-9]*"):
-        try:
-            cmd = (d / "cmdline").read_bytes().split(b"\0")
-            state = (d / "stat").read_text().rsplit(")", 1)[1].split()[0]
-        except OSError:
-            continue
-        if arg.encode() in cmd and state != "Z":
-            pids.append(int(d.name))
-    return pids
-
-
 @pytest.mark.slow
-def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path):
+def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path, processes_with):
     """A real SIGTERM at several moments of `pipeline ik`: either every output exists (the run
     finished) or none does (exit 143), never a half-written set."""
     import signal
@@ -246,7 +232,7 @@ def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path):
         _, err = proc.communicate(timeout=60)
         files = sorted(p.name for p in out.glob("*")) if out.exists() else []
         # the recording's forked child (pipeline.viz.background, same command line) is gone
-        assert _processes_with(str(out)) == [], (delay, proc.returncode)
+        assert processes_with(str(out)) == [], (delay, proc.returncode)
         # all or nothing: the five outputs (.mot, .csv, .urdf, .rrd, summary) or none. A signal
         # after the outputs were committed (while Python exits) still leaves the complete set.
         assert len(files) in (0, 6), (proc.returncode, files, err)

@@ -167,3 +167,27 @@ def test_a_failing_recording_leaves_no_output(tmp_path, monkeypatch):
     with pytest.raises((RuntimeError, ValueError), match="format changed"):
         ik.run_ik(sto, Measures("m", 1.8), out)
     assert list(out.glob("*")) == []
+
+
+@pytest.mark.dataset
+def test_the_program_writes_its_recording_through_the_early_child(tmp_path, processes_with):
+    """`pipeline ik` run as the program forks the recording's writer before its imports
+    (pipeline.cli): the .rrd it leaves holds the model, landmarks and angles, and the command
+    leaves no process behind."""
+    import subprocess
+    import sys
+
+    from pipeline.viz.recording import read_entities
+
+    sto = OPENSIM / "quaternions_4_ik.sto"
+    if not sto.exists():
+        pytest.skip("../shared/data/opensim not present")
+    out = tmp_path / "out"
+    subprocess.run([sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex",
+                    "m", "--height-m", "1.8", "--out", str(out)], check=True,
+                   capture_output=True)  # fmt: skip
+    entities = read_entities(out / "quaternions_4_ik.rrd")
+    assert {"/world/model/pelvis", "/world/model/right_tibia/mesh", "/world/landmarks/right_MM",
+            "/plots/right_knee/flexion"} <= entities  # fmt: skip
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
+    assert processes_with(str(out)) == []
