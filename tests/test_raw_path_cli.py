@@ -70,7 +70,8 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
                  "--no-rerun",
                  "--out", str(out)]) == 0  # fmt: skip
     summary = (out / "raw_summary.md").read_text()
-    assert "VQF, 9-D" in summary and "Functional knee calibration" in summary
+    assert "input: raw signals, orientations by VQF (9-D)" in summary
+    assert "Functional knee calibration" in summary
     assert "vertical was not checked" not in summary  # the filter's world is vertical
 
     truth_model = Skeleton.from_urdf(sim / "model.urdf", root="freeflyer")

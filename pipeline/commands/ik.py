@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.config import SUBJECT_KEYS, config_text, read_config
@@ -242,6 +243,9 @@ def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     o = run.options
     what = "segment orientations" if o.segment_orientations else "sensor orientations"
+    if run.filtered:
+        by = (o.filter or DEFAULT_FILTER).upper()
+        what = f"raw signals, orientations by {by} ({run.filtered})"
     pose = f"{o.calibration_pose} pose " + (f"from {Path(o.static_trial).name}" if o.static_trial
                                              else "at the first sample")  # fmt: skip
     lines = [

@@ -113,7 +113,8 @@ class IKRun:
     (:mod:`pipeline.process.drift`); ``sensors``: what the sensors
     observe; ``heading_right``: the subject's right at the calibration pose (world);
     ``residual_rms`` (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`);
-    ``options``: the options used.
+    ``options``: the options used; ``filtered``: ``'6-D'``/``'9-D'`` when the orientations were
+    estimated from raw signals here, else None.
     """
 
     time: np.ndarray
@@ -133,6 +134,7 @@ class IKRun:
     corrections: dict[str, KneeCorrection] = field(default_factory=dict)
     knee_calibrations: list[KneeCalibration] = field(default_factory=list)
     heading_drifts: dict[str, HeadingDrift] = field(default_factory=dict)
+    filtered: str | None = None
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -312,7 +314,7 @@ def process_recording(
                           joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections,
-                 knee_cal, drifts)  # fmt: skip
+                 knee_cal, drifts, filtered)  # fmt: skip
 
 
 def _side(segment: str) -> str:
