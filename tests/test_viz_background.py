@@ -86,3 +86,13 @@ def test_nothing_is_forked_while_other_threads_run():
     finally:
         stop.set()
         t.join()
+
+
+def test_a_fork_that_fails_falls_back_to_the_callers_process(monkeypatch):
+    def no_fork():
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", no_fork)
+    before = len(os.listdir("/proc/self/fd"))
+    assert BackgroundRecording.start() is None
+    assert len(os.listdir("/proc/self/fd")) == before  # its pipes closed

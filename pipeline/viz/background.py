@@ -63,7 +63,12 @@ class BackgroundRecording:
             return None
         job_r, job_w = os.pipe()
         status_r, status_w = os.pipe()
-        pid = os.fork()
+        try:
+            pid = os.fork()
+        except OSError:  # no process to spare (a limit reached): log in the caller's process
+            for fd in (job_r, job_w, status_r, status_w):
+                os.close(fd)
+            return None
         if pid == 0:  # the child: never returns
             code = 1
             try:
