@@ -25,6 +25,15 @@ UNBOUNDED = 1e30
 """Limits at or beyond this magnitude mean "no limit" (pinocchio's default is +-DBL_MAX)."""
 
 
+def dof_joints(model: pin.Model) -> np.ndarray:
+    """The joint that owns each tangent index, (nv,) ints: one pass over the joints (each
+    ``model.joints[j]`` builds a new Python object, so searching them per DoF is slow)."""
+    out = np.zeros(model.nv, dtype=int)
+    for j in range(1, model.njoints):
+        out[model.idx_vs[j] : model.idx_vs[j] + model.nvs[j]] = j
+    return out
+
+
 def joint_box(
     model: pin.Model, cols: np.ndarray, limits: bool = True
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -39,14 +48,11 @@ def joint_box(
     hi = np.full(na, np.inf)
     qidx = np.full(na, -1)
     if limits:
+        owners = dof_joints(model)
         for a, v in enumerate(cols):
-            j = next(
-                j
-                for j in range(1, model.njoints)
-                if model.joints[j].idx_v <= int(v) < model.joints[j].idx_v + model.nvs[j]
-            )
+            j = int(owners[int(v)])
             if model.nqs[j] == 1 and model.nvs[j] == 1:
-                iq = model.joints[j].idx_q
+                iq = model.idx_qs[j]
                 lo_q, hi_q = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
                 lo[a] = lo_q if abs(lo_q) < UNBOUNDED else -np.inf
                 hi[a] = hi_q if abs(hi_q) < UNBOUNDED else np.inf

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
-from pipeline.ik.bounds import joint_box
+from pipeline.ik.bounds import dof_joints, joint_box
 from pipeline.rotations import cross
 
 __all__ = ["IKProblem", "OrientationTask", "frame_id", "setup_ik"]
@@ -114,18 +114,6 @@ def _support_dofs(model: pin.Model, fids: list[int]) -> np.ndarray:
     return np.array([v for v in cand if seen[v]], dtype=int)
 
 
-def _joints_of(model: pin.Model, cols: np.ndarray) -> list[int]:
-    return sorted({j for j in range(1, model.njoints) for v in cols if _owns(model, j, v)})
-
-
-def _owns(model: pin.Model, j: int, v: int) -> bool:
-    return model.joints[j].idx_v <= v < model.joints[j].idx_v + model.nvs[j]
-
-
-def _q_of_v(model: pin.Model, v: int) -> int:
-    """Configuration index of tangent index ``v`` of a one-DoF (nq = nv = 1) joint."""
-    j = next(j for j in range(1, model.njoints) if _owns(model, j, v))
-    return model.joints[j].idx_q
 
 
 @dataclass
@@ -233,12 +221,13 @@ def setup_ik(
     weights = np.array([t.weight for t in tasks])
     # support masks: DoF a (of cols) rotates task frame i
     masks = np.zeros((k, na))
-    owner = [next(j for j in range(1, model.njoints) if _owns(model, j, int(v))) for v in cols]
+    owners = dof_joints(model)
+    owner = [int(owners[v]) for v in cols]
     for i, fid in enumerate(fids):
         sup = set(model.supports[model.frames[fid].parentJoint])
         masks[i] = [j in sup for j in owner]
-    euclid = all(model.nqs[j] == 1 and model.nvs[j] == 1 for j in _joints_of(model, cols))
-    qcols = np.array([_q_of_v(model, v) for v in cols]) if euclid else cols
+    euclid = all(model.nqs[j] == 1 and model.nvs[j] == 1 for j in set(owner))
+    qcols = np.array([model.idx_qs[j] for j in owner]) if euclid else cols  # 1-DoF: q of v
     cq = slice(qcols[0], qcols[-1] + 1) if np.all(np.diff(qcols) == 1) else qcols
     bsel = np.flatnonzero(bounded)
     problem = IKProblem(model, model.createData(), tuple(tasks), fids, RtT, finite, q_ref, cols, cs,
