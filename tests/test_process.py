@@ -429,3 +429,31 @@ def test_a_pelvis_sensor_heading_without_a_pelvis_sensor_is_refused(tmp_path):
     knee = _subset(trial, ("femur_r_imu", "tibia_r_imu"))
     with pytest.raises(InputError, match="needs a pelvis sensor"):
         process_recording(knee, Measures("m", 1.75), heading="pelvis_imu:-z")
+
+
+def test_a_still_knee_of_a_seated_subject_is_corrected_from_the_seated_pose():
+    """Seated, the left leg still at 90 deg of knee flexion: its AoR is not seen and it is
+    corrected as the population's knee would be in that pose, from the tibia's frame in the
+    femur's in the seated configuration (knee flexed), not in the straight one: the tibia's
+    correction carries a_T onto R_ft^T a_F (the population axis as the seated tibia sees it)."""
+    from pipeline.calibration.placement import pose_rotations
+    from pipeline.io.opensim import SENSOR_TO_SEGMENT
+    from pipeline.io.recording import SensorSignals
+    from pipeline.rotations import angle_between
+    from pipeline.simulate.model import simulate_trial
+
+    m = Measures("m", 1.75)
+    geometry, _ = geometry_from_measures(m)
+    sk = Skeleton.build(geometry, knee="hinge", root="freeflyer")
+    trial = simulate_trial(sk, "still_thigh", duration_s=8.0, seed=2)
+    names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
+    rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
+                                        for f, imu in trial.imus.items()})  # fmt: skip
+    run = process_recording(rec, m, calibration_pose="seated", sensor_to_model=(-np.pi / 2, 0, 0))
+    c = run.corrections["left"]
+    assert c.method == "population"
+    pose = pose_rotations(run.skeleton, "seated", np.eye(3))
+    R_ft = pose["left_femur"].T @ pose["left_tibia"]
+    a_F, a_T = c.reference_femur_axis, c.reference_tibia_axis
+    assert np.degrees(angle_between(c.tibia_rotation @ a_T, R_ft.T @ a_F)) < 1e-6
+    assert np.degrees(angle_between(R_ft.T @ a_F, a_F)) > 5.0  # the straight pose would differ

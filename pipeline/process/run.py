@@ -265,7 +265,7 @@ def process_recording(
                 c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
                                  method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
             if unseen is not None or not c.applied:  # as the reference population's knee
-                R_ft = pose_model.relative_pose(tib, fem, pose_model.neutral())[:3, :3]
+                R_ft = pose[fem].T @ pose[tib]  # the tibia in the femur in the calibration pose
                 c = population_correction(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia, R_ft,
                                           side=side, reason=unseen or c.reason)  # fmt: skip
                 notes.append(f"{side} knee: its AoR is not seen ({c.reason}); corrected as the "
@@ -276,7 +276,7 @@ def process_recording(
             placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
                                                            c.tibia_rotation)  # fmt: skip
             if f"{side}_foot_imu" in placements:  # placed with the ankle at neutral
-                R_c = pose_model.relative_pose(f"{side}_foot", tib, pose_model.neutral())[:3, :3]
+                R_c = pose[tib].T @ pose[f"{side}_foot"]
                 placements[f"{side}_foot_imu"] = corrected_placement(
                     placements[f"{side}_foot_imu"], carried_correction(c.tibia_rotation, R_c))
 
