@@ -138,11 +138,12 @@ def run_ik(
     run_opts = opts.replace(sensor_map={}) if folder else opts
     name = recording_name(orientations)
     output_dir(out_dir)
-    if recorder is not None and not (opts.rerun and trial.n_samples <= BACKGROUND_FRAMES):
+    background = opts.rerun and trial.n_samples <= BACKGROUND_FRAMES
+    if recorder is not None and not background:
         recorder.close()  # a long recording logs here (one process bounds the memory)
         recorder = None
     worker = recorder
-    if worker is None and opts.rerun and trial.n_samples <= BACKGROUND_FRAMES:
+    if worker is None and background:
         from pipeline.viz.background import BackgroundRecording
         from pipeline.viz.scene import warm_recording
 

@@ -114,8 +114,6 @@ def _support_dofs(model: pin.Model, fids: list[int]) -> np.ndarray:
     return np.array([v for v in cand if seen[v]], dtype=int)
 
 
-
-
 @dataclass
 class IKProblem:
     """Everything :func:`solve_frame` needs, computed once per trial by :func:`setup_ik`.

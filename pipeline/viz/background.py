@@ -2,8 +2,9 @@
 
 Importing ``rerun`` and its blueprint module takes ~0.4 s, the largest single part of a short
 ``pipeline ik`` (the IK of a 1,400-frame trial takes ~0.1 s). :class:`BackgroundRecording` forks
-the command right after it has read its input: the child imports rerun on the machine's second
-core while the parent calibrates, solves and writes; the parent then hands it the job
+the command early (the program before its parser, :func:`pipeline.cli.main`; else ``run_ik``
+once it has read a short input): the child imports rerun on the machine's second core while the
+parent reads, calibrates, solves and writes; the parent then hands it the job
 (:meth:`~BackgroundRecording.submit`: a module-level function and its arguments, pickled through
 a pipe) and waits for it (:meth:`~BackgroundRecording.wait`) before its outputs are committed.
 The recording is the one the same function writes in the process itself: only where the work
