@@ -53,6 +53,22 @@ class BlockSetup:
     root: np.ndarray  # DoFs coupled with every other one (a floating pelvis), positions in cols
     groups: list[np.ndarray]  # the other DoFs in mutually uncoupled groups (one per leg)
 
+    @property
+    def root_index(self) -> slice | np.ndarray:
+        """``root`` as a slice where it is a range (a view, not a copy, of the normal matrix)."""
+        return _as_index(self.root)
+
+    @property
+    def group_index(self) -> list[slice | np.ndarray]:
+        """``groups``, each as a slice where it is a range."""
+        return [_as_index(g) for g in self.groups]
+
+
+def _as_index(a: np.ndarray) -> slice | np.ndarray:
+    if a.size and np.array_equal(a, np.arange(a[0], a[0] + a.size)):
+        return slice(int(a[0]), int(a[0]) + a.size)
+    return a
+
 
 def block_setup(p: IKProblem) -> BlockSetup | None:
     """The block solver's constants for problem ``p``, or ``None`` where it does not apply
@@ -112,48 +128,42 @@ def _solve_normal(At: np.ndarray, g: np.ndarray, C: np.ndarray, mu: float, b: Bl
     3), the world axes of the DoFs as rows), the rows and columns of held DoFs (``free == 0``)
     replaced by the identity.
 
-    Arrowhead elimination where the model allows it (:func:`_coupling`): each group's block
-    ``H_gg`` is solved against ``[H_gR | g_g]``, the root's Schur complement
-    ``S = H_RR - sum_g H_Rg H_gg^-1 H_gR`` gives ``x_R``, then ``x_g = H_gg^-1 (g_g - H_gR x_R)``:
-    two 8 x 8 solves and a 3 x 3 instead of one 19 x 19 for a floating pelvis and two legs.
+    ``A^T A`` of every frame in one stacked product, then arrowhead elimination where the model
+    allows it (:func:`_coupling`): each group's block ``H_gg`` is solved against
+    ``[H_gR | g_g]``, the root's Schur complement ``S = H_RR - sum_g H_Rg H_gg^-1 H_gR`` gives
+    ``x_R``, then ``x_g = H_gg^-1 (g_g - H_gR x_R)``: two 8 x 8 solves and a 3 x 3 instead of one
+    19 x 19 for a floating pelvis and two legs.
     """
-
-    A = np.ascontiguousarray(np.swapaxes(At, 1, 2))  # stacked products need contiguous operands
-
-    def block(x, y):
-        H = At[:, x, :] @ A[:, :, y] * C[np.ix_(x, y)]
-        if free is not None:
-            H *= free[:, x, None] * free[:, None, y]
-        return H
-
-    def diagonal(H, x):
-        H += mu * np.eye(x.size)
-        if free is not None:
-            H += (1.0 - free[:, x])[:, :, None] * np.eye(x.size)
-        return H
-
-    out = np.empty_like(g)
+    H = At @ np.ascontiguousarray(np.swapaxes(At, 1, 2))  # stacked products: contiguous
+    H *= C
+    diag = np.arange(H.shape[1])
+    if free is None:
+        H[:, diag, diag] += mu
+    else:
+        H *= free[:, :, None]
+        H *= free[:, None, :]
+        H[:, diag, diag] += mu + (1.0 - free)
     r = b.root
-    if r.size:
-        S = diagonal(block(r, r), r)
-        t = g[:, r].copy()
+    out = np.empty_like(g)
+    if not b.root.size:
+        for grp in b.group_index:
+            out[:, grp] = np.linalg.solve(H[:, grp][:, :, grp], g[:, grp, None])[..., 0]
+        return out
+    r = b.root_index
+    S = H[:, r][:, :, r]
+    t = g[:, r].copy()
     parts = []
-    for grp in b.groups:
-        Hgg = diagonal(block(grp, grp), grp)
-        if not r.size:
-            out[:, grp] = np.linalg.solve(Hgg, g[:, grp, None])[..., 0]
-            continue
-        HgR = block(grp, r)
-        X = np.linalg.solve(Hgg, np.concatenate([HgR, g[:, grp, None]], axis=2))
+    for grp in b.group_index:
+        HgR = H[:, grp][:, :, r]
+        X = np.linalg.solve(H[:, grp][:, :, grp], np.concatenate([HgR, g[:, grp, None]], axis=2))
         HRg = np.swapaxes(HgR, 1, 2)
         S -= HRg @ X[:, :, :-1]
         t -= (HRg @ X[:, :, -1:])[..., 0]
         parts.append((grp, X))
-    if r.size:
-        xR = np.linalg.solve(S, t[..., None])
-        out[:, r] = xR[..., 0]
-        for grp, X in parts:
-            out[:, grp] = X[:, :, -1] - (X[:, :, :-1] @ xR)[..., 0]
+    xR = np.linalg.solve(S, t[..., None])
+    out[:, r] = xR[..., 0]
+    for grp, X in parts:
+        out[:, grp] = X[:, :, -1] - (X[:, :, :-1] @ xR)[..., 0]
     return out
 
 
@@ -196,8 +206,9 @@ def solve_block(
         Rw = b.kin.world(Qa)
         Rf = _task_rotations(b, Rw)
         U = log3((Rf @ p.RtT[frames[active]]).reshape(-1, 3, 3)).reshape(active.size, -1, 3)
-        At = np.stack([times(Rw[j], a) for j, a in zip(b.owners, b.axes, strict=True)], axis=1)
-        g = ((At @ np.ascontiguousarray(np.swapaxes(U, 1, 2))) * Wm).sum(axis=2)  # (Ba, na)
+        At = b.kin.world_axes(Rw, b.owners, b.axes)  # (Ba, na, 3)
+        # g_a = sum_i Wm[a, i] (A_a . u_i) = A_a . (Wm U)_a
+        g = np.einsum("bac,bac->ba", At, Wm @ U)  # (Ba, na)
         free = None
         if bq.size:
             qb = Qa[:, bq]

@@ -70,24 +70,46 @@ class JointRotations:
             self.joints.append(_Joint(j, int(model.parents[j]), R, t, kind, axis, jm.idx_q,
                                       jm.idx_v))  # fmt: skip
         self._MK = {}  # (M, M K, M K^2) of each revolute joint
+        self._cols = {}  # revolute joints about +-e_k: (i, j, k, sign, M is the identity)
         for jt in self.joints:
             if jt.kind == "revolute":
                 K = skew(jt.axis)
                 self._MK[jt.index] = (jt.placement, jt.placement @ K, jt.placement @ K @ K)
+                k = int(np.argmax(np.abs(jt.axis)))
+                if abs(jt.axis[k]) == 1.0 and jt.parent != 0:
+                    i, j = (k + 1) % 3, (k + 2) % 3
+                    ident = bool(np.array_equal(jt.placement, np.eye(3)))
+                    self._cols[jt.index] = (i, j, k, float(jt.axis[k]), ident)
 
     def world(self, Q: np.ndarray) -> dict[int, np.ndarray]:
         """``{joint: (B, 3, 3)}`` world rotations for configurations ``Q`` (B, nq).
 
-        A revolute joint's ``R_parent M (I + s K + c K^2)`` (``s = sin q``, ``c = 1 - cos q``) is
-        evaluated as ``R_parent M + s R_parent (M K) + c R_parent (M K^2)`` on the (3B, 3) stack of
-        rows: three BLAS products with constant matrices, ~3x faster than ``np.matmul``'s per-item
-        loop over (B, 3, 3) stacks.
+        A revolute joint about a unit axis ``+-e_k`` (the ``RX``, ``RY``, ``RZ`` joints and the
+        mirrored left-leg axes) mixes two columns of ``P = R_parent M``: with ``(i, j, k)``
+        cyclic, ``R e_i = c P_i + s P_j``, ``R e_j = c P_j - s P_i``, ``R e_k = P_k`` (``s``
+        signed by the axis). Any other axis: ``R_parent M (I + s K + (1 - c) K^2)`` evaluated
+        as ``R_parent M + s R_parent (M K) + (1 - c) R_parent (M K^2)`` on the (3B, 3) stack of
+        rows, three BLAS products with constant matrices (~3x faster than ``np.matmul``'s
+        per-item loop over (B, 3, 3) stacks).
         """
         B = Q.shape[0]
         out: dict[int, np.ndarray] = {}
         for jt in self.joints:
             if jt.kind == "revolute":
                 a = Q[:, jt.iq]
+                cols = self._cols.get(jt.index)
+                if cols is not None:
+                    i, j, k, sign, ident = cols
+                    P = out[jt.parent] if ident else times(out[jt.parent], jt.placement)
+                    s = (np.sin(a) if sign > 0 else -np.sin(a))[:, None]
+                    c = np.cos(a)[:, None]
+                    Pi, Pj = P[:, :, i], P[:, :, j]
+                    R = np.empty_like(P)
+                    R[:, :, i] = c * Pi + s * Pj
+                    R[:, :, j] = c * Pj - s * Pi
+                    R[:, :, k] = P[:, :, k]
+                    out[jt.index] = R
+                    continue
                 s, c = np.sin(a), 1.0 - np.cos(a)
                 M, MK, MK2 = self._MK[jt.index]
                 if jt.parent == 0:
@@ -135,17 +157,36 @@ class JointRotations:
     @staticmethod
     def integrate(Q: np.ndarray, d: np.ndarray, plan: list) -> np.ndarray:
         """``pin.integrate`` of the tangent steps ``d`` (B, na) (``plan`` from
-        :meth:`tangent_plan`): revolute angles add, quaternions move by ``q (x) exp(w)``."""
+        :meth:`tangent_plan`): revolute angles add (one indexed addition for all of them),
+        quaternions move by ``q (x) exp(w)``."""
         Q = Q.copy()
+        rq = [jt.iq for jt, _, _ in plan if jt.kind == "revolute"]
+        if rq:
+            Q[:, rq] += d[:, [sel[0] for jt, sel, _ in plan if jt.kind == "revolute"]]
         for jt, sel, comps in plan:
-            if jt.kind == "revolute":
-                Q[:, jt.iq] += d[:, sel[0]]
-            else:
+            if jt.kind != "revolute":
                 iq = jt.iq + (3 if jt.kind == "freeflyer" else 0)
                 w = np.zeros((Q.shape[0], 3))
                 w[:, comps] = d[:, sel]
                 Q[:, iq : iq + 4] = quat_xyzw_integrate(Q[:, iq : iq + 4], w)
         return Q
+
+    def world_axes(self, Rw: dict[int, np.ndarray], owners: list[int], axes: np.ndarray
+                   ) -> np.ndarray:  # fmt: skip
+        """World axes (B, na, 3) of tangent DoFs (``owners``, ``axes`` from
+        :meth:`tangent_plan`) given the joints' world rotations ``Rw``: ``R_j a``, a column of
+        ``R_j`` (signed) when ``a = +-e_k``."""
+        B = next(iter(Rw.values())).shape[0]
+        At = np.empty((B, len(owners), 3))
+        for col, (j, a) in enumerate(zip(owners, axes, strict=True)):
+            k = int(np.argmax(np.abs(a)))
+            if a[k] == 1.0:
+                At[:, col] = Rw[j][:, :, k]
+            elif a[k] == -1.0:
+                np.negative(Rw[j][:, :, k], out=At[:, col])
+            else:
+                At[:, col] = times(Rw[j], a)
+        return At
 
     def poses(self, Q: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         """``{joint: (R (B, 3, 3), p (B, 3))}`` world poses for configurations ``Q`` (B, nq):
