@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.rotations import cross
 
 __all__ = ["read_stl", "vertex_normals"]
 
@@ -40,11 +41,27 @@ def read_stl(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         corners = _ascii_corners(data, path)
     if not np.all(np.isfinite(corners)):
         raise InputError("the mesh has non-finite vertex coordinates", file=path)
-    unique, first, inverse = np.unique(corners, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    return unique[order], rank[inverse.reshape(-1)].reshape(-1, 3).astype(np.int64)
+    return _merge_equal(corners)
+
+
+def _merge_equal(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Equal rows of ``corners`` (M, 3) merged, in first-occurrence order: ``(vertices, index of
+    each corner's vertex)`` reshaped to triangles. A stable sort on the three coordinates
+    (``np.lexsort``, ~10x faster than ``np.unique(axis=0)``'s sort of structured rows): in each
+    run of equal rows the first is the earliest corner."""
+    if not len(corners):
+        return corners.reshape(0, 3), np.zeros((0, 3), dtype=np.int64)
+    order = np.lexsort(corners.T[::-1])
+    srt = corners[order]
+    starts = np.ones(len(srt), dtype=bool)
+    starts[1:] = np.any(srt[1:] != srt[:-1], axis=1)
+    group = np.cumsum(starts) - 1  # run of each sorted corner
+    first = order[starts]  # earliest corner of each run
+    rank = np.empty(first.size, dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
+    index = np.empty(len(corners), dtype=np.int64)
+    index[order] = rank[group]
+    return corners[np.sort(first)], index.reshape(-1, 3)
 
 
 def _ascii_corners(data: bytes, path: Path) -> np.ndarray:
@@ -70,13 +87,14 @@ def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(triangles, dtype=np.int64)
     p = v[f]  # (F, 3 corners, 3)
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n = cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     length = np.linalg.norm(n, axis=1, keepdims=True)
     n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
     out = np.zeros_like(v)
     for c in range(3):
         a, b = p[:, (c + 1) % 3] - p[:, c], p[:, (c + 2) % 3] - p[:, c]
-        angle = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
-        np.add.at(out, f[:, c], n * angle[:, None])
+        angle = np.arctan2(np.linalg.norm(cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+        for k in range(3):  # sums per vertex (np.bincount: ~10x faster than np.add.at)
+            out[:, k] += np.bincount(f[:, c], weights=n[:, k] * angle, minlength=len(v))
     norm = np.linalg.norm(out, axis=1, keepdims=True)
     return np.divide(out, norm, out=np.zeros_like(out), where=norm > 0)

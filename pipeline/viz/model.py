@@ -171,17 +171,25 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
     stride = max(1, -(-n // MAX_3D_SAMPLES))
     shown = np.arange(0, n, stride)
 
+    oriented = {*segments.values(), *imu_names}  # the frames drawn with their rotation
+
     def trajectories(rows: np.ndarray) -> Poses:
+        """Poses of ``names`` at ``rows``; positions only (``R`` None) for points and bones."""
         traj = frame_trajectories(skeleton, Q_fk[rows], names)
-        for R, p in traj.values():
-            R[~ok[rows]] = np.nan
+        out = {}
+        for name, (R, p) in traj.items():
             p[~ok[rows]] = np.nan
-        return traj
+            if name in oriented:
+                R[~ok[rows]] = np.nan
+            out[name] = (R if name in oriented else None, p)
+        return out
 
     def poses(start: int, stop: int) -> Poses:
         return trajectories(shown[start:stop])
 
-    view = trajectories(shown[:: max(1, len(shown) // 2000)])  # framing from <= 2000 samples
+    every = trajectories(shown) if precompute else None
+    step = max(1, len(shown) // 2000)  # framing from <= 2000 samples
+    view = every if every is not None and step == 1 else trajectories(shown[::step])
     angles = {}
     if joint_angles:
         wanted = None if joint_angles is True else set(joint_angles)
@@ -200,7 +208,7 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
     reference = {k: check_series(v, n, (3,), k) for k, v in (reference_landmarks or {}).items()}
     scene = MotionScene(
         t, shown, ok, skeleton.urdf, skeleton.source, tuple(skeleton.legs), dict(segments),
-        lm_names, imu_names, bone_legs, view, trajectories(shown) if precompute else None,
+        lm_names, imu_names, bone_legs, view, every,
         angles, truth, scalars, reference, bool(meshes), bool(error_arrows), up_axis, vertical,
         recording_name, app_id, float(imu_axis_length), float(point_radius),
     )  # fmt: skip

@@ -17,9 +17,10 @@ timeline ``time``, seconds):
   ``ROS_PACKAGE_PATH``. Its root link is placed in ``world`` by a static named-frame transform
   (default ``Rx(+90 deg)``: a Y-up model stands upright in a Z-up world).
 
-The file carries a default blueprint (the viewer's layout,
-:func:`pipeline.viz.layout.default_blueprint`): the 3D view of ``world`` on the left, the
-``plots`` as time-series views on the right.
+The file carries a default blueprint (the viewer's layout, :func:`pipeline.viz.layout.layout`):
+the 3D view of ``world`` on the left, the ``plots`` as time-series views on the right. Files are
+written by rerun's native writer through :class:`pipeline.viz.rrd.RrdWriter`, without importing
+the ``rerun`` Python package (~0.3 s); reading back uses it.
 
 Samples with NaN are not logged (the viewer shows the last valid one until the next).
 :func:`pipeline.viz.model.log_motion` draws a model's motion from its configurations (moving
@@ -31,7 +32,6 @@ native or web viewer.
 
 from __future__ import annotations
 
-import importlib.metadata
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
@@ -41,15 +41,16 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.model.resources import example_robot_data_share
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.viz.arrow import pandas_shortcut_if_asked
-from pipeline.viz.layout import default_blueprint as _blueprint
+from pipeline.viz.layout import layout as _layout
 from pipeline.viz.layout import up_axis_index as _check_up_axis
+from pipeline.viz.rrd import VIEW_COORDINATES, Layout, RrdWriter, pack_colors
 
 __all__ = [
     "check_series",
     "check_time",
-    "import_rerun",
     "log_landmarks",
     "log_poses",
     "log_scalars",
@@ -63,12 +64,6 @@ __all__ = [
 IMC_COLOR = (230, 90, 40)
 REFERENCE_COLOR = (40, 120, 230)
 ERROR_COLOR = (200, 40, 160)
-
-
-def import_rerun():
-    import rerun as rr  # deferred: importing rerun costs ~0.3 s
-
-    return rr
 
 
 def check_series(x: np.ndarray, n: int, tail: tuple[int, ...], what: str) -> np.ndarray:
@@ -102,12 +97,8 @@ def _default_package_paths(urdf_path: Path) -> list[Path]:
     """Folders that may hold ``package://`` packages: example-robot-data's share, URDF ancestors."""
     paths: list[Path] = []
     try:
-        for f in importlib.metadata.files("example-robot-data") or []:
-            share = next((a for a in Path(str(f.locate())).parents if a.name == "share"), None)
-            if share is not None:
-                paths.append(share)
-                break
-    except importlib.metadata.PackageNotFoundError:
+        paths.append(example_robot_data_share().parent)
+    except FileNotFoundError:
         pass
     paths.extend(list(urdf_path.resolve().parents)[:3])
     return paths
@@ -135,59 +126,45 @@ def check_time(time: np.ndarray) -> np.ndarray:
 
 @contextmanager
 def open_recording(
-    path: Path, app_id: str, recording_name: str | None, up_axis: str, blueprint=None
-):
-    """An offline recording to ``path`` with view coordinates on ``world`` and ``blueprint`` as its
-    default layout; deleted on failure."""
-    pandas_shortcut_if_asked()
-    rr = import_rerun()
+    path: Path, app_id: str, recording_name: str | None, up_axis: str,
+    layout: Layout | None = None,
+):  # fmt: skip
+    """An offline recording (:class:`~pipeline.viz.rrd.RrdWriter`) to ``path`` with view
+    coordinates on ``world`` and ``layout`` as its default blueprint; deleted on failure."""
     _check_up_axis(up_axis)
+    pandas_shortcut_if_asked()  # before pyarrow converts its first list
     path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream(app_id)
-    rec.save(path, default_blueprint=blueprint)
+    rec = RrdWriter(path, app_id, recording_name, layout)
     try:
-        if recording_name:
-            rec.send_recording_name(recording_name)
-        view_coordinates = (
-            rr.ViewCoordinates.RIGHT_HAND_Z_UP
-            if up_axis == "z"
-            else rr.ViewCoordinates.RIGHT_HAND_Y_UP
-        )
-        rec.log("world", view_coordinates, static=True)
+        rec.log("world", "ViewCoordinates", xyz=[VIEW_COORDINATES[up_axis]])
         yield rec
-        rec.flush()
+        rec.close()
     except BaseException:
-        rec.disconnect()
+        rec.abort()
         path.unlink(missing_ok=True)  # no half-written recording
         raise
-    rec.disconnect()
 
 
-def send_columns(rec, entity: str, t: np.ndarray, mask: np.ndarray, columns) -> None:
-    """One ``send_columns`` call: the rows of ``t`` selected by ``mask`` on timeline ``time``."""
-    rr = import_rerun()
-    rec.send_columns(entity, indexes=[rr.TimeColumn("time", duration=t[mask])], columns=columns)
+def send_columns(rec: RrdWriter, entity: str, t: np.ndarray, mask: np.ndarray, archetype: str,
+                 **columns: np.ndarray) -> None:  # fmt: skip
+    """One columns chunk: the rows of ``t`` (and of each column) selected by ``mask`` on the
+    timeline ``time``."""
+    rec.send_columns(entity, t[mask], archetype, **{k: v[mask] for k, v in columns.items()})
 
 
 def _log_points(
     rec, t: np.ndarray, group: str, data: Mapping[str, np.ndarray], color, radius: float
 ) -> dict[str, np.ndarray]:
     """``world/<group>/<name>``: one labelled point per time row (NaN rows skipped)."""
-    rr = import_rerun()
     out = {}
     for name, xyz in data.items():
         xyz = check_series(xyz, len(t), (3,), name)
         ok = _finite(xyz)
         entity = f"world/{group}/{name}"
-        rec.log(
-            entity,
-            rr.Points3D.from_fields(
-                colors=[color], radii=[radius], labels=[name], show_labels=False
-            ),
-            static=True,
-        )
+        rec.log(entity, "Points3D", radii=[radius], colors=pack_colors([color]), labels=[name],
+                show_labels=[False])  # fmt: skip
         if ok.any():
-            send_columns(rec, entity, t, ok, rr.Points3D.columns(positions=xyz[ok]))
+            send_columns(rec, entity, t, ok, "Points3D", positions=xyz)
         out[name] = xyz
     return out
 
@@ -196,14 +173,13 @@ def _log_error_arrows(
     rec, t: np.ndarray, est: Mapping[str, np.ndarray], ref: Mapping[str, np.ndarray]
 ) -> None:
     """``world/errors/<name>``: arrow reference -> estimate for the names in both."""
-    rr = import_rerun()
     for name in est.keys() & ref.keys():
         ok = _finite(est[name]) & _finite(ref[name])
         entity = f"world/errors/{name}"
-        rec.log(entity, rr.Arrows3D.from_fields(colors=[ERROR_COLOR]), static=True)
+        rec.log(entity, "Arrows3D", colors=pack_colors([ERROR_COLOR]))
         if ok.any():
-            cols = rr.Arrows3D.columns(origins=ref[name][ok], vectors=est[name][ok] - ref[name][ok])
-            send_columns(rec, entity, t, ok, cols)
+            send_columns(rec, entity, t, ok, "Arrows3D", origins=ref[name],
+                         vectors=est[name] - ref[name])  # fmt: skip
 
 
 def log_landmarks(
@@ -230,28 +206,25 @@ def log_poses(
     axis_length: float | None,
 ) -> None:
     """``<group>/<name>``: ``Transform3D`` columns (translation, xyzw quaternion), static axes."""
-    rr = import_rerun()
     for name, (R, p) in poses.items():
         R = check_series(R, len(t), (3, 3), f"{name} R")
         p = check_series(p, len(t), (3,), f"{name} p")
         ok = _finite(R) & _finite(p)
         entity = f"{group}/{name}"
         if axis_length is not None:
-            rec.log(entity, rr.TransformAxes3D(axis_length), static=True)
+            rec.log(entity, "TransformAxes3D", axis_length=[axis_length])
         if ok.any():
             xyzw = quat_xyzw_from_matrix(R[ok])  # rerun: scalar-last
-            columns = rr.Transform3D.columns(translation=p[ok], quaternion=xyzw)
-            send_columns(rec, entity, t, ok, columns)
+            rec.send_columns(entity, t[ok], "Transform3D", translation=p[ok], quaternion=xyzw)
 
 
 def log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:
     """Entity path -> ``(N,)`` series times ``scale``, as ``Scalars`` (NaN rows skipped)."""
-    rr = import_rerun()
     for entity, y in series.items():
         y = check_series(y, len(t), (), entity)
         ok = np.isfinite(y)
         if ok.any():
-            send_columns(rec, entity, t, ok, rr.Scalars.columns(scalars=scale * y[ok]))
+            rec.send_columns(entity, t[ok], "Scalars", scalars=scale * y[ok])
 
 
 def log_trial(
@@ -286,8 +259,7 @@ def log_trial(
     t = check_time(time)
     _check_up_axis(up_axis)
     plots = [("joint angles (deg)", "/plots")] if joint_angles else []
-    blueprint = _blueprint(plots, up_axis)
-    with open_recording(path, app_id, recording_name, up_axis, blueprint) as rec:
+    with open_recording(path, app_id, recording_name, up_axis, _layout(plots, up_axis)) as rec:
         log_landmarks(rec, t, landmarks, reference_landmarks, error_arrows, point_radius)
         log_poses(rec, t, "world/segments", segment_poses or {}, axis_length)
         angles = {f"plots/{name}": q for name, q in (joint_angles or {}).items()}
@@ -297,29 +269,21 @@ def log_trial(
     return path
 
 
-def _log_urdf(rec, urdf_path: Path, urdf_root, package_paths) -> None:
-    rr = import_rerun()
+def _log_urdf(rec: RrdWriter, urdf_path: Path, urdf_root, package_paths) -> None:
     if not urdf_path.is_file():
         raise InputError("no such URDF file", file=urdf_path)
     root_link = _urdf_root_link(urdf_path)
     R, p = (rot_x(np.pi / 2), np.zeros(3)) if urdf_root is None else urdf_root
-    rec.log(
-        "world/model_root",
-        rr.Transform3D(
-            translation=np.asarray(p, dtype=float),
-            mat3x3=np.asarray(R, dtype=float),
-            parent_frame="tf#/world",
-            child_frame=root_link,
-        ),
-        static=True,
-    )
+    rec.log("world/model_root", "Transform3D", translation=[np.asarray(p, dtype=float)],
+            mat3x3=[np.asarray(R, dtype=float)], parent_frame=["tf#/world"],
+            child_frame=[root_link])  # fmt: skip
     folders = [str(Path(f)) for f in (package_paths or _default_package_paths(urdf_path))]
     existing = os.environ.get("ROS_PACKAGE_PATH")
     if existing:
         folders.append(existing)
     with _env("ROS_PACKAGE_PATH", os.pathsep.join(folders)):
-        rec.log_file_from_path(urdf_path, entity_path_prefix="world/model", static=True)
-        rec.flush()  # the importer streams meshes asynchronously; wait while the path is set
+        # the importer streams meshes asynchronously: flushed while the path is set
+        rec.log_file_from_path(urdf_path, entity_path_prefix="world/model")
 
 
 # --------------------------------------------------------------------------- reading back

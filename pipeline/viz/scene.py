@@ -21,15 +21,15 @@ from pipeline.errors import InputError
 from pipeline.io.stl import read_stl, vertex_normals
 from pipeline.model.meshes import resolve_package_uri
 from pipeline.rotations import matrix_from_euler_zyx
-from pipeline.viz.layout import default_blueprint as _blueprint
+from pipeline.viz.layout import layout as _layout
 from pipeline.viz.recording import (
-    import_rerun,
     log_landmarks,
     log_poses,
     log_scalars,
     open_recording,
     send_columns,
 )
+from pipeline.viz.rrd import pack_colors
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "CHUNK_SAMPLES", "MotionScene", "SegmentMesh",
            "log_scene", "meshes_from_urdf", "preload_meshes", "warm_recording"]  # fmt: skip
@@ -42,8 +42,9 @@ CHUNK_SAMPLES = 10_000
 ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "inversion": (220, 50, 50),
                 "rotation": (30, 160, 70)}  # fmt: skip
 
-#: name -> (R (n, 3, 3), p (n, 3)) world poses of model frames over some samples
-Poses = dict[str, tuple[np.ndarray, np.ndarray]]
+#: name -> (R (n, 3, 3), p (n, 3)) world poses of model frames over some samples (R None for
+#: frames drawn as points: landmarks, bone ends)
+Poses = dict[str, tuple[np.ndarray | None, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -57,11 +58,13 @@ class SegmentMesh:
 
 
 @functools.lru_cache(maxsize=32)
-def _load_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
+def _load_mesh(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A mesh file's vertices, triangles and unit vertex normals (read once per process)."""
     vertices, faces = read_stl(path)
-    vertices.setflags(write=False)
-    faces.setflags(write=False)
-    return vertices, faces
+    normals = vertex_normals(vertices, faces)
+    for a in (vertices, faces, normals):
+        a.setflags(write=False)
+    return vertices, faces, normals
 
 
 def _floats(text: str | None, default: Sequence[float]) -> np.ndarray:
@@ -118,22 +121,26 @@ def meshes_from_urdf(urdf: str, source: Path | None, segments: Mapping[str, str]
 
     ``segments``: segment -> link name. A vertex ``v`` of a mesh file becomes ``R_o (s * v) +
     p_o`` (``s`` the visual's ``scale``, ``(R_o, p_o)`` its ``origin``); triangles are reversed
-    when ``prod(s) < 0`` (a mirroring scale) so that they stay counter-clockwise. Segments without
-    a mesh visual are left out.
+    when ``prod(s) < 0`` (a mirroring scale) so that they stay counter-clockwise. Normals follow
+    by the inverse transpose of that map, ``n -> unit(R_o (n / s))``, from the file's own vertex
+    normals (computed once per file: :func:`preload_meshes`). Segments without a mesh visual are
+    left out.
     """
     visuals = _link_visuals(urdf, source)
     out = {}
     for segment, link in segments.items():
-        parts_v, parts_f, count = [], [], 0
+        parts_v, parts_f, parts_n, count = [], [], [], 0
         for uri, scale, T in visuals.get(link, []):
-            v, f = _load_mesh(str(_mesh_file(uri, source)))
+            v, f, n = _load_mesh(str(_mesh_file(uri, source)))
             parts_v.append((v * scale) @ T[:3, :3].T + T[:3, 3])
             parts_f.append((f[:, ::-1] if np.prod(scale) < 0 else f) + count)
+            n = (n / scale) @ T[:3, :3].T
+            length = np.linalg.norm(n, axis=1, keepdims=True)
+            parts_n.append(np.divide(n, length, out=np.zeros_like(n), where=length > 0))
             count += len(v)
         if not parts_v:
             continue
-        vertices, triangles = np.concatenate(parts_v), np.concatenate(parts_f)
-        out[segment] = SegmentMesh(vertices, triangles, vertex_normals(vertices, triangles))
+        out[segment] = SegmentMesh(*map(np.concatenate, (parts_v, parts_f, parts_n)))
     return out
 
 
@@ -151,11 +158,11 @@ def _lowest_height(
     for seg, mesh in meshes.items():
         if seg.endswith("foot"):
             R, p = traj[segments[seg]]
-            for lo in range(0, len(R), _CHUNK_FRAMES):
-                h = R[lo : lo + _CHUNK_FRAMES, axis, :] @ mesh.vertices.T
-                h += p[lo : lo + _CHUNK_FRAMES, axis, None]
-                if np.isfinite(h).any():
-                    lows.append(float(np.nanmin(h)))
+            ok = np.isfinite(R[:, axis, :]).all(axis=1) & np.isfinite(p[:, axis])
+            d, h0 = R[ok, axis, :], p[ok, axis]  # height of v: d . v + h0 (finite rows only)
+            for lo in range(0, len(d), _CHUNK_FRAMES):
+                h = (d[lo : lo + _CHUNK_FRAMES] @ mesh.vertices.T).min(axis=1)
+                lows.append(float((h + h0[lo : lo + _CHUNK_FRAMES]).min()))
     if not lows:  # no foot mesh, or no finite sample of one
         for x in points:
             h = np.asarray(x)[:, axis]
@@ -238,7 +245,8 @@ def log_scene(path: str | Path, scene: MotionScene,
             raise InputError("the scene has no poses and none were given", field="poses")
 
         def poses(start: int, stop: int) -> Poses:
-            return {k: (R[start:stop], p[start:stop]) for k, (R, p) in scene.poses.items()}
+            return {k: (None if R is None else R[start:stop], p[start:stop])
+                    for k, (R, p) in scene.poses.items()}  # fmt: skip
 
     t, ok, view, segments = scene.time, scene.ok, scene.view, scene.segments
     lm_names, imu_names, bone_legs = scene.landmark_names, scene.imu_names, scene.bone_legs
@@ -255,22 +263,14 @@ def log_scene(path: str | Path, scene: MotionScene,
     plots.sort(key=lambda view: order[view[0].split()[1]])  # hip, knee, ankle; right first
     if scene.scalars:
         plots.append(("other", [f"/{entity}" for entity in scene.scalars]))
-    blueprint = _blueprint(plots, scene.up_axis, camera=camera, ground=ground)
+    layout = _layout(plots, scene.up_axis, camera=camera, ground=ground)
 
-    rr = import_rerun()
     with open_recording(path, scene.app_id, scene.recording_name, scene.up_axis,
-                        blueprint) as rec:  # fmt: skip
+                        layout) as rec:  # fmt: skip
         for seg, mesh in mesh_data.items():
-            rec.log(
-                f"world/model/{seg}/mesh",
-                rr.Mesh3D(
-                    vertex_positions=mesh.vertices,
-                    triangle_indices=mesh.triangles,
-                    vertex_normals=mesh.normals,
-                    albedo_factor=BONE_COLOR,
-                ),
-                static=True,
-            )
+            rec.log(f"world/model/{seg}/mesh", "Mesh3D", vertex_positions=mesh.vertices,
+                    triangle_indices=mesh.triangles, vertex_normals=mesh.normals,
+                    albedo_factor=pack_colors([BONE_COLOR]))  # fmt: skip
         shown = scene.shown
         for start in range(0, len(shown), CHUNK_SAMPLES):  # bounded memory on long recordings
             rows = shown[start : start + CHUNK_SAMPLES]
@@ -284,23 +284,20 @@ def log_scene(path: str | Path, scene: MotionScene,
             for side in bone_legs:
                 strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
                 entity = f"world/bones/{side}"
-                rec.log(
-                    entity,
-                    rr.LineStrips3D.from_fields(colors=[BONE_LINE_COLOR], radii=[0.006]),
-                    static=True,
-                )
+                rec.log(entity, "LineStrips3D", radii=[0.006],
+                        colors=pack_colors([BONE_LINE_COLOR]))  # fmt: skip
                 if okc.any():
-                    send_columns(rec, entity, tc, okc, rr.LineStrips3D.columns(strips=strip[okc]))
+                    send_columns(rec, entity, tc, okc, "LineStrips3D", strips=strip)
         for entity in scene.angles:
             angle = entity.rsplit("/", 1)[1]
-            style = rr.SeriesLines(colors=[ANGLE_COLORS[angle]], names=[angle])
-            rec.log(entity, style, static=True)
+            rec.log(entity, "SeriesLines", colors=pack_colors([ANGLE_COLORS[angle]]),
+                    names=[angle])  # fmt: skip
         log_scalars(rec, t, scene.angles, scale=float(np.degrees(1.0)))
         for entity in scene.truth:
             angle = entity.rsplit("/", 1)[1].removesuffix("_truth")
             light = tuple(int(c + 0.55 * (255 - c)) for c in ANGLE_COLORS[angle])
-            style = rr.SeriesLines(colors=[light], names=[f"{angle} (truth)"], widths=[1.0])
-            rec.log(entity, style, static=True)
+            rec.log(entity, "SeriesLines", colors=pack_colors([light]),
+                    names=[f"{angle} (truth)"], widths=[1.0])  # fmt: skip
         log_scalars(rec, t, scene.truth, scale=float(np.degrees(1.0)))
         log_scalars(rec, t, scene.scalars)
     return path
@@ -309,13 +306,15 @@ def log_scene(path: str | Path, scene: MotionScene,
 def warm_recording() -> None:
     """What a recording's first call would otherwise do on the critical path, done in the
     forked child (:mod:`pipeline.viz.background`) while the parent works, without Pinocchio:
-    rerun's import, pyarrow's pandas check (our own child: nothing else runs in it), the shipped
-    meshes read (cached) and a blueprint converted once."""
+    pyarrow's and rerun's native writer's imports, pyarrow's pandas check (our own child: nothing
+    else runs in it), the shipped meshes read (cached)."""
     from pipeline.viz.arrow import pyarrow_without_pandas
 
     pyarrow_without_pandas()
+    from pipeline.viz.rrd import check_version
+
+    check_version()  # imports the native writer
     from pipeline.model.builder import urdf_text
     from pipeline.model.geometry import SubjectGeometry
 
     preload_meshes(urdf_text(SubjectGeometry.default(), check=False))
-    _blueprint([("knee", "/plots/right_knee")], "y", (np.ones(3), np.zeros(3)), 0.0)
