@@ -59,3 +59,21 @@ def test_bad_files_name_the_file(tmp_path, content):
         read_stl(path)
     with pytest.raises(InputError, match="missing.stl"):
         read_stl(tmp_path / "missing.stl")
+
+
+def test_merge_equal_is_unique_rows_in_first_occurrence_order():
+    """The lexsort merge gives what np.unique(axis=0) reordered by first occurrence gives (the
+    former implementation), on corners with many repeats."""
+    from pipeline.io.stl import _merge_equal
+
+    rng = np.random.default_rng(3)
+    pool = rng.integers(-3, 4, (40, 3)).astype(float) * 0.25
+    corners = pool[rng.integers(0, 40, 300)]
+    v, f = _merge_equal(corners)
+    unique, first, inverse = np.unique(corners, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    np.testing.assert_array_equal(v, unique[order])
+    np.testing.assert_array_equal(f, rank[inverse.reshape(-1)].reshape(-1, 3))
+    np.testing.assert_array_equal(v[f].reshape(-1, 3), corners)  # every corner kept

@@ -130,3 +130,18 @@ def test_mirrored_meshes_load_in_pinocchio_and_render_outward(mesh_urdf):
             trimesh.Trimesh(m.vertices, m.triangles, process=False).volume for m in (right, left)
         ]
         assert vol[0] > 1e-4 and vol[1] == pytest.approx(vol[0], rel=1e-9), seg
+
+
+def test_scaled_normals_by_the_inverse_transpose():
+    """A mesh scaled unevenly keeps normals perpendicular to its faces: the template's vertex
+    normals carried by the inverse transpose stay close to the scaled mesh's own."""
+    from pipeline.io.stl import vertex_normals
+    from pipeline.model.geometry import SubjectGeometry
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.viz.model import segment_meshes
+
+    sk = Skeleton.build(SubjectGeometry.default(1.95, "m"), "hinge")
+    for seg, mesh in segment_meshes(sk).items():
+        own = vertex_normals(mesh.vertices, mesh.triangles)
+        cos = np.einsum("ij,ij->i", mesh.normals, own)
+        assert np.median(cos) > 0.999 and np.percentile(cos, 5) > 0.97, seg

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import read_blueprint
 
 import pipeline.viz.recording as recording
 from pipeline.viz.layout import sdk_blueprint
 from pipeline.viz.rrd import RrdWriter, check_version, pack_colors
-from tests._helpers import read_blueprint
 
 
 class SdkWriter:

@@ -164,7 +164,7 @@ def run_ik(
 
 
 #: Recordings up to this many frames are logged by a forked child
-#: (:mod:`pipeline.viz.background`), whose ~0.4 s import of rerun then overlaps the calibration
+#: (:mod:`pipeline.viz.background`), whose imports and logging then overlap the calibration
 #: and the IK; longer ones log in the process, where that import is a small part of the time and
 #: one process bounds the memory (``results/bench_long.txt``).
 BACKGROUND_FRAMES = 20_000

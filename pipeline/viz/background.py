@@ -1,9 +1,10 @@
-"""A rerun recording written by a forked child, so that importing rerun overlaps the work.
+"""A rerun recording written by a forked child, so that its imports and logging overlap the work.
 
-Importing ``rerun`` and its blueprint module takes ~0.4 s, the largest single part of a short
+A recording's imports (NumPy, pyarrow and rerun's native writer, :mod:`pipeline.viz.rrd`: ~0.15 s)
+and its logging (~0.07 s for a 1,400-frame trial) are a large part of a short
 ``pipeline ik`` (the IK of a 1,400-frame trial takes ~0.1 s). :class:`BackgroundRecording` forks
 the command early (the program before its parser, :func:`pipeline.cli.main`; else ``run_ik``
-once it has read a short input): the child imports rerun on the machine's second core while the
+once it has read a short input): the child imports them on the machine's second core while the
 parent reads, calibrates, solves and writes; the parent then hands it the job
 (:meth:`~BackgroundRecording.submit`: a module-level function and its arguments, pickled through
 a pipe) and waits for it (:meth:`~BackgroundRecording.wait`) before its outputs are committed.
@@ -49,7 +50,8 @@ def _write_all(fd: int, data: bytes) -> None:
 
 
 class BackgroundRecording:
-    """A forked child that imports rerun now and runs one logging job later (module doc)."""
+    """A forked child that imports the recording's modules now and runs one logging job later
+    (module doc)."""
 
     def __init__(self, pid: int, job_fd: int, status_fd: int) -> None:
         self.pid, self._job_fd, self._status_fd = pid, job_fd, status_fd

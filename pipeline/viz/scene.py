@@ -4,7 +4,8 @@
 returns a :class:`MotionScene` (poses, landmarks, angles and the URDF text, NumPy arrays and
 strings); :func:`log_scene` writes it, reading the segment meshes from the URDF's visuals itself.
 So a forked child (:mod:`pipeline.viz.background`) can write the recording having imported only
-NumPy and rerun, while the parent computes. Layout: :mod:`pipeline.viz.model`.
+NumPy, pyarrow and rerun's native writer (:mod:`pipeline.viz.rrd`), while the parent computes.
+Layout: :mod:`pipeline.viz.model`.
 """
 
 from __future__ import annotations
