@@ -205,17 +205,24 @@ def log_poses(
     poses: Mapping[str, tuple[np.ndarray, np.ndarray]],
     axis_length: float | None,
 ) -> None:
-    """``<group>/<name>``: ``Transform3D`` columns (translation, xyzw quaternion), static axes."""
+    """``<group>/<name>``: ``Transform3D`` columns (translation, xyzw quaternion), static axes.
+    The quaternions of every pose in one conversion."""
+    rows = []
     for name, (R, p) in poses.items():
         R = check_series(R, len(t), (3, 3), f"{name} R")
         p = check_series(p, len(t), (3,), f"{name} p")
         ok = _finite(R) & _finite(p)
+        rows.append((name, R[ok], p[ok], ok))
+    xyzw = quat_xyzw_from_matrix(np.concatenate([r[1] for r in rows] or [np.eye(3)[None]]))
+    start = 0
+    for name, R, p, ok in rows:
         entity = f"{group}/{name}"
         if axis_length is not None:
             rec.log(entity, "TransformAxes3D", axis_length=[axis_length])
-        if ok.any():
-            xyzw = quat_xyzw_from_matrix(R[ok])  # rerun: scalar-last
-            rec.send_columns(entity, t[ok], "Transform3D", translation=p[ok], quaternion=xyzw)
+        if ok.any():  # rerun's quaternions are scalar-last
+            q = xyzw[start : start + len(R)]
+            rec.send_columns(entity, t[ok], "Transform3D", translation=p, quaternion=q)
+        start += len(R)
 
 
 def log_scalars(rec, t: np.ndarray, series: Mapping[str, np.ndarray], scale: float = 1.0) -> None:

@@ -312,9 +312,10 @@ def warm_recording() -> None:
     from pipeline.viz.arrow import pyarrow_without_pandas
 
     pyarrow_without_pandas()
-    from pipeline.viz.rrd import check_version
+    from pipeline.viz.rrd import warm
 
-    check_version()  # imports the native writer
+    warm()  # the native writer's import and first use
+    np.ones((64, 3)) @ np.ones((3, 64))  # BLAS's first call (its buffers)
     from pipeline.model.builder import urdf_text
     from pipeline.model.geometry import SubjectGeometry
 
