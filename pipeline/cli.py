@@ -301,6 +301,8 @@ _RECORDING_COMMANDS = {_cmd_ik, _cmd_demo}
 
 def main(argv: list[str] | None = None) -> int:
     """The ``pipeline`` program (``argv=None``: ``sys.argv``, run as a program)."""
+    if argv is None:
+        _single_threaded_blas()
     recorder = _recording_writer(argv)
     try:
         parser = build_parser()
@@ -321,6 +323,22 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if recorder is not None:
             recorder.close()
+
+
+#: BLAS thread pools the program sizes to one thread unless the user set them.
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _single_threaded_blas() -> None:
+    """One BLAS thread per process, unless the environment says otherwise: the commands' arrays
+    are small (3 x 3 rotations, joint-sized normal matrices, stacks of them), where BLAS threads
+    gain nothing, and the program runs a second process (the recording's writer, Dask workers)
+    on the other cores: two processes' spinning BLAS pools on two cores slowed each ~2x here.
+    Before NumPy is imported (its pool is sized then)."""
+    import os
+
+    for var in BLAS_THREADS:
+        os.environ.setdefault(var, "1")
 
 
 def _recording_writer(argv: list[str] | None):

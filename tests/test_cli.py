@@ -261,3 +261,18 @@ def test_every_ik_flag_reaches_the_options(monkeypatch, tmp_path):
                  "none", "--filter", "pi", "--correction", "none"]) == 0  # fmt: skip
     o = seen["options"]
     assert (o.calibration_method, o.drift, o.filter, o.correction) == ("gn", "none", "pi", "none")
+
+
+def test_program_runs_blas_single_threaded_unless_told(monkeypatch):
+    """Run as a program, BLAS pools default to one thread (the program's two processes would
+    spin against each other on two cores); a user's setting is kept."""
+    from pipeline.cli import BLAS_THREADS, _single_threaded_blas
+
+    for var in BLAS_THREADS:
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("OMP_NUM_THREADS", "4")
+    _single_threaded_blas()
+    import os
+
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "1" and os.environ["MKL_NUM_THREADS"] == "1"
+    assert os.environ["OMP_NUM_THREADS"] == "4"
