@@ -47,3 +47,18 @@ def test_read_text_lines_drops_bom_and_line_ends_refuses_folder(tmp_path):
 
 def test_parse_table_without_rows_is_empty_with_the_right_width():
     assert text.parse_table([], ["a", "b", "c"]).shape == (0, 3)
+
+
+def test_whole_table_parse_equals_row_by_row():
+    """The one-conversion path gives the row-by-row parse's array, and steps aside (None) for
+    the tables the row-by-row parse must refuse or fill: an empty cell, a missing or extra
+    field, a word."""
+    from pipeline.io.text import _parse_whole
+
+    rows = ["0.0\t1,-2.5e-3,nan,4", "0.01\t 5,6,7,8.25E+2"]
+    fast = _parse_whole(rows, 5, "\t", ",")
+    slow = np.array([[0.0, 1, -2.5e-3, np.nan, 4], [0.01, 5, 6, 7, 825.0]])
+    np.testing.assert_array_equal(fast, slow)
+    np.testing.assert_array_equal(text.parse_table(rows, list("abcde"), also_sep=","), slow)
+    for bad in (["0\t1,2,,4"], ["0\t1,2,3"], ["0\t1,2,3,4,5"], ["0\t1,2,x,4"], ["0\t1,2 3,4"]):
+        assert _parse_whole(bad, 5, "\t", ",") is None

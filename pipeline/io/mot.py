@@ -88,10 +88,12 @@ def write_mot(
         "endheader",
         "\t".join(["time", *names]),
     ]
+    row_fmt = "\t".join(["%.17g"] * data.shape[1]) + "\n"  # one format per row: ~2x faster
     with atomic_write(path, newline="\n") as f:
         f.write("\n".join(head) + "\n")
-        for row in data:
-            f.write("\t".join(f"{v:.17g}" for v in row) + "\n")
+        for start in range(0, len(data), 10_000):  # bounded memory on long tables
+            rows = data[start : start + 10_000].tolist()
+            f.write("".join([row_fmt % tuple(row) for row in rows]))
     return path
 
 

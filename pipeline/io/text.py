@@ -51,6 +51,9 @@ def parse_table(
                                      first_line=line0, also_sep=also_sep, chunk=chunk))  # fmt: skip
         return np.concatenate(parts)
     n = len(labels)
+    fast = _parse_whole(lines, n, sep, also_sep)
+    if fast is not None:
+        return fast
     if also_sep is not None:
         lines = [ln.replace(also_sep, sep) for ln in lines]
     rows = [ln.rstrip("\r\n").split(sep) for ln in lines]
@@ -80,6 +83,27 @@ def parse_table(
                     f"{s!r} at {where(r, first_line)} is not a number", file=file, field=labels[c]
                 ) from None
     return out
+
+
+def _parse_whole(lines: list[str], n: int, sep: str, also_sep: str | None) -> np.ndarray | None:
+    """The rows as one float conversion when every row has ``n`` non-empty cells (counted by
+    separators), else None (the row-by-row parse then finds and names the fault)."""
+    if not lines:
+        return None
+    seps = n - 1
+    if any(ln.count(sep) + (ln.count(also_sep) if also_sep else 0) != seps for ln in lines):
+        return None
+    text = "\n".join(lines)
+    for s in (sep, also_sep):
+        if s:
+            text = text.replace(s, " ")
+    tokens = text.split()
+    if len(tokens) != len(lines) * n:  # an empty cell
+        return None
+    try:
+        return np.array(tokens, dtype=float).reshape(len(lines), n)
+    except ValueError:  # a cell that is not a number
+        return None
 
 
 def read_text_lines(path: str | Path) -> list[str]:
