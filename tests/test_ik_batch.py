@@ -106,3 +106,36 @@ def test_fast_turns_and_splices_get_closer_anchors_and_the_sequential_optima():
     assert max(turn) <= ANCHOR_TURN_RAD + 0.2  # no frame is interpolated across a large turn
     seq, res = solve_ik(m, targets, stride=1), solve_ik(m, targets)
     assert res.converged.all() and np.abs(res.q - seq.q).max() < 2e-4
+
+
+def test_anchors_follow_the_rotations_at_the_joints():
+    """Each target's turn counts relative to the target on the joint above it (the pelvis: in
+    the world), as the interpolated joint coordinates do: a hip and a knee flexing together by
+    4 rad each (summed over the trial) turn the shank 8 rad in the world, but the anchors come
+    every ~1 rad of either joint; a body turning round sets them by the pelvis. The anchors are
+    solved loosely in sequence, then to tol with the other frames: the sequential optima."""
+    from pipeline.ik.solver import ANCHOR_TURN_RAD, _anchors, _parent_tasks
+
+    m = leg_model("free", root="spherical")
+    n = 400
+    t = np.linspace(0.0, 2.0, n)
+    legs = np.zeros((n, m.nq - 4))
+    legs[:, 0] = 0.5 * np.sin(2 * np.pi * t)  # hip: 4 rad of |change| over two cycles
+    legs[:, 3] = 0.6 + 0.5 * np.sin(2 * np.pi * t)  # knee, in phase
+    still = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    targets = _noisy_targets(m, np.c_[still, legs], 0.0, seed=1, pelvis=True)
+    p = setup_ik(m, targets)
+    names = [t.frame for t in p.tasks]
+    parents = _parent_tasks(p)
+    assert [names[i] for i, j in enumerate(parents) if j < 0] == ["pelvis"], (names, parents)
+    assert names[parents[names.index("right_tibia")]] == "right_femur"
+    inner = len(_anchors(p, 1000)) - 2
+    assert 4 / ANCHOR_TURN_RAD - 2 <= inner <= 4 / ANCHOR_TURN_RAD + 1  # not ~8: the shank's
+    yaw = np.linspace(0.0, 4 * np.pi, n)  # the body turning twice, joints still
+    turning = np.c_[np.zeros(n), np.sin(yaw / 2), np.zeros(n), np.cos(yaw / 2)]
+    turned = _noisy_targets(m, np.c_[turning, np.tile(legs[:1], (n, 1))], 0.0, seed=1,
+                            pelvis=True)  # fmt: skip
+    assert abs(len(_anchors(setup_ik(m, turned), 1000)) - 4 * np.pi / ANCHOR_TURN_RAD) <= 3
+    noisy = _noisy_targets(m, np.c_[still, legs], 0.02, seed=4, pelvis=True)
+    seq, res = solve_ik(m, noisy, stride=1), solve_ik(m, noisy)
+    assert res.converged.all() and np.abs(res.q - seq.q).max() < 2e-4

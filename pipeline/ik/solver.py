@@ -120,9 +120,11 @@ def orientation_residuals(
 
 
 def solve_frame(
-    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None
-) -> tuple[np.ndarray, int, bool]:
+    p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None,
+    tol: float | None = None,
+) -> tuple[np.ndarray, int, bool]:  # fmt: skip
     """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``.
+    ``tol``: the stopping tolerance (default the problem's).
 
     ``previous`` (2, nq): the solutions of frames ``n-2`` and ``n-1`` for the constant-velocity
     warm start (``extrapolate``). A frame without any finite target returns ``q`` untouched with
@@ -148,7 +150,7 @@ def solve_frame(
     U = np.empty((3, k))  # world-frame residuals u_i = R_i r_i = log3(R_i R_i*^T)
     v = np.zeros(model.nv)
     mu_eye = p.mu_eye
-    lam, tol = p.regularization, p.tol
+    lam, tol = p.regularization, (p.tol if tol is None else tol)
     log3_, cjj, ufp = pin.log3, pin.computeJointJacobians, pin.updateFramePlacement
     rs = (6, model.nv)
     margin = box_margin(q[bq], blo, bhi) if has_limits else np.inf
@@ -276,11 +278,14 @@ def _solve_strided(
     known = np.empty((N, model.nq))  # the warm start each solved frame leaves
     done = np.zeros(N, dtype=bool)
     q = p.q_ref.copy()
-    for n in anchors:
+    for n in anchors:  # in sequence, each from the one before: the basin of the motion
         if whole[n]:
-            q, iters[n], conv[n] = solve_frame(p, n, q)
-            Q[n] = q
+            q, iters[n], _ = solve_frame(p, n, q, tol=max(ANCHOR_TOL, p.tol))
+            Q[n] = q.copy()
         known[n] = q
+    # the anchors then to tol together, from where the sequence left them
+    _refine(p, b, anchors[whole[anchors]], Q, iters, conv)
+    known[anchors] = np.where(whole[anchors, None], Q[anchors], known[anchors])
     done[anchors] = True
     spacing = stride
     while spacing > 1:
@@ -291,13 +296,8 @@ def _solve_strided(
             frames = level[first : first + block]
             start = b.kin.normalize(_interpolate(ref, known, frames))
             start[:, b.fixed_q] = p.q_ref[b.fixed_q]  # exactly as given, not interpolated
-            Q[frames], iters[frames], conv[frames] = solve_block(p, b, frames, start)
-        for n in level[~conv[level]]:  # the per-frame solver finishes what a block did not,
-            qn = Q[n].copy()  # with max_iters steps of its own
-            if p.has_limits:
-                qn[p.bq] = np.clip(qn[p.bq], p.blo, p.bhi)
-            Q[n], extra, conv[n] = solve_frame(p, n, qn)
-            iters[n] += extra
+            Q[frames] = start
+            _refine(p, b, frames, Q, iters, conv)
         known[level] = Q[level]
         done[level] = True
     # frames with a missing target last, in order, each from the solution before it (the
@@ -310,20 +310,67 @@ def _solve_strided(
     return Q, iters, conv
 
 
-#: Largest rotation (rad, ~57 deg) of any target, summed along the trial, between two anchors:
+def _refine(p: IKProblem, b: BlockSetup, frames: np.ndarray, Q: np.ndarray, iters: np.ndarray,
+            conv: np.ndarray) -> None:  # fmt: skip
+    """``frames`` (all targets present) solved to ``tol`` in a block from ``Q[frames]``, in
+    place (iterations added); the per-frame solver finishes what the block did not, with
+    ``max_iters`` steps of its own."""
+    if not frames.size:
+        return
+    Q[frames], it, conv[frames] = solve_block(p, b, frames, Q[frames])
+    iters[frames] += it
+    for n in frames[~conv[frames]]:
+        qn = Q[n].copy()
+        if p.has_limits:
+            qn[p.bq] = np.clip(qn[p.bq], p.blo, p.bhi)
+        Q[n], extra, conv[n] = solve_frame(p, n, qn)
+        iters[n] += extra
+
+
+#: Tolerance (rad) of the anchors' sequential solve: it only has to keep the motion's basin; the
+#: block then takes them to ``tol`` together (:func:`_refine`).
+ANCHOR_TOL = 1e-2
+
+#: Largest rotation (rad, ~57 deg) of any target relative to its parent segment's target (of a
+#: top target, such as the pelvis, in the world), summed along the trial, between two anchors:
 #: where the motion is fast the anchors come closer (down to every frame), so that no frame starts
-#: from an interpolation across a large turn (a pelvis turning round, a recording spliced end to
-#: end: there the interpolated start can lie in another basin of the least-squares problem).
+#: from an interpolation of joint coordinates across a large turn (a pelvis turning round, a knee
+#: flexing fast, a recording spliced end to end: there the interpolated start can lie in another
+#: basin of the least-squares problem). Relative rotations are what the interpolated joint
+#: coordinates follow: a foot swinging with its leg turns fast in the world, not at its joints.
 ANCHOR_TURN_RAD = 1.0
 
 
+def _parent_tasks(p: IKProblem) -> list[int]:
+    """Per task, the task on the nearest joint above its own (-1 for a top task)."""
+    model = p.model
+    joint_task: dict[int, int] = {}
+    for i, fid in enumerate(p.fids):
+        joint_task.setdefault(int(model.frames[fid].parentJoint), i)
+    parents = []
+    for fid in p.fids:
+        own = int(model.frames[fid].parentJoint)
+        j = int(model.parents[own]) if own > 0 else 0
+        while j > 0 and j not in joint_task:
+            j = int(model.parents[j])
+        parents.append(joint_task.get(j, -1) if j > 0 else -1)
+    return parents
+
+
 def _anchors(p: IKProblem, stride: int) -> np.ndarray:
-    """Every ``stride``-th frame and the last, and more where the targets' rotation summed since
-    the previous anchor exceeds :data:`ANCHOR_TURN_RAD`."""
+    """Every ``stride``-th frame and the last, and more where the targets' rotation (relative to
+    their parent target: :data:`ANCHOR_TURN_RAD`) summed since the previous anchor exceeds
+    :data:`ANCHOR_TURN_RAD`."""
     N = p.n_frames
     if N < 2:
         return np.arange(N)
-    tr = np.einsum("nkij,nkij->nk", p.RtT[1:], p.RtT[:-1])  # tr(R_n^T R_{n-1}), per task
+    R = np.swapaxes(p.RtT, 2, 3)  # (N, k, 3, 3) targets
+    parents = _parent_tasks(p)
+    rel = np.array(R)
+    for i, j in enumerate(parents):
+        if j >= 0:
+            rel[:, i] = p.RtT[:, j] @ R[:, i]  # R_j^T R_i
+    tr = np.einsum("nkij,nkij->nk", rel[1:], rel[:-1])  # tr(A_{n-1}^T A_n), per task
     turn = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
     turn = np.nan_to_num(turn, nan=0.0).max(axis=1)  # (N-1,): from frame n to n + 1
     out, acc, last = [0], 0.0, 0
