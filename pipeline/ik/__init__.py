@@ -26,6 +26,7 @@ _EXPORTS = {
     "solve_ik": "solver",
     "solve_linear": "bounds",
     "UNBOUNDED": "bounds",
+    "anchor_frames": "anchors",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -14,11 +14,12 @@ stopping test and leaves the block when it meets it, so each returned ``q`` is w
 its optimum, exactly as with :func:`~pipeline.ik.solver.solve_frame`.
 
 Warm start (frames are independent once each has a starting point): anchor frames (every
-``stride``-th, closer where the targets turn fast) are solved by the per-frame solver, each
-warm-started from the previous one, as the sequential solver does; every other frame starts from
-the cubic through the solved frames around it, quaternions renormalised
-(:func:`pipeline.ik.solver.solve_ik` drives this). The optimum reached is the one the sequential
-solver reaches (tested within ``tol``); only the number of iterations differs.
+``stride``-th, closer where the targets turn fast relative to their parent targets) are solved by
+the per-frame solver, each warm-started from the previous one, as the sequential solver does, to
+a loose tolerance (they only have to keep the motion's basin) and then to ``tol`` together in a
+block; every other frame starts from the cubic through the solved frames around it, quaternions
+renormalised (:func:`pipeline.ik.solver.solve_ik` drives this). The optimum reached is the one the
+sequential solver reaches (tested within ``tol``); only the number of iterations differs.
 
 The per-frame solver takes over, from the block's last iterate, where the block cannot match it:
 frames that did not converge within ``max_iters`` and frames with a missing target. Joint limits

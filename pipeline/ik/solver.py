@@ -51,6 +51,7 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
+from pipeline.ik.anchors import ANCHOR_TOL, anchor_frames, interpolate
 from pipeline.ik.batch import BlockSetup, block_frame_rotations, block_setup, solve_block
 from pipeline.ik.bounds import box_margin, box_step, solve_linear
 from pipeline.ik.problem import IKProblem, OrientationTask, frame_id, setup_ik
@@ -262,10 +263,12 @@ def solve_ik(
 def _solve_strided(
     p: IKProblem, b: BlockSetup, stride: int, block: int = 2048
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Anchors (every ``stride``-th frame, closer where the targets turn fast: :func:`_anchors`)
-    in sequence, then the frames between them level by level (spacing divided by 8 per level,
+    """Anchors (every ``stride``-th frame, closer where the joints turn fast:
+    :func:`~pipeline.ik.anchors.anchor_frames`) in sequence to
+    :data:`~pipeline.ik.anchors.ANCHOR_TOL`, then to ``tol`` in a block, then the frames between
+    them level by level (spacing divided by 8 per level,
     down to 1), each level in blocks started from the interpolation of the frames solved so far
-    (:func:`_interpolate`, :mod:`pipeline.ik.batch`). Frames with a
+    (:func:`~pipeline.ik.anchors.interpolate`, :mod:`pipeline.ik.batch`). Frames with a
     missing target are solved last, in time order, each warm-started from the solution before
     it, so that the DoFs only the missing targets observe are held as in the sequential solver."""
     model = p.model
@@ -274,7 +277,7 @@ def _solve_strided(
     iters = np.zeros(N, dtype=int)
     conv = np.zeros(N, dtype=bool)
     whole = p.finite.all(axis=1)
-    anchors = _anchors(p, stride)
+    anchors = anchor_frames(p, stride)
     known = np.empty((N, model.nq))  # the warm start each solved frame leaves
     done = np.zeros(N, dtype=bool)
     q = p.q_ref.copy()
@@ -294,7 +297,7 @@ def _solve_strided(
         ref = np.flatnonzero(done)
         for first in range(0, level.size, block):  # memory: one block's starting points
             frames = level[first : first + block]
-            start = b.kin.normalize(_interpolate(ref, known, frames))
+            start = b.kin.normalize(interpolate(ref, known, frames))
             start[:, b.fixed_q] = p.q_ref[b.fixed_q]  # exactly as given, not interpolated
             Q[frames] = start
             _refine(p, b, frames, Q, iters, conv)
@@ -325,93 +328,6 @@ def _refine(p: IKProblem, b: BlockSetup, frames: np.ndarray, Q: np.ndarray, iter
             qn[p.bq] = np.clip(qn[p.bq], p.blo, p.bhi)
         Q[n], extra, conv[n] = solve_frame(p, n, qn)
         iters[n] += extra
-
-
-#: Tolerance (rad) of the anchors' sequential solve: it only has to keep the motion's basin; the
-#: block then takes them to ``tol`` together (:func:`_refine`).
-ANCHOR_TOL = 1e-2
-
-#: Largest rotation (rad, ~57 deg) of any target relative to its parent segment's target (of a
-#: top target, such as the pelvis, in the world), summed along the trial, between two anchors:
-#: where the motion is fast the anchors come closer (down to every frame), so that no frame starts
-#: from an interpolation of joint coordinates across a large turn (a pelvis turning round, a knee
-#: flexing fast, a recording spliced end to end: there the interpolated start can lie in another
-#: basin of the least-squares problem). Relative rotations are what the interpolated joint
-#: coordinates follow: a foot swinging with its leg turns fast in the world, not at its joints.
-ANCHOR_TURN_RAD = 1.0
-
-
-def _parent_tasks(p: IKProblem) -> list[int]:
-    """Per task, the task on the nearest joint above its own (-1 for a top task)."""
-    model = p.model
-    joint_task: dict[int, int] = {}
-    for i, fid in enumerate(p.fids):
-        joint_task.setdefault(int(model.frames[fid].parentJoint), i)
-    parents = []
-    for fid in p.fids:
-        own = int(model.frames[fid].parentJoint)
-        j = int(model.parents[own]) if own > 0 else 0
-        while j > 0 and j not in joint_task:
-            j = int(model.parents[j])
-        parents.append(joint_task.get(j, -1) if j > 0 else -1)
-    return parents
-
-
-def _anchors(p: IKProblem, stride: int) -> np.ndarray:
-    """Every ``stride``-th frame and the last, and more where the targets' rotation (relative to
-    their parent target: :data:`ANCHOR_TURN_RAD`) summed since the previous anchor exceeds
-    :data:`ANCHOR_TURN_RAD`."""
-    N = p.n_frames
-    if N < 2:
-        return np.arange(N)
-    R = np.swapaxes(p.RtT, 2, 3)  # (N, k, 3, 3) targets
-    parents = _parent_tasks(p)
-    rel = np.array(R)
-    for i, j in enumerate(parents):
-        if j >= 0:
-            rel[:, i] = p.RtT[:, j] @ R[:, i]  # R_j^T R_i
-    tr = np.einsum("nkij,nkij->nk", rel[1:], rel[:-1])  # tr(A_{n-1}^T A_n), per task
-    turn = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
-    turn = np.nan_to_num(turn, nan=0.0).max(axis=1)  # (N-1,): from frame n to n + 1
-    out, acc, last = [0], 0.0, 0
-    for n, t in enumerate(turn.tolist(), start=1):
-        acc += t
-        if acc > ANCHOR_TURN_RAD or n - last >= stride:
-            if t > ANCHOR_TURN_RAD and n - 1 > last:
-                out.append(n - 1)  # a jump: no frame is interpolated across it
-            out.append(n)
-            acc, last = 0.0, n
-    if out[-1] != N - 1:
-        out.append(N - 1)
-    return np.array(out)
-
-
-def _interpolate(ref: np.ndarray, known: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """Starting points at frames ``at`` from the solutions ``known[ref]``: the cubic through the
-    two solved frames on each side (Lagrange in the frame index; exact for cubic motion, so that
-    most frames converge in one or two steps), linear where a side has only one or where an outer
-    interval changes by more than 0.5 rad in a coordinate (a jump: the cubic would overshoot)."""
-    right = np.minimum(np.searchsorted(ref, at), ref.size - 1)
-    i1, i2 = np.maximum(right - 1, 0), right
-    i0, i3 = np.maximum(i1 - 1, 0), np.minimum(i2 + 1, ref.size - 1)
-    x = at.astype(float)
-    nodes = [ref[i].astype(float) for i in (i0, i1, i2, i3)]
-    cubic = (i0 < i1) & (i2 < i3)
-    step = lambda a, b: np.abs(known[ref[a]] - known[ref[b]]).max(axis=1)  # noqa: E731
-    cubic &= (step(i0, i1) < 0.5) & (step(i2, i3) < 0.5)
-    w = np.zeros((at.size, 4))
-    for k in range(4):
-        wk = np.ones(at.size)
-        for m in range(4):
-            if m != k:
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    wk *= (x - nodes[m]) / (nodes[k] - nodes[m])
-        w[:, k] = wk
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.nan_to_num((x - nodes[1]) / (nodes[2] - nodes[1]))
-    w = np.where(cubic[:, None], np.nan_to_num(w), np.c_[np.zeros_like(t), 1.0 - t, t,
-                                                        np.zeros_like(t)])  # fmt: skip
-    return sum(w[:, k, None] * known[ref[i]] for k, i in enumerate((i0, i1, i2, i3)))
 
 
 def _result(
