@@ -1,5 +1,6 @@
-"""The rerun viewer (outputs): trials and model motions written to ``.rrd`` recordings with the
-columnar API and a default layout, read back, and opened in the native or web viewer.
+"""The rerun viewer (outputs): trials and model motions written to ``.rrd`` recordings (columns
+over a timeline, a default layout) by rerun's native writer (:mod:`pipeline.viz.rrd`), read
+back, and opened in the native or web viewer.
 
 The public names below load their module on first use (:mod:`pipeline._lazy`).
 """
@@ -8,6 +9,8 @@ from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
     "default_blueprint": "layout",
+    "default_layout": "layout",
+    "RrdWriter": "rrd",
     "entity_row_counts": "recording",
     "log_motion": "model",
     "log_trial": "recording",

@@ -18,7 +18,7 @@ from pipeline.errors import InputError
 from pipeline.viz.arrow import pandas_shortcut_if_asked
 from pipeline.viz.rrd import Layout
 
-__all__ = ["default_blueprint", "layout", "sdk_blueprint", "up_axis_index"]
+__all__ = ["default_blueprint", "default_layout", "sdk_blueprint", "up_axis_index"]
 
 
 def up_axis_index(up_axis: str) -> int:
@@ -28,7 +28,7 @@ def up_axis_index(up_axis: str) -> int:
     return 1 if up_axis == "y" else 2
 
 
-def layout(
+def default_layout(
     plots: Sequence[tuple[str, str | Sequence[str]]],
     up_axis: str,
     camera: tuple[np.ndarray, np.ndarray] | None = None,
@@ -59,9 +59,10 @@ def default_blueprint(
     camera: tuple[np.ndarray, np.ndarray] | None = None,
     ground: float | None = None,
 ):
-    """:func:`layout` as a ``rerun.blueprint.Blueprint`` (rerun's Python API: e.g. a ``.rbl``
-    file, a viewer). Recordings carry the same layout, written by :mod:`pipeline.viz.rrd`."""
-    return sdk_blueprint(layout(plots, up_axis, camera, ground))
+    """:func:`default_layout` as a ``rerun.blueprint.Blueprint`` (rerun's Python API: e.g. a
+    ``.rbl`` file, a viewer). Recordings carry the same layout, written by
+    :mod:`pipeline.viz.rrd`."""
+    return sdk_blueprint(default_layout(plots, up_axis, camera, ground))
 
 
 def sdk_blueprint(spec: Layout):

@@ -17,8 +17,9 @@ timeline ``time``, seconds):
   ``ROS_PACKAGE_PATH``. Its root link is placed in ``world`` by a static named-frame transform
   (default ``Rx(+90 deg)``: a Y-up model stands upright in a Z-up world).
 
-The file carries a default blueprint (the viewer's layout, :func:`pipeline.viz.layout.layout`):
-the 3D view of ``world`` on the left, the ``plots`` as time-series views on the right. Files are
+The file carries a default blueprint (the viewer's layout,
+:func:`pipeline.viz.layout.default_layout`): the 3D view of ``world`` on the left, the ``plots``
+as time-series views on the right. Files are
 written by rerun's native writer through :class:`pipeline.viz.rrd.RrdWriter`, without importing
 the ``rerun`` Python package (~0.3 s); reading back uses it.
 
@@ -44,7 +45,7 @@ from pipeline.errors import InputError
 from pipeline.model.resources import example_robot_data_share
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.viz.arrow import pandas_shortcut_if_asked
-from pipeline.viz.layout import layout as _layout
+from pipeline.viz.layout import default_layout as _layout
 from pipeline.viz.layout import up_axis_index as _check_up_axis
 from pipeline.viz.rrd import VIEW_COORDINATES, Layout, RrdWriter, pack_colors
 

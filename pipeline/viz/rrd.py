@@ -182,11 +182,11 @@ def _components(archetype: str, fields: dict, columns: bool) -> dict:
 
 @dataclass(frozen=True)
 class Layout:
-    """The viewer's default layout (:func:`pipeline.viz.layout.layout`): the 3D view of ``world``
-    (3/5 of the width) beside ``views`` (title, origin entity or list of entities) in a grid of
-    ``grid_columns``; ``up`` (3,) the vertical, ``camera`` (eye, target) or None, ``ground`` the
-    height of the line grid or None; the time panel plays timeline ``time`` in a loop, the
-    selection panel starts collapsed."""
+    """The viewer's default layout (:func:`pipeline.viz.layout.default_layout`): the 3D view of
+    ``world`` (3/5 of the width) beside ``views`` (title, origin entity or list of entities) in
+    a grid of ``grid_columns``; ``up`` (3,) the vertical, ``camera`` (eye, target) or None,
+    ``ground`` the height of the line grid or None; the time panel plays timeline ``time`` in a
+    loop, the selection panel starts collapsed."""
 
     views: tuple[tuple[str, str | tuple[str, ...]], ...]
     grid_columns: int

@@ -22,7 +22,7 @@ from pipeline.errors import InputError
 from pipeline.io.stl import read_stl, vertex_normals
 from pipeline.model.meshes import resolve_package_uri
 from pipeline.rotations import matrix_from_euler_zyx
-from pipeline.viz.layout import layout as _layout
+from pipeline.viz.layout import default_layout as _layout
 from pipeline.viz.recording import (
     log_landmarks,
     log_poses,
