@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.model.skeleton import Skeleton
+from pipeline.quantiles import nanmedian
 
 __all__ = ["AT_LIMIT_SHARE", "AT_LIMIT_TOL", "RESIDUAL_BOUND_DEG", "quality_flags"]
 
@@ -37,7 +38,7 @@ def quality_flags(
     ``joints``: the joints whose limits are checked (default all; unobserved joints held at a
     fixed value are better left out)."""
     flags = []
-    res = np.degrees(np.nanmedian(residual_rms)) if np.isfinite(residual_rms).any() else np.nan
+    res = np.degrees(nanmedian(residual_rms))
     if not res <= RESIDUAL_BOUND_DEG:
         flags.append(
             f"median orientation residual {res:.1f} deg (plausible: below "

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.quantiles import quantile
 from pipeline.rotations import (
     angle_between,
     axis_angle,
@@ -53,7 +54,7 @@ def dominant_axis(
     ok = np.isfinite(angle) & (angle > 0)
     if ok.sum() < 10:
         return None, 0.0
-    thresh = np.quantile(angle[ok], 1.0 - top)
+    thresh = quantile(angle[ok], 1.0 - top)
     sel = ok & (angle >= thresh)
     v = np.sum(axis[sel] * angle[sel, None], axis=0)
     if np.linalg.norm(v) == 0:
@@ -79,7 +80,7 @@ def turning_axis(
     largest = float(np.max(angle[ok])) if ok.any() else 0.0
     if ok.sum() < 10 or largest < min_turn:
         return None, largest
-    sel = ok & (angle >= np.quantile(angle[ok], 1.0 - top))
+    sel = ok & (angle >= quantile(angle[ok], 1.0 - top))
     scatter = np.einsum("n,ni,nj->ij", angle[sel], axis[sel], axis[sel])
     return normalize(np.linalg.eigh(scatter)[1][:, -1]), largest
 

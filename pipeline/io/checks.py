@@ -22,6 +22,7 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.io.notes import Notes
 from pipeline.io.text import FileLike, where
+from pipeline.quantiles import median
 
 __all__ = [
     "PLAUSIBLE_RATE_HZ",
@@ -110,7 +111,7 @@ def estimate_rate(time: np.ndarray) -> RateInfo:
     """Sampling rate from (already checked) time stamps: ``1 / median(diff(t))``."""
     t = np.asarray(time, dtype=float)
     dt = np.diff(t)
-    med = float(np.median(dt))
+    med = median(dt)
     return RateInfo(
         rate_hz=1.0 / med,
         dt_s=med,

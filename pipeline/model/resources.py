@@ -3,7 +3,7 @@ installed inside the package so that wheels carry it) and example-robot-data."""
 
 from __future__ import annotations
 
-import importlib.resources
+import importlib
 import sys
 from functools import lru_cache
 from pathlib import Path
@@ -12,8 +12,10 @@ __all__ = ["example_robot_data_share", "human_urdf", "models_file"]
 
 
 def models_file(name: str) -> Path:
-    """Path of a shipped file of ``pipeline.models``; raises ``FileNotFoundError`` naming it."""
-    path = Path(str(importlib.resources.files("pipeline.models").joinpath(name)))
+    """Path of a shipped file of ``pipeline.models``; raises ``FileNotFoundError`` naming it.
+    The package's folder from its ``__file__`` (installed or editable, the files are on disk;
+    ``importlib.resources`` would import ``zipfile`` for it)."""
+    path = Path(importlib.import_module("pipeline.models").__file__).parent / name
     if not path.is_file():
         raise FileNotFoundError(f"shipped model file missing: {path}")
     return path
