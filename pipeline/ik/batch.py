@@ -138,12 +138,12 @@ def _solve_normal(At: np.ndarray, g: np.ndarray, C: np.ndarray, mu: float, b: Bl
     H = At @ np.ascontiguousarray(np.swapaxes(At, 1, 2))  # stacked products: contiguous
     H *= C
     diag = np.arange(H.shape[1])
-    if free is None:
-        H[:, diag, diag] += mu
-    else:
-        H *= free[:, :, None]
-        H *= free[:, None, :]
-        H[:, diag, diag] += mu + (1.0 - free)
+    H[:, diag, diag] += mu
+    if free is not None:  # held DoFs (few): their rows and columns replaced by the identity
+        fb, fa = np.nonzero(free == 0.0)
+        H[fb, fa, :] = 0.0
+        H[fb, :, fa] = 0.0
+        H[fb, fa, fa] = 1.0
     r = b.root
     out = np.empty_like(g)
     if not b.root.size:

@@ -71,6 +71,9 @@ class JointRotations:
                                       jm.idx_v))  # fmt: skip
         self._MK = {}  # (M, M K, M K^2) of each revolute joint
         self._cols = {}  # revolute joints about +-e_k: (i, j, k, sign, M is the identity)
+        revolute = [jt for jt in self.joints if jt.kind == "revolute"]
+        self._rev_iq = [jt.iq for jt in revolute]  # their configuration entries
+        self._rev_row = {jt.index: r for r, jt in enumerate(revolute)}
         for jt in self.joints:
             if jt.kind == "revolute":
                 K = skew(jt.axis)
@@ -94,6 +97,8 @@ class JointRotations:
         """
         B = Q.shape[0]
         out: dict[int, np.ndarray] = {}
+        if self._rev_iq:  # every revolute joint's sine and cosine in one call each
+            sines, cosines = np.sin(Q[:, self._rev_iq]).T, np.cos(Q[:, self._rev_iq]).T
         for jt in self.joints:
             if jt.kind == "revolute":
                 a = Q[:, jt.iq]
@@ -101,8 +106,9 @@ class JointRotations:
                 if cols is not None:
                     i, j, k, sign, ident = cols
                     P = out[jt.parent] if ident else times(out[jt.parent], jt.placement)
-                    s = (np.sin(a) if sign > 0 else -np.sin(a))[:, None]
-                    c = np.cos(a)[:, None]
+                    r = self._rev_row[jt.index]
+                    s = (sines[r] if sign > 0 else -sines[r])[:, None]
+                    c = cosines[r][:, None]
                     Pi, Pj = P[:, :, i], P[:, :, j]
                     R = np.empty_like(P)
                     R[:, :, i] = c * Pi + s * Pj
