@@ -343,8 +343,9 @@ def _single_threaded_blas() -> None:
 
 def _recording_writer(argv: list[str] | None):
     """``pipeline ik`` run as the program, its recording wanted: the recording's writer forked
-    first, before the parser and the heavy imports, so that it imports rerun on the second core
-    meanwhile (:mod:`pipeline.viz.background`; ``run_ik`` hands it the job or closes it)."""
+    first, before the parser and the heavy imports, so that it imports NumPy, pyarrow and rerun's
+    native writer on the second core meanwhile (:mod:`pipeline.viz.background`; ``run_ik`` hands
+    it the job or closes it)."""
     words = sys.argv[1:] if argv is None else []
     if words[:1] != ["ik"] or any(w in ("--no-rerun", "-h", "--help") for w in words):
         return None
