@@ -28,7 +28,7 @@ are handled in the block by projected Newton (:func:`solve_block`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -53,16 +53,14 @@ class BlockSetup:
     fixed_q: np.ndarray  # configuration entries no solved DoF moves (held at q_ref)
     root: np.ndarray  # DoFs coupled with every other one (a floating pelvis), positions in cols
     groups: list[np.ndarray]  # the other DoFs in mutually uncoupled groups (one per leg)
+    columns: list = field(init=False)  # the DoFs' world axes as columns (JointRotations)
+    root_index: slice | np.ndarray = field(init=False)  # root / groups as slices where ranges:
+    group_index: list = field(init=False)  # views, not copies, of the normal matrix
 
-    @property
-    def root_index(self) -> slice | np.ndarray:
-        """``root`` as a slice where it is a range (a view, not a copy, of the normal matrix)."""
-        return _as_index(self.root)
-
-    @property
-    def group_index(self) -> list[slice | np.ndarray]:
-        """``groups``, each as a slice where it is a range."""
-        return [_as_index(g) for g in self.groups]
+    def __post_init__(self) -> None:
+        self.columns = self.kin.axis_columns(self.owners, self.axes)
+        self.root_index = _as_index(self.root)
+        self.group_index = [_as_index(g) for g in self.groups]
 
 
 def _as_index(a: np.ndarray) -> slice | np.ndarray:
@@ -207,7 +205,7 @@ def solve_block(
         Rw = b.kin.world(Qa)
         Rf = _task_rotations(b, Rw)
         U = log3((Rf @ p.RtT[frames[active]]).reshape(-1, 3, 3)).reshape(active.size, -1, 3)
-        At = b.kin.world_axes(Rw, b.owners, b.axes)  # (Ba, na, 3)
+        At = b.kin.world_axes(Rw, b.columns)  # (Ba, na, 3)
         # g_a = sum_i Wm[a, i] (A_a . u_i) = A_a . (Wm U)_a
         g = np.einsum("bac,bac->ba", At, Wm @ U)  # (Ba, na)
         free = None

@@ -78,11 +78,11 @@ class JointRotations:
             if jt.kind == "revolute":
                 K = skew(jt.axis)
                 self._MK[jt.index] = (jt.placement, jt.placement @ K, jt.placement @ K @ K)
-                k = int(np.argmax(np.abs(jt.axis)))
-                if abs(jt.axis[k]) == 1.0 and jt.parent != 0:
-                    i, j = (k + 1) % 3, (k + 2) % 3
+                unit = _unit_axis(jt.axis)
+                if unit is not None and jt.parent != 0:
+                    k, sign = unit
                     ident = bool(np.array_equal(jt.placement, np.eye(3)))
-                    self._cols[jt.index] = (i, j, k, float(jt.axis[k]), ident)
+                    self._cols[jt.index] = ((k + 1) % 3, (k + 2) % 3, k, sign, ident)
 
     def world(self, Q: np.ndarray) -> dict[int, np.ndarray]:
         """``{joint: (B, 3, 3)}`` world rotations for configurations ``Q`` (B, nq).
@@ -101,7 +101,6 @@ class JointRotations:
             sines, cosines = np.sin(Q[:, self._rev_iq]).T, np.cos(Q[:, self._rev_iq]).T
         for jt in self.joints:
             if jt.kind == "revolute":
-                a = Q[:, jt.iq]
                 cols = self._cols.get(jt.index)
                 if cols is not None:
                     i, j, k, sign, ident = cols
@@ -116,7 +115,8 @@ class JointRotations:
                     R[:, :, k] = P[:, :, k]
                     out[jt.index] = R
                     continue
-                s, c = np.sin(a), 1.0 - np.cos(a)
+                r = self._rev_row[jt.index]
+                s, c = sines[r], 1.0 - cosines[r]
                 M, MK, MK2 = self._MK[jt.index]
                 if jt.parent == 0:
                     out[jt.index] = M + s[:, None, None] * MK + c[:, None, None] * MK2
@@ -177,21 +177,32 @@ class JointRotations:
                 Q[:, iq : iq + 4] = quat_xyzw_integrate(Q[:, iq : iq + 4], w)
         return Q
 
-    def world_axes(self, Rw: dict[int, np.ndarray], owners: list[int], axes: np.ndarray
-                   ) -> np.ndarray:  # fmt: skip
-        """World axes (B, na, 3) of tangent DoFs (``owners``, ``axes`` from
-        :meth:`tangent_plan`) given the joints' world rotations ``Rw``: ``R_j a``, a column of
-        ``R_j`` (signed) when ``a = +-e_k``."""
+    @staticmethod
+    def axis_columns(owners: list[int], axes: np.ndarray
+                     ) -> list[tuple[int, int, float, np.ndarray]]:  # fmt: skip
+        """Per tangent DoF (``owners``, ``axes`` from :meth:`tangent_plan`): ``(joint, k, sign,
+        axis)``, its world axis being ``sign`` times column ``k`` of the joint's rotation when
+        the axis is ``+-e_k`` (``k = -1``: any other axis), for :meth:`world_axes`."""
+        out = []
+        for j, a in zip(owners, axes, strict=True):
+            k, sign = _unit_axis(a) or (-1, 0.0)
+            out.append((j, k, sign, a))
+        return out
+
+    @staticmethod
+    def world_axes(Rw: dict[int, np.ndarray], columns: list) -> np.ndarray:
+        """World axes (B, na, 3) of tangent DoFs (``columns`` from :meth:`axis_columns`) given
+        the joints' world rotations ``Rw``: ``R_j a``, a column of ``R_j`` (signed) when
+        ``a = +-e_k``."""
         B = next(iter(Rw.values())).shape[0]
-        At = np.empty((B, len(owners), 3))
-        for col, (j, a) in enumerate(zip(owners, axes, strict=True)):
-            k = int(np.argmax(np.abs(a)))
-            if a[k] == 1.0:
-                At[:, col] = Rw[j][:, :, k]
-            elif a[k] == -1.0:
-                np.negative(Rw[j][:, :, k], out=At[:, col])
-            else:
+        At = np.empty((B, len(columns), 3))
+        for col, (j, k, sign, a) in enumerate(columns):
+            if k < 0:
                 At[:, col] = times(Rw[j], a)
+            elif sign > 0:
+                At[:, col] = Rw[j][:, :, k]
+            else:
+                np.negative(Rw[j][:, :, k], out=At[:, col])
         return At
 
     def poses(self, Q: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
@@ -238,6 +249,12 @@ class JointRotations:
                 iq = jt.iq + (3 if jt.kind == "freeflyer" else 0)
                 Q[:, iq : iq + 4] /= np.linalg.norm(Q[:, iq : iq + 4], axis=1, keepdims=True)
         return Q
+
+
+def _unit_axis(a: np.ndarray) -> tuple[int, float] | None:
+    """``(k, sign)`` when the unit axis ``a`` is ``sign * e_k``, else None."""
+    k = int(np.argmax(np.abs(a)))
+    return (k, float(a[k])) if abs(a[k]) == 1.0 else None
 
 
 def times(R: np.ndarray, M: np.ndarray) -> np.ndarray:

@@ -69,7 +69,7 @@ _FIELDS = {
     ("ViewBlueprint", "space_origin"): ("rerun.blueprint.components.ViewOrigin", "text"),
     ("LineGrid3D", "visible"): ("rerun.components.Visible", "bool"),
     ("LineGrid3D", "spacing"): ("rerun.blueprint.components.GridSpacing", "f32"),
-    ("LineGrid3D", "plane"): ("rerun.components.Plane3D", "vec4"),
+    ("LineGrid3D", "plane"): ("rerun.components.Plane3D", _VEC4),
     ("EyeControls3D", "kind"): ("rerun.blueprint.components.Eye3DKind", "u8"),
     ("EyeControls3D", "position"): ("rerun.components.Position3D", _VEC3),
     ("EyeControls3D", "look_target"): ("rerun.components.Position3D", _VEC3),
