@@ -25,7 +25,7 @@ _EXPORTS = {
     "IKOptions": "process",
     "IKRun": "process",
     "InputError": "errors",
-    "Measures": "model.anthropometry",
+    "Measures": "model.measures",
     "Skeleton": "model.skeleton",
     "calibrate": "calibration.calibrate",
     "mot_columns": "process",

@@ -27,10 +27,10 @@ EXAMPLES = {
     "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
     "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
     "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
-    "orientations": "pipeline orientations --imu out/sim --filter vqf "
+    "orientations": "pipeline orientations --imu out/sim/imu --filter vqf "
     "--out out/sim_orientations.sto",
-    "calibrate": "pipeline calibrate hinge --imu1 out/sim/right_femur_imu.csv "
-    "--imu2 out/sim/right_tibia_imu.csv --method ipopt --json",
+    "calibrate": "pipeline calibrate hinge --imu1 out/sim/imu/right_femur_imu.csv "
+    "--imu2 out/sim/imu/right_tibia_imu.csv --method ipopt --json",
     "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",
     "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
     "demo": "pipeline demo --out out/demo",
@@ -44,26 +44,32 @@ def _version() -> str:
     return __version__
 
 
+#: What an example needs first.
+EXAMPLE_NEEDS = {"orientations": "the simulate example's output",
+                 "calibrate": "the simulate example's output"}  # fmt: skip
+
+
 def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
+    needs = f" (reads {EXAMPLE_NEEDS[name]})" if name in EXAMPLE_NEEDS else ""
     return sub.add_parser(
         name,
         help=help_,
         description=help_,
-        epilog=f"example:\n  {EXAMPLES[name]}",
+        epilog=f"example{needs}:\n  {EXAMPLES[name]}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
 
 
-def _add_anthropometrics(p: argparse.ArgumentParser, required: bool = True) -> None:
-    p.add_argument("--sex", choices=["m", "f"], required=required,
-                   help="sex, for the regression equations (required)")  # fmt: skip
-    p.add_argument("--height-m", type=float, required=required,
-                   help="body height in metres (required)")  # fmt: skip
-    absent = "default: not measured; the equations use the others"
-    p.add_argument("--shank-lateral-m", type=float, help=f"s_L = |EFL - LM| in metres ({absent})")
-    p.add_argument("--shank-medial-m", type=float, help=f"s_M = |EFM - MM| in metres ({absent})")
-    p.add_argument("--knee-width-m", type=float, help=f"k = |EFM - EFL| in metres ({absent})")
-    p.add_argument("--ankle-width-m", type=float, help=f"a = |MM - LM| in metres ({absent})")
+def _add_anthropometrics(p: argparse.ArgumentParser) -> None:
+    """The subject's measures (:class:`~pipeline.model.measures.Measures`), sex and height
+    required."""
+    from pipeline.model.measures import Measures
+    from pipeline.option import add_flags, specs
+
+    add_flags(p, specs(Measures))
+    for action in p._actions:
+        if action.dest in ("sex", "height_m"):
+            action.required = True
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -93,7 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, help="output .urdf file")
     p.set_defaults(func=_cmd_scale)
 
-    p = _sub(sub, "ik", "inverse kinematics from IMU orientations (.sto)")
+    p = _sub(sub, "ik", "joint angles and landmarks from a recording (IMU orientations or raw "
+             "signals)")
     add_ik_options(p)
     p.set_defaults(func=_cmd_ik)
 
@@ -136,6 +143,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"attitude filter (default {DEFAULT_FILTER}; pi: Hu 2021's PI filter)")
     p.add_argument("--sensor-map", nargs="+", metavar="NAME=ID",
                    help="our sensor name = a unique part of a file name (default: the names)")
+    p.add_argument("--ignore", nargs="+", metavar="PATTERN", default=(),
+                   help="entries of the folder to leave out (file name patterns) (default: none)")
     p.add_argument("--out", type=Path, required=True, help="output .sto file")
     p.set_defaults(func=_cmd_orientations)
 
@@ -185,28 +194,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _measures(args):
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
+    from pipeline.option import specs
 
-    return Measures(
-        sex=args.sex,
-        height_m=args.height_m,
-        shank_lateral_m=args.shank_lateral_m,
-        shank_medial_m=args.shank_medial_m,
-        knee_width_m=args.knee_width_m,
-        ankle_width_m=args.ankle_width_m,
-    )
+    return Measures(**{f.name: getattr(args, f.name) for f in specs(Measures)})
 
 
 def _pairs(items: list[str] | None, option: str) -> dict[str, str] | None:
-    if not items:
-        return None
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name or not value:
-            raise InputError(f"expected NAME=VALUE pairs, got {item!r}", field=option)
-        out[name] = value
-    return out
+    from pipeline.option import parse_pairs
+
+    return parse_pairs(items, option) if items else None
 
 
 def _cmd_scale(args) -> int:
@@ -219,19 +216,13 @@ def _cmd_scale(args) -> int:
 
 
 def _cmd_ik(args) -> int:
-    from pipeline.commands.ik import resolve_ik, run_ik
+    from pipeline.commands.ik import run_settings, summary_text
+    from pipeline.option import from_flag
+    from pipeline.process.options import all_specs, resolve_settings
 
-    keys = ("orientations", "out", "sex", "height_m", "shank_lateral_m", "shank_medial_m",
-            "knee_width_m", "ankle_width_m", "foot_length_m", "sensor_to_model", "heading",
-            "segment_orientations", "calibration_pose", "static_trial", "filter",
-            "calibration_method", "drift", "knee", "correction", "knee_axis_femur",
-            "knee_axis_tibia", "joint_limits", "rerun", "strict", "osim")  # fmt: skip
-    flags = {k: getattr(args, k) for k in keys}
-    flags.update({k: str(v) for k, v in flags.items() if isinstance(v, Path)})
-    sto, out, measures, options = resolve_ik(args.config, flags,
-                                             _pairs(args.sensor_map, "--sensor-map"))  # fmt: skip
-    summary = run_ik(sto, measures, out, options, recorder=args.recorder)
-    print(summary)
+    values = {s.name: from_flag(s, getattr(args, s.name)) for s in all_specs()}
+    settings = resolve_settings(args.config, values)
+    print(summary_text(run_settings(settings, recorder=args.recorder)))
     return 0
 
 
@@ -254,7 +245,8 @@ def _cmd_orientations(args) -> int:
     from pipeline.commands.orientations import run_orientations
 
     print(run_orientations(args.imu, args.out, filter=args.filter,
-                           sensor_map=_pairs(args.sensor_map, "--sensor-map")))  # fmt: skip
+                           sensor_map=_pairs(args.sensor_map, "--sensor-map"),
+                           ignore=tuple(args.ignore)))  # fmt: skip
     return 0
 
 

@@ -7,8 +7,8 @@ simulator's default) gives 2 s standing and then ``--minutes`` of weaving gait. 
 accelerometer signals (no magnetometer, no quaternions) go through
 :func:`pipeline.process.process_recording` with VQF 6-D, once with ``drift='none'`` and once with
 the default ``drift='auto'`` (each leg's sensors turned into the pelvis sensor's heading by the hip
-and ankle centres and the knee's hinge axis, :mod:`pipeline.process.drift`); the 9-D run (with
-the simulated, undisturbed magnetometer) is the reference a magnetometer would give.
+and ankle centres and the knee's hinge axis, :mod:`pipeline.process.heading_alignment`); the 9-D
+run (with the simulated, undisturbed magnetometer) is the reference a magnetometer would give.
 
 Printed: the heading that each joint's alignment applied (its range over the trial: the
 filter's heading difference between the two sensors, a constant from their starts plus the
@@ -27,7 +27,7 @@ import time
 import numpy as np
 from bench_raw_path import NAMES, SUBJECT, errors
 
-from pipeline.analysis.landmarks import joint_angles
+from pipeline.analysis.joint_angles import joint_angles
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton

@@ -242,7 +242,7 @@ def timed_solve_ik(record: list, **fixed):
 
 
 def run_ours(trial, rot, heading: str, knee: str, work: Path, **solver) -> dict:
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
     from pipeline.process import mot_columns, process_recording
 
     cpu: list[float] = []
@@ -499,7 +499,7 @@ def main() -> int:
         return 0
     with contextlib.suppress(Exception):
         osim.Logger.setLevelString("Error")
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
     from pipeline.model.scaling import geometry_from_measures
 
     files = [f for f in FILES if args.only in (None, f)]

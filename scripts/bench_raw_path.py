@@ -36,10 +36,11 @@ import time
 
 import numpy as np
 
-from pipeline.analysis.landmarks import frame_trajectories, joint_angles
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
+from pipeline.analysis.joint_angles import joint_angles
+from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.model.anthropometry import Measures
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process import process_recording

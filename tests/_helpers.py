@@ -80,7 +80,7 @@ def knee_truth(sim):
 
     from pipeline.calibration.joint_constraints import project_hinge_positions
 
-    truth = json.loads((sim / "truth.json").read_text())
+    truth = json.loads((sim / "truth" / "truth.json").read_text())
     k = truth["joints"]["right_knee"]
     j1, j2 = np.array(k["axis_1"]), np.array(k["axis_2"])
     o1, o2 = project_hinge_positions(

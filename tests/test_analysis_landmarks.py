@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.analysis.landmarks import jcs_angles, joint_angles, landmark_trajectories
+from pipeline.analysis.joint_angles import jcs_angles, joint_angles
+from pipeline.analysis.landmarks import landmark_trajectories
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_euler_zxy, normalize, rot_x, rot_y, rot_z

@@ -1,5 +1,6 @@
 """Every example that ``pipeline --help`` and each command's ``--help`` show runs as written from
-the repository root (outputs under the git-ignored ``out/``)."""
+a folder laid out as the repository's root (its ``tests/`` and ``../shared`` linked), so that its
+``out/`` is a temporary folder: the tests never write into the repository."""
 
 from __future__ import annotations
 
@@ -27,8 +28,13 @@ def test_every_command_has_an_example_in_its_help():
 
 
 @pytest.mark.slow
-def test_examples_run_as_written(monkeypatch, capsys):
-    monkeypatch.chdir(ROOT)
+def test_examples_run_as_written(monkeypatch, capsys, tmp_path):
+    root = tmp_path / "repo"
+    root.mkdir()
+    (root / "tests").symlink_to(ROOT / "tests")
+    if SHARED.parent.is_dir():
+        (tmp_path / "shared").symlink_to(SHARED.parent)
+    monkeypatch.chdir(root)
     for name in ORDER:
         if name in NEEDS_DATA and not NEEDS_DATA[name].is_dir():
             continue
@@ -37,8 +43,8 @@ def test_examples_run_as_written(monkeypatch, capsys):
         assert main(argv[1:]) == 0, name
     out = capsys.readouterr().out
     assert '"axis_1"' in out  # the calibrate example printed its JSON
-    assert (ROOT / "out" / "subject.urdf").is_file()
-    assert (ROOT / "out" / "demo" / "demo.rrd").is_file()
+    assert (root / "out" / "subject.urdf").is_file()
+    assert (root / "out" / "demo" / "demo.rrd").is_file()
     # `pipeline view out/demo/demo.rrd --web` serves until stopped: its file exists (above) and the
     # command line it runs is checked in test_viz_viewer.py
 

@@ -50,7 +50,7 @@ def test_rows_run_fail_alone_and_a_rerun_skips_what_is_complete(trials, tmp_path
     rows = _summary(out)
     assert [r["status"] for r in rows] == ["ok", "failed", "ok"]
     assert rows[0]["frames"] == "400" and float(rows[0]["residual_median_deg"]) < 5
-    assert "file not found" in rows[1]["message"]
+    assert "no such file" in rows[1]["message"]
     assert (out / "s1" / "walk0" / "walk0_ik.mot").is_file()
     assert (out / "s1" / "walk1" / "walk1_config.toml").read_text().count('knee = "hinge"') == 1
     again = run_batch(m, out, workers=1, progress=False)

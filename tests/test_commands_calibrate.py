@@ -15,8 +15,8 @@ from pipeline.rotations import angle_between
 
 
 def _calibrate(capsys, sim, method, joint="hinge", as_json=True):
-    argv = ["calibrate", joint, "--imu1", str(sim / "right_femur_imu.csv")]
-    argv += ["--imu2", str(sim / "right_tibia_imu.csv"), "--method", method]
+    argv = ["calibrate", joint, "--imu1", str(sim / "imu" / "right_femur_imu.csv")]
+    argv += ["--imu2", str(sim / "imu" / "right_tibia_imu.csv"), "--method", method]
     capsys.readouterr()
     assert main(argv + (["--json"] if as_json else [])) == 0
     out = capsys.readouterr().out
@@ -97,7 +97,7 @@ def _fails(capsys, argv, *needles):
 
 
 def test_bad_inputs_exit_2_with_one_line(capsys, sim, tmp_path):
-    f1, f2 = sim / "right_femur_imu.csv", sim / "right_tibia_imu.csv"
+    f1, f2 = sim / "imu" / "right_femur_imu.csv", sim / "imu" / "right_tibia_imu.csv"
     missing = tmp_path / "nope.csv"
     _fails(capsys, ["calibrate", "hinge", "--imu1", str(missing), "--imu2", str(f2)], "nope.csv")
     rec = read_imu_csv(f2)
@@ -122,7 +122,7 @@ def test_bad_inputs_exit_2_with_one_line(capsys, sim, tmp_path):
 def test_degenerate_inputs_are_refused_not_returned(capsys, sim, tmp_path):
     from pipeline.commands.simulate import run_simulation
 
-    thigh = sim / "right_femur_imu.csv"
+    thigh = sim / "imu" / "right_femur_imu.csv"
     # the same file twice, and the same signals under two names
     assert main(["calibrate", "hinge", "--imu1", str(thigh), "--imu2", str(thigh)]) == 2
     assert "same file" in capsys.readouterr().err
@@ -133,8 +133,8 @@ def test_degenerate_inputs_are_refused_not_returned(capsys, sim, tmp_path):
     # a trial with no motion (the simulator's standing pose)
     still = tmp_path / "still"
     run_simulation(still, "static", 2.0, 0)
-    argv = ["calibrate", "hinge", "--imu1", str(still / "right_femur_imu.csv"),
-            "--imu2", str(still / "right_tibia_imu.csv")]  # fmt: skip
+    argv = ["calibrate", "hinge", "--imu1", str(still / "imu" / "right_femur_imu.csv"),
+            "--imu2", str(still / "imu" / "right_tibia_imu.csv")]  # fmt: skip
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "barely move" in err and "Traceback" not in err

@@ -6,7 +6,7 @@ import pytest
 import tomllib
 
 from pipeline.cli import main
-from pipeline.commands.ik import resolve_ik
+from pipeline.process.options import resolve_settings
 
 OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
 WALK = OPENSIM / "xsens_walking_orientations.sto"
@@ -43,16 +43,16 @@ def test_flags_override_the_file_and_required_values_are_named(tmp_path):
     cfg = tmp_path / "s.toml"
     cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
                    'knee = "hinge"\nout = "res"\n[sensors]\npelvis_imu = "P"\n')  # fmt: skip
-    sto, out, measures, options = resolve_ik(cfg, {"knee": "free", "height_m": 1.7},
-                                             {"femur_r_imu": "T"})  # fmt: skip
-    assert sto == tmp_path / "w.sto" and out == tmp_path / "res"
-    assert measures.height_m == 1.7 and options.knee == "free"
-    assert options.sensor_map == {"pelvis_imu": "P", "femur_r_imu": "T"}
+    s = resolve_settings(cfg, {"knee": "free", "height_m": 1.7, "sensor_map": {"femur_r_imu": "T"}})
+    assert Path(s.inputs.orientations) == tmp_path / "w.sto"
+    assert Path(s.outputs.out) == tmp_path / "res"
+    assert s.subject.height_m == 1.7 and s.options.knee == "free"
+    assert s.inputs.sensor_map == {"pelvis_imu": "P", "femur_r_imu": "T"}
     cfg.write_text('[ik]\norientations = "w.sto"\nout = "o"\n')
     with pytest.raises(Exception, match="--sex is required"):
-        resolve_ik(cfg, {})
+        resolve_settings(cfg, {})
     with pytest.raises(Exception, match="--orientations is required"):
-        resolve_ik(None, {"sex": "m", "height_m": 1.8})
+        resolve_settings(None, {"sex": "m", "height_m": 1.8, "out": "o"})
 
 
 def test_bad_configuration_exits_2_naming_the_file_and_key(tmp_path, capsys):
@@ -99,7 +99,7 @@ def _chunk_columns(path: Path) -> dict[str, list]:
 CHILD_RUN = """
 import os, sys
 import pipeline.commands.ik as ik
-from pipeline.model.anthropometry import Measures
+from pipeline.model.measures import Measures
 from pipeline.viz.background import BackgroundRecording
 pids = []
 start = BackgroundRecording.start
@@ -127,7 +127,7 @@ def test_the_recording_written_by_the_child_is_the_one_written_in_process(tmp_pa
     import sys
 
     import pipeline.commands.ik as ik
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
 
     sto = OPENSIM / "quaternions_4_ik.sto"
     if not sto.exists():
@@ -156,7 +156,7 @@ def _broken_recording(*args) -> None:
 def test_a_failing_recording_leaves_no_output(tmp_path, monkeypatch):
     """The child's error reaches the caller and no file (nor temporary) is left."""
     import pipeline.commands.ik as ik
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
 
     sto = OPENSIM / "quaternions_4_ik.sto"
     if not sto.exists():

@@ -7,7 +7,7 @@ from pipeline.cli import main
 from pipeline.io.imu_csv import write_imu_csv
 from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
-from pipeline.model.anthropometry import Measures
+from pipeline.model.measures import Measures
 from pipeline.process import process_recording
 from pipeline.simulate.model import simulate_trial
 
@@ -39,7 +39,7 @@ def test_writes_an_sto_that_pipeline_ik_reads_like_the_folder(raw_folder, tmp_pa
     # calibration and the joints' heading alignment, which the .sto cannot carry)
     m = Measures("m", 1.75)
     from_sto = process_recording(rec, m, sensor_to_model=(-np.pi / 2, 0, 0))
-    from pipeline.io.imu_folder import read_imu_folder
+    from pipeline.io.formats import read_recording as read_imu_folder
 
     from_raw = process_recording(read_imu_folder(raw_folder), m, filter="pi",
                                  calibration_method="none", drift="none")  # fmt: skip

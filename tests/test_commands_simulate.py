@@ -17,22 +17,22 @@ HEADER = "time,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,mag_x,mag_y,mag_z,quat_w,quat
 
 
 def test_simulate_writes_every_file(sim):
-    names = {p.name for p in sim.iterdir()}
+    assert {p.name for p in sim.iterdir()} == {"imu", "truth"}
     imus = ["pelvis_imu"] + [f"{s}_{g}_imu" for s in ("right", "left") for g in ("femur", "tibia")]
     imus += ["right_foot_imu", "left_foot_imu"]
-    expected = {f"{n}.csv" for n in imus}
-    expected |= {"truth.json", "model.urdf", "landmarks.csv", "configuration.csv"}
-    assert names == expected
-    assert (sim / "right_femur_imu.csv").read_text().splitlines()[0] == HEADER
-    rec = read_imu_csv(sim / "right_femur_imu.csv")
+    assert {p.name for p in (sim / "imu").iterdir()} == {f"{n}.csv" for n in imus}
+    assert {p.name for p in (sim / "truth").iterdir()} == {"truth.json", "model.urdf",
+                                                          "landmarks.csv", "configuration.csv"}
+    assert (sim / "imu" / "right_femur_imu.csv").read_text().splitlines()[0] == HEADER
+    rec = read_imu_csv(sim / "imu" / "right_femur_imu.csv")
     assert rec.time.size == 1500 and abs(rec.rate_hz - 100.0) < 1e-6
-    truth = json.loads((sim / "truth.json").read_text())
+    truth = json.loads((sim / "truth" / "truth.json").read_text())
     assert truth["motion"] == "gait" and truth["seed"] == 0
     assert set(truth["sensors"]) == set(imus)
     assert truth["sensors"]["right_tibia_imu"]["misalignment_deg"] > 5.0
-    lm = (sim / "landmarks.csv").read_text().splitlines()
+    lm = (sim / "truth" / "landmarks.csv").read_text().splitlines()
     assert lm[0].startswith("time,right_HJC_x,right_HJC_y,right_HJC_z") and len(lm) == 1501
-    Skeleton.from_urdf(sim / "model.urdf", root="freeflyer")  # the URDF used loads
+    Skeleton.from_urdf(sim / "truth" / "model.urdf", root="freeflyer")  # the URDF used loads
 
 
 def test_truth_json_matches_the_files(sim):
@@ -41,8 +41,8 @@ def test_truth_json_matches_the_files(sim):
     truth, j1, j2, _, _ = knee_truth(sim)
     from pipeline.rotations import matrix_from_quat
 
-    q1 = read_imu_csv(sim / "right_femur_imu.csv").quat
-    q2 = read_imu_csv(sim / "right_tibia_imu.csv").quat
+    q1 = read_imu_csv(sim / "imu" / "right_femur_imu.csv").quat
+    q2 = read_imu_csv(sim / "imu" / "right_tibia_imu.csv").quat
     w1, w2 = matrix_from_quat(q1) @ j1, matrix_from_quat(q2) @ j2
     assert np.degrees(angle_between(w1, w2)).max() < 1e-6
 

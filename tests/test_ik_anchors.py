@@ -4,7 +4,7 @@ splices, joint rotations), checked against the sequential solver's optima."""
 from __future__ import annotations
 
 import numpy as np
-from test_ik_batch import _noisy_targets
+from test_ik_block import _noisy_targets
 from test_ik_solver import gait, leg_model
 
 from pipeline.ik.anchors import ANCHOR_TURN_RAD, anchor_frames, interpolate, parent_tasks

@@ -27,7 +27,7 @@ def test_readers_and_simulator_return_recordings(sim):
     from pipeline.simulate.joint_trials import hinge_trial
     from pipeline.simulate.model import simulate_trial
 
-    csv = read_imu_csv(sim / "right_femur_imu.csv")
+    csv = read_imu_csv(sim / "imu" / "right_femur_imu.csv")
     assert isinstance(csv, Recording) and csv.name == "right_femur_imu"
     trial = simulate_trial(motion="static", duration_s=0.2)
     rec = trial.recording

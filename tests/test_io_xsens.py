@@ -195,9 +195,9 @@ def test_a_folder_of_raw_xsens_exports_runs_through_the_filter_and_ik(tmp_path):
     """The Xsens MT raw path end to end: simulated gait (misplaced sensors, noise, gyro bias)
     written as MT Manager .txt exports with Acc/Gyr/Mag only, read by the ``pipeline ik`` loader
     with an id map, filtered by VQF 9-D: knee flexion of the truth within 2 deg RMS."""
-    from pipeline.analysis.landmarks import joint_angles
+    from pipeline.analysis.joint_angles import joint_angles
     from pipeline.commands.ik import load_orientations
-    from pipeline.model.anthropometry import Measures
+    from pipeline.model.measures import Measures
     from pipeline.process import process_recording
     from pipeline.simulate.model import simulate_trial
 
@@ -255,27 +255,38 @@ def test_comma_delimited_export(tmp_path):
 
 
 def test_trial_from_several_sensors(tmp_path):
+    from pipeline.io.formats import read_recording
+
     t, R, acc, gyr = _motion(60)
     t2, R2, acc2, gyr2 = _motion(60, w=(0.1, 0.2, -0.3))
     _write(tmp_path / "MT_012005D6_009-001_00B421AF.txt", R, acc, gyr)
     _write(tmp_path / "MT_012005D6_009-001_00B42263.txt", R2, acc2, gyr2)
-    trial = xsens.read_xsens_trial(
-        tmp_path,
-        {"00B421AF": "pelvis_imu", "00B42263": "femur_r_imu"},
-        prefix="MT_012005D6_009-001_",
-    )
-    assert trial.sensor_names == ("pelvis_imu", "femur_r_imu") and trial.rate_hz == 100.0
+    trial = read_recording(tmp_path, {"pelvis_imu": "00B421AF", "femur_r_imu": "00B42263"})
+    assert set(trial.sensor_names) == {"pelvis_imu", "femur_r_imu"} and trial.rate_hz == 100.0
     np.testing.assert_allclose(trial.time, t, atol=1e-12)
     assert _err(trial.sensors["femur_r_imu"].quat, R2).max() < 2e-5
     q = make_quaternions_continuous(trial.sensors["pelvis_imu"].quat)[0]
     np.testing.assert_array_equal(q, trial.sensors["pelvis_imu"].quat)  # already continuous
-    with pytest.raises(InputError, match="no file for sensor 00B4XXXX \\(tibia_r_imu\\)"):
-        xsens.read_xsens_trial(tmp_path, {"00B4XXXX": "tibia_r_imu"}, prefix="MT_012005D6_009-001_")
+    with pytest.raises(InputError, match="no sensor of the recording matches '00B4XXXX'"):
+        read_recording(tmp_path, {"tibia_r_imu": "00B4XXXX"})
+    with pytest.raises(InputError, match=r"no sensor name for \['MT_012005D6_009-001_00B42263"):
+        read_recording(tmp_path, {"pelvis_imu": "00B421AF"})
 
 
-def test_trial_with_mismatched_lengths_refused(tmp_path):
+def test_sensors_of_different_lengths_keep_the_span_all_cover(tmp_path):
+    """Files of one station share the packet counter: a file that stops early crops the trial
+    to the samples every sensor has (not a refusal)."""
+    from pipeline.io.formats import read_recording
+
     t, R, acc, gyr = _motion(60)
     _write(tmp_path / "a_1.txt", R, acc, gyr)
     _write(tmp_path / "a_2.txt", R[:50], acc[:50], gyr[:50])
-    with pytest.raises(InputError, match=r"different numbers of samples \(x \(a_1.txt\): 60"):
-        xsens.read_xsens_trial(tmp_path, {"1": "x", "2": "y"}, prefix="a_")
+    trial = read_recording(tmp_path, {"pelvis_imu": "a_1", "femur_r_imu": "a_2"})
+    assert trial.n_samples == 50
+    np.testing.assert_allclose(trial.time, t[:50], atol=1e-9)
+    later = np.arange(3593, 3593 + 50)  # the second sensor's first packet 10 samples later
+    _write(tmp_path / "a_2.txt", R[10:], acc[10:], gyr[10:], counter=later)
+    trial = read_recording(tmp_path, {"pelvis_imu": "a_1", "femur_r_imu": "a_2"})
+    assert trial.n_samples == 50
+    assert _err(trial.sensors["pelvis_imu"].quat, R[10:]).max() < 2e-5
+    assert _err(trial.sensors["femur_r_imu"].quat, R[10:]).max() < 2e-5

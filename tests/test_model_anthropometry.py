@@ -14,10 +14,10 @@ from pipeline.model.anthropometry import (
     CSV_COLUMNS,
     EQUATION_TARGETS,
     GROUPS,
-    Measures,
     load_table1,
     predict_landmarks,
 )
+from pipeline.model.measures import Measures
 
 MIRRORS = [  # (equation, landmark a, landmark b, axis): a = -b by construction of the frames
     *[(eq, "EFM", "EFL", "z") for eq in ("h", "k")],

@@ -7,7 +7,8 @@ import pytest
 from pipeline.cli import main
 from pipeline.errors import InputError
 from pipeline.model import Skeleton
-from pipeline.model.anthropometry import Measures, load_table1
+from pipeline.model.anthropometry import load_table1
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures, population_knee_axis, scale_model
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "wang2023"

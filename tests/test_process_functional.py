@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.model.anthropometry import Measures
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
 from pipeline.process import process_recording
 from pipeline.simulate.model import simulate_trial
 
@@ -46,7 +46,7 @@ def test_the_real_ximu3_recording_is_not_trusted_and_says_why():
     """~18 s of free leg movements: the halves disagree and the hinge residual is large."""
     if not XIMU3.exists():
         pytest.skip("../shared/data/ximu3_lower_body not present")
-    from pipeline.io.imu_folder import read_imu_folder
+    from pipeline.io.formats import read_recording as read_imu_folder
 
     run = process_recording(read_imu_folder(XIMU3), Measures("m", 1.8), filter="vqf")
     assert len(run.knee_calibrations) == 2
@@ -88,9 +88,9 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
         ours, theirs, eq_1_8 = (_femur_axis_error_deg(r, trial, side)
                                 for r in (run, fallback, aligned))  # fmt: skip
         assert ours < 1.0 and theirs > 5.0 and eq_1_8 < 1.0, (side, ours, theirs, eq_1_8)
-    text = summary_text(tmp_path / "raw", run, measures)
+    text = summary_text(run)
     assert "(functional calibration)" in text and text.count("| yes | yes |") == 2
-    default = summary_text(tmp_path / "raw", aligned, measures)
+    default = summary_text(aligned)
     assert text.count("| yes | no: correction aor |") == 0
     assert default.count("| yes | no: correction aor |") == 2
 

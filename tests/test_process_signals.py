@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.analysis.landmarks import joint_angles
+from pipeline.analysis.joint_angles import joint_angles
 from pipeline.errors import InputError
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.model.anthropometry import Measures
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process import process_recording
@@ -37,7 +37,8 @@ def walk():
 def test_raw_signals_give_the_simulated_joint_angles(walk, method):
     """Gyro + accelerometer only (15 deg misaligned sensors, noise, gyro bias): the hip and knee
     flexion of the truth within the 2 deg goal, the sensors' headings aligned by the joints
-    (pipeline.process.drift). Measured on this seed: hip 0.5-1.1, knee 0.5-0.6 deg (VQF and PI);
+    (pipeline.process.heading_alignment). Measured on this seed: hip 0.5-1.1, knee 0.5-0.6 deg
+    (VQF and PI);
     without the alignment it was hip 2.0-3.1, knee 0.8-2.5."""
     trial, raw, _ = walk
     run = process_recording(raw, M, filter=method)
@@ -77,7 +78,7 @@ def test_real_ximu3_recording_through_the_raw_path():
     fusion (the knees flex to ~120-140 deg in this recording)."""
     if not XIMU3.exists():
         pytest.skip("../shared/data/ximu3_lower_body not present")
-    from pipeline.io.imu_folder import read_imu_folder
+    from pipeline.io.formats import read_recording as read_imu_folder
 
     rec = read_imu_folder(XIMU3)
     ours = process_recording(rec, Measures("m", 1.8), filter="vqf")

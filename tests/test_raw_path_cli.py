@@ -16,7 +16,7 @@ import csv
 
 import numpy as np
 
-from pipeline.analysis.landmarks import joint_angles
+from pipeline.analysis.joint_angles import joint_angles
 from pipeline.cli import main
 from pipeline.io.mot import read_mot
 from pipeline.model.skeleton import Skeleton
@@ -65,7 +65,7 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     sim, raw, out = tmp_path / "sim", tmp_path / "raw", tmp_path / "out"
     assert main(["simulate", "--out", str(sim), "--duration-s", "17", "--standing-s",
                  str(STANDING_S), "--seed", "1"]) == 0  # fmt: skip
-    _strip_quaternions(sim, raw)
+    _strip_quaternions(sim / "imu", raw)
     assert main(["ik", "--orientations", str(raw), "--sex", "m", "--height-m", "1.75",
                  "--no-rerun",
                  "--out", str(out)]) == 0  # fmt: skip
@@ -74,8 +74,8 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     assert "Functional knee calibration" in summary
     assert "vertical was not checked" not in summary  # the filter's world is vertical
 
-    truth_model = Skeleton.from_urdf(sim / "model.urdf", root="freeflyer")
-    config = _table(sim / "configuration.csv")
+    truth_model = Skeleton.from_urdf(sim / "truth" / "model.urdf", root="freeflyer")
+    config = _table(sim / "truth" / "configuration.csv")
     Q = np.stack([config[c] for c in list(config)[1:]], axis=1)
     truth = joint_angles(truth_model, Q)
     mot = read_mot(out / "raw_ik.mot")
@@ -92,7 +92,7 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     for key, value in rms.items():
         assert value < (2.0 if key.endswith("flexion") else 4.0), (key, rms)
 
-    est, ref = _table(out / "raw_landmarks.csv"), _table(sim / "landmarks.csv")
+    est, ref = _table(out / "raw_landmarks.csv"), _table(sim / "truth" / "landmarks.csv")
     names = sorted({c.rsplit("_", 1)[0] for c in est if c != "time"} & set(
         c.rsplit("_", 1)[0] for c in ref if c != "time"))
     assert {"right_KJC", "left_MM", "right_TOE"} <= set(names)

@@ -1,7 +1,8 @@
 """Hand checks of pipeline.reproduce.wang2023.factors (the data-driven table is tested with the
 reproduction in test_reproduce_wang2023.py)."""
 
-from pipeline.model.anthropometry import Measures, load_table1
+from pipeline.model.anthropometry import load_table1
+from pipeline.model.measures import Measures
 from pipeline.reproduce.wang2023.factors import lm_y_quirk
 
 

@@ -11,13 +11,8 @@ import pytest
 from scipy import stats
 
 from pipeline.errors import InputError
-from pipeline.model.anthropometry import (
-    CSV_COLUMNS,
-    GROUPS,
-    Measures,
-    load_table1,
-    predict_landmarks,
-)
+from pipeline.model.anthropometry import CSV_COLUMNS, GROUPS, load_table1, predict_landmarks
+from pipeline.model.measures import Measures
 from pipeline.reproduce.wang2023.regression import (
     SubjectSample,
     fit_results_to_rows,

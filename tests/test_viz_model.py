@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from _helpers import blueprint_views, read_blueprint
 
-from pipeline.analysis.landmarks import joint_angles
+from pipeline.analysis.joint_angles import joint_angles
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat, rot_z

@@ -1,24 +1,10 @@
-"""Anatomical landmark trajectories and ISB joint angles from model configurations.
+"""Anatomical landmark trajectories and segment poses from model configurations.
 
 Landmarks (Wang et al. 2023, eq 15-17): the landmark frames of the scaled model are fixed in their
 segments, so their trajectories are the forward kinematics of those frames. With the hip at the
 origin, the femoral landmarks follow ``t = e_F p`` (eq 15), the knee centre
 ``t_knee = (t_EFL + t_EFM) / 2`` (eq 16) and the malleoli ``t = e_T p + t_knee`` (eq 17).
-
-Joint angles: the Grood & Suntay / ISB joint coordinate system (Wu et al. 2002) as a Z-X-Y
-decomposition of the distal segment's rotation relative to the proximal one,
-``R_p^T R_d = Rz(a) Rx(b) Ry(c)`` (Hu et al. 2021 eq 38-42):
-
-* hip: flexion ``a``, adduction ``L b``, internal rotation ``L c``;
-* knee: flexion ``-a`` (the tibia turns about -z when it flexes), adduction (varus) ``L b``,
-  tibial internal rotation ``L c``;
-* ankle (tibia -> foot): dorsiflexion ``a``, inversion ``L b`` (the model's ankle has no third
-  rotation, so ``c`` is not reported);
-
-with ``L = +1`` for the right leg and ``-1`` for the left leg, whose segment frames are mirrored
-(z still to the subject's right): mirroring maps ``Rz(a) Rx(b) Ry(c)`` to ``Rz(a) Rx(-b) Ry(-c)``,
-so the sign flip gives both legs the same anatomical meaning (adduction and internal rotation
-positive). Radians throughout.
+Joint angles are :mod:`pipeline.analysis.joint_angles`.
 """
 
 from __future__ import annotations
@@ -31,24 +17,15 @@ import pinocchio as pin
 from pipeline.errors import InputError
 from pipeline.model.batch_kinematics import JointRotations
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import euler_zxy_from_matrix
 
-__all__ = [
-    "frame_trajectories",
-    "jcs_angles",
-    "joint_angles",
-    "landmark_trajectories",
-    "wang_trajectories",
-]
+__all__ = ["CHUNK", "check_configurations", "frame_trajectories", "landmark_trajectories",
+           "wang_trajectories"]
 
-_JOINTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"), "ankle": ("tibia", "foot")}
-_CHUNK = 10_000
-_ANGLE_NAMES = {"hip": ("flexion", "adduction", "rotation"),
-                "knee": ("flexion", "adduction", "rotation"),
-                "ankle": ("flexion", "inversion", "rotation")}  # fmt: skip
+#: Frames per chunk of forward kinematics: bounded memory on long recordings.
+CHUNK = 10_000
 
 
-def _check_q(skeleton: Skeleton, Q: np.ndarray) -> np.ndarray:
+def check_configurations(skeleton: Skeleton, Q: np.ndarray) -> np.ndarray:
     Q = np.asarray(Q, dtype=float)
     if Q.ndim == 1:
         Q = Q[None]
@@ -71,7 +48,7 @@ def frame_trajectories(
 
 
 def _frame_poses(skeleton: Skeleton, Q: np.ndarray, names: Sequence[str], rotations: bool):
-    Q = _check_q(skeleton, Q)
+    Q = check_configurations(skeleton, Q)
     model = skeleton.model
     ids = [skeleton.frame_id(n) for n in names]
     n = len(Q)
@@ -92,8 +69,8 @@ def _frame_poses(skeleton: Skeleton, Q: np.ndarray, names: Sequence[str], rotati
                 if rotations:
                     R[i, k] = M.rotation
     else:
-        for lo in range(0, ok.size, _CHUNK):
-            rows = ok[lo : lo + _CHUNK]
+        for lo in range(0, ok.size, CHUNK):
+            rows = ok[lo : lo + CHUNK]
             Rc, p[:, rows] = kin.frame_poses(model, Q[rows], ids)
             if rotations:
                 R[:, rows] = Rc
@@ -112,50 +89,6 @@ def landmark_trajectories(
     names = list(skeleton.landmark_frames if names is None else names)
     _, p = _frame_poses(skeleton, Q, names, rotations=False)
     return {name: p[i] for i, name in enumerate(names)}
-
-
-def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: str) -> np.ndarray:
-    """ISB joint angles ``(N, 3)`` = [flexion, adduction, internal rotation] (rad).
-
-    ``R_proximal``, ``R_distal``: ``(N, 3, 3)`` or ``(3, 3)`` segment rotations in one world frame
-    (ISB axes; left-leg frames mirrored). ``joint`` is ``'hip'`` or ``'knee'`` (knee flexion is
-    ``-a`` of the Z-X-Y decomposition); see the module docstring for the signs.
-    """
-    if joint not in _JOINTS:
-        raise InputError(f"expected joint 'hip', 'knee' or 'ankle', got {joint!r}",
-                         field="joint")  # fmt: skip
-    if side not in ("right", "left"):
-        raise InputError(f"expected side 'right' or 'left', got {side!r}", field="side")
-    Rp, Rd = np.asarray(R_proximal, dtype=float), np.asarray(R_distal, dtype=float)
-    rel = np.swapaxes(Rp, -1, -2) @ Rd
-    e = euler_zxy_from_matrix(rel)
-    lat = 1.0 if side == "right" else -1.0
-    flex = -e[..., 0] if joint == "knee" else e[..., 0]
-    return np.stack([flex, lat * e[..., 1], lat * e[..., 2]], axis=-1)
-
-
-def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
-    """ISB hip, knee and ankle angles over ``Q``: ``'<side>_<joint>_<angle>'`` -> ``(N,)`` rad.
-
-    Keys: ``right_hip_flexion``, ``right_hip_adduction``, ``right_hip_rotation``,
-    ``right_knee_flexion``, ``right_knee_adduction``, ``right_knee_rotation``,
-    ``right_ankle_flexion`` (dorsiflexion), ``right_ankle_inversion`` (+ ``left_*``);
-    rotation = internal rotation. Computed from the segment frames (not read from q), so a hinge
-    knee reports its JCS angles including the reference rotation between the segments.
-    """
-    segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia", "foot")]
-    Q = _check_q(skeleton, Q)
-    out: dict[str, np.ndarray] = {}
-    for start in range(0, len(Q), _CHUNK):  # chunks of frames: bounded memory on long trials
-        rows = slice(start, start + _CHUNK)
-        traj = frame_trajectories(skeleton, Q[rows], segs)
-        for side in skeleton.legs:
-            for joint, (prox, dist) in _JOINTS.items():
-                p = prox if prox == "pelvis" else f"{side}_{prox}"
-                ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
-                for i, name in enumerate(_ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
-                    out.setdefault(f"{side}_{joint}_{name}", np.empty(len(Q)))[rows] = ang[:, i]
-    return out
 
 
 def wang_trajectories(

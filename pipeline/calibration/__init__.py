@@ -1,122 +1,55 @@
-"""Calibration (stage 3): recordings and a model in, sensor-to-segment relations out. Takes:
-segment or IMU orientations, gyroscope and accelerometer signals. Gives: the knee AoR (Wang eq
-1-8) and its orientation correction (eq 9-13; IPOPT whole-trial version; the full
-sensor-to-segment rotation of femur and tibia from IMU data and population priors), joint-constraint
-calibration of hinge and spherical joints (Hu eq 1-29: :func:`calibrate` with GN, DWPSO, GWO or
-IPOPT), segment frames from it (eq 30-38), the subject's heading, IMU placements from a
-calibration pose, and the PI attitude filter (eq 43-50).
+"""Calibration (stage 3): recordings and a model in, sensor-to-segment relations out.
 
-The public names below load their module on first use (:mod:`pipeline._lazy`).
+* Wang 2023: the knee AoR (eq 1-8, :func:`knee_aor`), its correction (eq 9-13,
+  :func:`correction_rotations`; one leg as ``pipeline ik`` applies it, :func:`correct_knee`; the
+  whole-trial IPOPT version, :func:`aor_correction_ipopt`).
+* Hu 2021: joint-constraint calibration of hinge and spherical joints (eq 1-29,
+  :func:`calibrate` with GN, DWPSO, GWO or IPOPT), segment frames from it (eq 30-38,
+  :func:`thigh_frame`, :func:`shank_frame`), the PI attitude filter (eq 43-50) beside VQF
+  (:func:`filter_orientations`).
+* The subject's heading (:func:`subject_right`), IMU placements from a calibration pose
+  (:func:`placements_from_pose`), the heading between two sensors from a joint
+  (:func:`hinge_heading`, :func:`heading_between`).
+
+The public names below load their module on first use (:mod:`pipeline._lazy`); the modules hold
+the rest.
 """
 
 from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
-    "AGREEMENT_DEG": "calibrate",
-    "AGREEMENT_M": "calibrate",
-    "anatomical_right": "heading",
-    "angular_acceleration": "joint_constraints",
     "aor_correction_ipopt": "aor_ipopt",
     "AorCorrection": "aor_ipopt",
-    "apply_correction": "aor",
-    "AttitudeEstimate": "attitude",
-    "axis_from_spherical": "joint_constraints",
     "calibrate": "calibrate",
-    "calibrate_classic": "solvers",
-    "calibrate_ipopt": "ipopt",
     "CALIBRATION_POSES": "conventions",
     "CalibrationResult": "solvers",
-    "check_loss": "losses",
-    "check_vertical": "heading",
-    "consistent_axis_signs": "joint_constraints",
     "correct_knee": "correction",
-    "correct_knee_to_axes": "correction",
-    "carried_correction": "correction",
-    "corrected_placement": "correction",
-    "correction_priors": "priors",
     "correction_rotations": "aor",
-    "CorrectionPriors": "priors",
     "CORRECTIONS": "conventions",
     "DEFAULT_CALIBRATION_POSE": "conventions",
     "DEFAULT_CORRECTION": "conventions",
     "DEFAULT_FILTER": "conventions",
     "DEFAULT_METHOD": "conventions",
-    "diagnose": "observability",
-    "DirectionDiagnostics": "observability",
-    "dominant_axis": "heading",
-    "dwpso": "solvers",
-    "elevation_coordinate": "aor",
+    "DRIFT_CORRECTIONS": "conventions",
     "filter_orientations": "attitude",
     "FILTERS": "conventions",
-    "flexion_coordinate": "aor",
-    "FLEXION_RANGE": "heading",
-    "frame_pairs": "aor",
-    "full_correction_ipopt": "full_correction",
-    "FullCorrection": "full_correction",
-    "gamma": "joint_constraints",
-    "gauss_newton": "solvers",
-    "gwo": "solvers",
-    "heading_rotation": "heading",
-    "HEADINGS": "heading",
-    "hinge_fit": "hinge_fit",
-    "hinge_jacobian": "joint_constraints",
-    "hinge_jacobian_spherical": "joint_constraints",
-    "hinge_residual": "joint_constraints",
-    "hinge_sample_cost": "losses",
-    "HingeFit": "hinge_fit",
-    "imu_placements_from_calibration": "placement",
+    "heading_between": "heading_offset",
+    "HeadingDrift": "heading_offset",
+    "HEADINGS": "conventions",
+    "hinge_heading": "heading_offset",
     "joint_data": "joint_constraints",
-    "joint_rotation": "segment_frames",
     "JointData": "joint_constraints",
     "JOINTS": "conventions",
     "knee_aor": "aor",
-    "knee_hinge_residual": "correction",
     "KneeAoR": "aor",
     "KneeCorrection": "correction",
-    "KneeTrial": "priors",
-    "LOSSES": "losses",
-    "mahony_filter": "attitude",
-    "mean_rotation": "placement",
     "METHODS": "conventions",
-    "MIN_AXIS_Z": "aor",
-    "motion_weights": "hinge_fit",
-    "Observability": "observability",
-    "observability": "observability",
-    "parallel_frame": "segment_frames",
-    "pelvis_axis_right": "heading",
-    "PlacementEstimate": "placement",
     "placements_from_pose": "placement",
     "population_aor": "aor",
-    "PopulationAoR": "aor",
-    "pose_configuration": "placement",
     "pose_rotations": "placement",
-    "project_hinge_positions": "joint_constraints",
-    "projection_angles": "aor",
-    "reexpress_tibia": "aor",
-    "relative_rotations": "hinge_fit",
-    "rest_bias": "attitude",
-    "rest_error": "priors",
-    "rest_rotation": "priors",
-    "REST_SAMPLES": "priors",
-    "robust_loss": "losses",
-    "sample_weights": "hinge_fit",
-    "segment_orientation": "segment_frames",
-    "select_windows": "aor",
     "shank_frame": "segment_frames",
-    "solve_subproblem": "solvers",
-    "spherical_from_axis": "joint_constraints",
-    "spherical_jacobian": "joint_constraints",
-    "spherical_residual": "joint_constraints",
-    "still_start": "attitude",
     "subject_right": "heading",
-    "Subproblem": "solvers",
-    "subproblem": "solvers",
     "thigh_frame": "segment_frames",
-    "tilt_error": "attitude",
-    "TUNED": "attitude",
-    "turning_axis": "heading",
-    "UP": "heading",
-    "verify": "calibrate",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

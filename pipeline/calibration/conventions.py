@@ -14,6 +14,7 @@ __all__ = [
     "DEFAULT_FILTER",
     "DEFAULT_METHOD",
     "FILTERS",
+    "HEADINGS",
     "JOINTS",
     "METHODS",
 ]
@@ -37,9 +38,13 @@ DEFAULT_CALIBRATION_POSE = "standing"
 #: Attitude filters for raw signals: VQF (Laidig & Seel 2023, the default) and Hu's PI filter.
 FILTERS = ("vqf", "pi")
 DEFAULT_FILTER = "vqf"
-#: Heading-drift corrections (:mod:`pipeline.process.drift`): ``'joints'`` turns each leg's sensors
-#: into the pelvis sensor's heading by the joint constraints (hip and ankle centres, the knee's
-#: hinge axis) where their calibrations hold; ``'auto'`` does so where the orientations come from
-#: a 6-D filter (each sensor's heading its own, drifting with the vertical gyro bias); ``'none'``
-#: never.
+#: Heading-drift corrections (:mod:`pipeline.process.heading_alignment`): ``'joints'`` turns each
+#: leg's sensors into the pelvis sensor's heading by the joint constraints (hip and ankle centres,
+#: the knee's hinge axis) where their calibrations hold; ``'auto'`` does so where the orientations
+#: come from a 6-D filter (each sensor's heading its own, drifting with the vertical gyro bias);
+#: ``'none'`` never.
 DRIFT_CORRECTIONS = ("auto", "joints", "none")
+#: How the subject's forward direction is found at the calibration pose
+#: (:mod:`pipeline.calibration.heading`): from the motion, or an axis of the pelvis sensor
+#: (OpenSense's convention, e.g. ``pelvis_imu:-z``).
+HEADINGS = ("anatomical",) + tuple(f"pelvis_imu:{s}{a}" for s in ("", "-") for a in "xyz")

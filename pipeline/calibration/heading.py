@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.calibration.conventions import HEADINGS
 from pipeline.errors import InputError
 from pipeline.quantiles import quantile
 from pipeline.rotations import (
@@ -40,7 +41,6 @@ __all__ = [
 ]
 
 UP = np.array([0.0, 1.0, 0.0])
-HEADINGS = ("anatomical",) + tuple(f"pelvis_imu:{s}{a}" for s in ("", "-") for a in "xyz")
 
 
 def dominant_axis(

@@ -1,11 +1,13 @@
 """``pipeline batch``: a lab's archive of trials through ``pipeline ik``, locally or on Dask.
 
 The manifest is a CSV with one row per trial: ``subject,sex,height_m,orientations`` and optional
-columns named after the options of ``pipeline ik`` (:data:`OPTION_COLUMNS`: ``knee``,
-``correction``, ``sensor_to_model`` as ``"-1.5708 0 0"``, ``sensor_map`` as ``"pelvis_imu=ID
-..."``, ``config``, the subject's measures, ...); an empty cell is "not given". Paths are relative
-to the manifest's folder. Each row runs :func:`pipeline.commands.ik.run_ik` into
-``DIR/<subject>/<recording name>/`` (all or nothing, as ``pipeline ik``).
+columns named after any other option of ``pipeline ik`` (:func:`option_columns`, from the options'
+one definition, :mod:`pipeline.process.options`: ``knee``, ``correction``, ``drift``,
+``sensor_to_model`` as ``"-1.5708 0 0"``, ``sensor_map`` as ``"pelvis_imu=ID ..."``, the
+subject's measures, ...) and ``config`` (a configuration file the row's cells override); an empty
+cell is "not given". Paths are relative to the manifest's folder. Each row runs
+:func:`pipeline.commands.ik.run_settings` into ``DIR/<subject>/<recording name>/`` (all or
+nothing, as ``pipeline ik``).
 
 * Parallel: on local worker processes (``distributed.LocalCluster``, one thread each; ``workers``
   of them, default one per core, 1 = in this process), or on a running Dask cluster with
@@ -14,8 +16,9 @@ to the manifest's folder. Each row runs :func:`pipeline.commands.ik.run_ik` into
 * One failing trial never stops the others: its row says ``failed`` and why.
 * A rerun skips rows whose outputs are complete (``skipped``); ``force`` redoes them.
 * ``DIR/batch_summary.csv`` lists every row: ``row,subject,orientations,status,message,frames,
-  residual_median_deg,flags,seconds,out_dir``; written when every row has ended (an interrupted
-  batch leaves the trials it finished, each complete, and no summary; rerun it to continue).
+  residual_median_deg,flags,seconds,out_dir``, the figures read from each run's
+  ``<name>_figures.json``; written when every row has ended (an interrupted batch leaves the
+  trials it finished, each complete, and no summary; rerun it to continue).
 """
 
 from __future__ import annotations
@@ -28,62 +31,32 @@ from pathlib import Path
 
 from pipeline.errors import InputError
 
-__all__ = ["OPTION_COLUMNS", "REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "read_manifest", "run_batch",
+__all__ = ["REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "option_columns", "read_manifest", "run_batch",
            "run_row"]  # fmt: skip
 
 REQUIRED_COLUMNS = ("subject", "sex", "height_m", "orientations")
-#: Optional manifest columns: ``pipeline ik`` options (flag names without dashes) -> cell type.
-OPTION_COLUMNS = {
-    "config": "path", "static_trial": "path",
-    "shank_lateral_m": "float", "shank_medial_m": "float", "knee_width_m": "float",
-    "ankle_width_m": "float", "foot_length_m": "float",
-    "knee": "text", "correction": "text", "heading": "text", "calibration_pose": "text",
-    "filter": "text",
-    "sensor_to_model": "floats", "knee_axis_femur": "floats", "knee_axis_tibia": "floats",
-    "segment_orientations": "bool", "joint_limits": "bool", "rerun": "bool", "osim": "bool",
-    "strict": "bool", "sensor_map": "pairs",
-}  # fmt: skip
 SUMMARY_COLUMNS = ("row", "subject", "orientations", "status", "message", "frames",
                    "residual_median_deg", "flags", "seconds", "out_dir")  # fmt: skip
-_OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml")
+_OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml", "_figures.json")
 
 
-def _cell(value: str, kind: str, manifest: Path, column: str, line: int) -> object:
-    where = dict(file=manifest, field=f"{column} (line {line})")
-    if kind == "path":
-        p = Path(value).expanduser()
-        return str(p if p.is_absolute() else (manifest.parent / p).resolve())
-    if kind == "float":
-        try:
-            return float(value)
-        except ValueError:
-            raise InputError(f"expected a number, got {value!r}", **where) from None
-    if kind == "floats":
-        try:
-            return tuple(float(v) for v in value.split())
-        except ValueError:
-            raise InputError(f"expected numbers separated by spaces, got {value!r}",
-                             **where) from None  # fmt: skip
-    if kind == "bool":
-        low = value.strip().lower()
-        if low not in ("true", "false", "1", "0", "yes", "no"):
-            raise InputError(f"expected true or false, got {value!r}", **where)
-        return low in ("true", "1", "yes")
-    if kind == "pairs":
-        out = {}
-        for item in value.split():
-            name, sep, ident = item.partition("=")
-            if not sep or not name or not ident:
-                raise InputError(f"expected NAME=ID pairs, got {item!r}", **where)
-            out[name] = ident
-        return out
-    return value
+def option_columns() -> dict[str, object]:
+    """Manifest column -> its option's :class:`~pipeline.option.Spec` (every option of
+    ``pipeline ik`` but ``out``, which the batch sets per row), and ``config``."""
+    from pipeline.option import Spec
+    from pipeline.process.options import all_specs
+
+    cols: dict[str, object] = {s.name: s for s in all_specs() if s.name != "out"}
+    cols["config"] = Spec("config", "path", "a configuration file the row's cells override")
+    return cols
 
 
 def read_manifest(path: str | Path) -> list[dict[str, object]]:
-    """The manifest's rows as ``pipeline ik`` flags (``None`` where a cell is empty), each with
-    its ``row`` number (1 = the first data row) and ``line``; refused with the file, the column
-    and the line when a column is unknown or a cell malformed."""
+    """The manifest's rows as option values (``None`` where a cell is empty), each with its
+    ``row`` number (1 = the first data row), ``line`` and ``subject``; refused with the file, the
+    column and the line when a column is unknown or a cell malformed."""
+    from pipeline.option import from_cell
+
     path = Path(path)
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
@@ -92,17 +65,18 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
             raw_rows = list(reader)
     except FileNotFoundError:
         raise InputError("no such manifest", file=path) from None
+    columns = option_columns()
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
         raise InputError(f"missing column(s) {missing}; expected {list(REQUIRED_COLUMNS)} and "
-                         f"any of {sorted(OPTION_COLUMNS)}", file=path, field="header")  # fmt: skip
-    unknown = [c for c in header if c not in REQUIRED_COLUMNS and c not in OPTION_COLUMNS]
+                         f"any of {sorted(set(columns) - set(REQUIRED_COLUMNS))}", file=path,
+                         field="header")  # fmt: skip
+    unknown = [c for c in header if c != "subject" and c not in columns]
     if unknown:
-        raise InputError(f"unknown column(s) {unknown}; the options are {sorted(OPTION_COLUMNS)}",
+        raise InputError(f"unknown column(s) {unknown}; the options are {sorted(columns)}",
                          file=path, field="header")  # fmt: skip
     if not raw_rows:
         raise InputError("no rows after the header", file=path)
-    kinds = {"height_m": "float", "orientations": "path", **OPTION_COLUMNS}
     rows = []
     for k, raw in enumerate(raw_rows, start=1):
         line = k + 1
@@ -114,7 +88,11 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
                 continue
             if key in ("subject", "sex") and not value:
                 raise InputError("expected a value", file=path, field=f"{key} (line {line})")
-            row[key] = _cell(value, kinds.get(key, "text"), path, key, line) if value else None
+            if key == "subject":
+                row[key] = value
+            else:
+                row[key] = from_cell(columns[key], value, path.parent, path, line) if value \
+                    else None
         rows.append(row)
     return rows
 
@@ -128,7 +106,8 @@ def _out_dir(out: Path, row: Mapping[str, object]) -> Path:
 def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[str, object]:
     """One manifest row through ``pipeline ik`` (what a worker runs); never raises: a failure is
     the row's ``status`` and ``message``."""
-    from pipeline.commands.ik import recording_name, resolve_ik, run_ik
+    from pipeline.commands.ik import recording_name, run_settings
+    from pipeline.process.options import resolve_settings
 
     folder = _out_dir(Path(out), row)
     name = recording_name(str(row["orientations"]))
@@ -136,18 +115,14 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
     result.update(row=row["row"], subject=row["subject"], orientations=row["orientations"],
                   out_dir=str(folder))  # fmt: skip
     if not force and all((folder / f"{name}{s}").is_file() for s in _OUTPUTS):
-        text = (folder / f"{name}_summary.md").read_text(encoding="utf-8")
         result.update(status="skipped", message="outputs complete (--force redoes them)",
-                      **_figures(text))  # fmt: skip
+                      **_figures(folder / f"{name}_figures.json"))  # fmt: skip
         return result
     t0 = time.perf_counter()
-    flags = {k: v for k, v in row.items()
-             if k not in ("row", "line", "subject", "config", "sensor_map")}  # fmt: skip
-    flags["out"] = str(folder)
+    values = {k: v for k, v in row.items() if k not in ("row", "line", "subject", "config")}
+    values["out"] = str(folder)
     try:
-        sto, out_dir, measures, options = resolve_ik(row.get("config"), flags,
-                                                     row.get("sensor_map"))  # fmt: skip
-        summary = run_ik(sto, measures, out_dir, options)
+        run_settings(resolve_settings(row.get("config"), values))
     except (InputError, OSError, ValueError) as exc:
         result.update(status="failed", message=str(exc), seconds=f"{time.perf_counter() - t0:.2f}")
         return result
@@ -155,20 +130,22 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
         result.update(status="failed", message=f"{type(exc).__name__}: {exc}",
                       seconds=f"{time.perf_counter() - t0:.2f}")  # fmt: skip
         return result
-    result.update(status="ok", seconds=f"{time.perf_counter() - t0:.2f}", **_figures(summary))
+    result.update(status="ok", seconds=f"{time.perf_counter() - t0:.2f}",
+                  **_figures(folder / f"{name}_figures.json"))  # fmt: skip
     return result
 
 
-def _figures(summary: str) -> dict[str, str]:
-    """Frames, median residual and the number of flags, read from a run's summary."""
-    lines = summary.splitlines()
-    frames = next((ln for ln in lines if " frames, " in ln), "")
-    residual = next((ln for ln in lines if "residual RMS: median" in ln), "")
-    return {
-        "frames": frames.split("- ", 1)[-1].split(" frames")[0],
-        "residual_median_deg": residual.split("median ")[-1].split(" deg")[0] if residual else "",
-        "flags": str(summary.count("**WARNING:")),
-    }
+def _figures(path: Path) -> dict[str, str]:
+    """Frames, median residual and the number of flags, from a run's ``_figures.json``."""
+    import json
+
+    try:
+        fig = json.loads(path.read_text(encoding="utf-8"))
+        return {"frames": str(fig["frames"]),
+                "residual_median_deg": f"{fig['residual_median_deg']:.2f}",
+                "flags": str(len(fig["flags"]))}  # fmt: skip
+    except (OSError, ValueError, KeyError, TypeError):
+        return {"frames": "", "residual_median_deg": "", "flags": ""}
 
 
 def run_batch(

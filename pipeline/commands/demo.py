@@ -23,16 +23,17 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.landmarks import jcs_angles, joint_angles
+from pipeline.analysis.joint_angles import jcs_angles, joint_angles
 from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.commands.ik import write_landmarks_csv
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
-from pipeline.io.opensim import SENSOR_TO_SEGMENT, sensor_to_opensim_matrix
+from pipeline.io.opensim import sensor_to_opensim_matrix
 from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.io.tables import markdown_table
-from pipeline.model.anthropometry import Measures
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process import mot_columns, process_recording
@@ -75,7 +76,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
     """Run the demo; every output is written all-or-nothing into ``out_dir``."""
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
-    output_dir(out_dir)
+    output_dir(out_dir, create=False)
     timings: dict[str, float] = {}
     with output_set() as out:
         # 1. scale

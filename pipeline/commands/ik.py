@@ -1,112 +1,56 @@
-"""``pipeline ik``: a recording of orientations in, joint angles and landmarks out.
+"""``pipeline ik``: a recording in, joint angles and landmarks out.
 
-Reads an OpenSim ``.sto`` (or a folder of Xsens MT ``.txt`` exports), runs
+Reads any recording :func:`pipeline.io.formats.read_recording` reads (an OpenSim ``.sto``, a
+folder of Xsens MT ``.txt`` exports, raw IMU files), runs
 :func:`pipeline.process.process_recording` and writes, all or nothing: ``<name>_ik.mot``
 (OpenSim coordinate names, degrees), ``<name>_landmarks.csv`` (m), ``<name>.urdf`` (with the
 calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md``, ``<name>_config.toml``
-(the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``) and, with
-``osim``, ``<name>.osim`` (:mod:`pipeline.model.osim`).
+(the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``),
+``<name>_figures.json`` (the run's figures, :func:`figures_json`) and, with ``osim``,
+``<name>.osim`` (:mod:`pipeline.model.osim`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from pipeline.calibration.conventions import DEFAULT_FILTER
-from pipeline.errors import InputError, QualityError
+from pipeline.errors import QualityError
 from pipeline.io.atomic import output_dir, output_set
-from pipeline.io.config import SUBJECT_KEYS, config_text, read_config
-from pipeline.io.imu_folder import read_imu_folder
+from pipeline.io.formats import read_recording
 from pipeline.io.mot import write_mot
-from pipeline.io.opensim import read_orientations_sto
 from pipeline.io.recording import Recording
 from pipeline.io.tables import write_array_csv
-from pipeline.io.xsens import read_xsens_trial
-from pipeline.model.anthropometry import Measures
-from pipeline.process.options import IKOptions
+from pipeline.model.measures import Measures
+from pipeline.option import specs
+from pipeline.process.options import (
+    IKOptions,
+    IKSettings,
+    InputOptions,
+    OutputOptions,
+    settings_text,
+)
 from pipeline.process.run import IKRun, mot_columns, process_recording
 
-__all__ = ["load_orientations", "recording_name", "resolve_ik", "run_ik", "summary_text",
-           "write_landmarks_csv"]
+__all__ = ["figures_json", "load_orientations", "recording_name", "run_ik", "run_settings",
+           "summary_text", "write_landmarks_csv"]
 
 
-def load_orientations(
-    path: str | Path, sensor_map: dict[str, str] | None = None
-) -> Recording:
-    """An OpenSim ``.sto`` file, a folder of Xsens MT ``.txt`` exports (one per sensor), or a
-    folder of raw IMU recordings (:func:`pipeline.io.imu_folder.read_imu_folder`: our IMU CSV,
-    Movella DOT ``.csv``, x-IMU3 device folders).
-
-    For an Xsens folder, ``sensor_map`` maps OpenSense sensor names to Xsens sensor ids (like
-    OpenSense's ``myIMUMappings.xml``), e.g. ``{"pelvis_imu": "00B421AF", ...}``; files are found
-    as ``<prefix><id>.txt`` with the common prefix of the export (``MT_012005D6_009-001_``).
-    """
-    path = Path(path)
-    if not path.is_dir():
-        return read_orientations_sto(path)
-    if not any(path.glob("*.txt")):
-        return read_imu_folder(path, sensor_map)
-    if not sensor_map:
-        raise InputError(
-            "a folder of Xsens .txt files needs --sensor-map NAME=ID ... (e.g. "
-            "pelvis_imu=00B421AF femur_r_imu=00B4227B)",
-            file=path,
-        )
-    first_id = next(iter(sensor_map.values()))
-    matches = sorted(path.glob(f"*{first_id}.txt"))
-    if not matches:
-        raise InputError(f"no file ending in {first_id}.txt", file=path, field="sensor_map")
-    prefix = matches[0].name[: -len(f"{first_id}.txt")]
-    return read_xsens_trial(path, {sid: name for name, sid in sensor_map.items()}, prefix=prefix)
+def load_orientations(path: str | Path, sensor_map: dict[str, str] | None = None,
+                      ignore: tuple[str, ...] = ()) -> Recording:
+    """The recording at ``path`` with our sensor names (:func:`pipeline.io.formats.read_recording`:
+    every format, the sensor map applied)."""
+    return read_recording(path, sensor_map, ignore=ignore)
 
 
 def recording_name(path: str | Path) -> str:
     """The name a recording's outputs take: the file's stem, or the folder's name."""
     path = Path(path)
-    return path.stem if path.suffix else path.name
-
-
-def resolve_ik(
-    config: str | Path | None, flags: dict[str, object], sensor_map: dict[str, str] | None = None
-) -> tuple[Path, Path, Measures, IKOptions]:
-    """``(orientations, out_dir, measures, options)`` from a configuration file (optional) and
-    the flags given on the command line, which override it (``None`` = not given)."""
-    cfg = read_config(config) if config is not None else None
-    subject = dict(cfg.subject) if cfg else {}
-    ik = dict(cfg.ik) if cfg else {}
-    sensors = dict(cfg.sensors) if cfg else {}
-    for key, value in flags.items():
-        if value is None:
-            continue
-        (subject if key in SUBJECT_KEYS else ik)[key] = value
-    sensors.update(sensor_map or {})
-    where = cfg.source if cfg else None
-    for key in ("orientations", "out"):
-        if key not in ik:
-            raise InputError(f"--{key} is required (or [ik] {key} in the configuration file)",
-                             file=where)  # fmt: skip
-    for key in ("sex", "height_m"):
-        if key not in subject:
-            flag = "--" + key.replace("_", "-")
-            raise InputError(f"{flag} is required (or [subject] {key} in the configuration file)",
-                             file=where)  # fmt: skip
-    orientations, out = Path(ik.pop("orientations")), Path(ik.pop("out"))
-    try:
-        measures = Measures(**subject)
-        if ik.get("sensor_to_model") is not None:
-            ik["sensor_to_model"] = tuple(ik["sensor_to_model"])
-        for key in ("knee_axis_femur", "knee_axis_tibia"):
-            if ik.get(key) is not None:
-                ik[key] = tuple(ik[key])
-        options = IKOptions(**ik, sensor_map=sensors)
-    except InputError as exc:
-        if exc.file is None and where is not None:
-            raise InputError(exc.message, file=where, field=exc.field) from None
-        raise
-    return orientations, out, measures, options
+    return path.stem if path.suffix and not path.is_dir() else path.name
 
 
 def run_ik(
@@ -117,28 +61,52 @@ def run_ik(
     *,
     recorder=None,
     **changes: object,
-) -> str:
-    """``pipeline ik``: read, calibrate, correct, IK; write the files of the module docstring.
+) -> IKRun:
+    """``pipeline ik`` from Python: read ``orientations``, process, write the files of the module
+    docstring into ``out_dir``; return the :class:`~pipeline.process.IKRun`.
 
-    ``options`` (default :class:`IKOptions`) with fields overridden by keyword. ``recorder``: a
-    :class:`~pipeline.viz.background.BackgroundRecording` the caller started early (the
-    command-line program, before its imports; run_ik closes it), else one is started here for a
-    short recording where forking is safe. Implausible
-    results (:mod:`pipeline.analysis.quality`) open the summary and go to stderr; with
-    ``strict`` they raise :class:`~pipeline.errors.QualityError` and nothing is written.
+    ``options`` (default :class:`IKOptions`) with any option of ``pipeline ik`` changed by
+    keyword (:mod:`pipeline.process.options`: e.g. ``correction="none"``, ``sensor_map={...}``,
+    ``rerun=False``, ``strict=True``).
     """
-    opts = (options or IKOptions()).replace(**changes)
-    orientations, out_dir = Path(orientations), Path(out_dir)
-    folder = orientations.is_dir()
-    trial = load_orientations(orientations, opts.sensor_map)
+    groups: dict[type, dict[str, object]] = {InputOptions: {"orientations": str(orientations)},
+                                             OutputOptions: {"out": str(out_dir)}}  # fmt: skip
+    ik_changes = {}
+    for key, value in changes.items():
+        cls = next((c for c in (InputOptions, OutputOptions) if key in _names(c)), None)
+        if cls is None:
+            ik_changes[key] = value
+        else:
+            groups[cls][key] = value
+    opts = (options or IKOptions()).replace(**ik_changes)
+    settings = IKSettings(measures, InputOptions(**groups[InputOptions]), opts,
+                          OutputOptions(**groups[OutputOptions]))  # fmt: skip
+    return run_settings(settings, recorder=recorder)
+
+
+def _names(cls) -> set[str]:
+    return {s.name for s in specs(cls)}
+
+
+def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
+    """``pipeline ik`` on resolved settings (:func:`~pipeline.process.options.resolve_settings`):
+    read, calibrate, correct, IK; write the files of the module docstring; return the run.
+
+    ``recorder``: a :class:`~pipeline.viz.background.BackgroundRecording` the caller started
+    early (the command-line program, before its imports; this closes it), else one is started
+    here for a short recording where forking is safe. Implausible results
+    (:mod:`pipeline.analysis.quality`) open the summary and go to stderr; with ``strict`` they
+    raise :class:`~pipeline.errors.QualityError` and nothing is written.
+    """
+    inputs, outputs = settings.inputs, settings.outputs
+    orientations, out_dir = Path(inputs.orientations), Path(outputs.out)
+    trial = load_orientations(orientations, inputs.sensor_map, inputs.ignore)
     static = None
-    if opts.static_trial is not None:
-        static = load_orientations(opts.static_trial, opts.sensor_map)
-    # a folder's reader has applied the map already
-    run_opts = opts.replace(sensor_map={}) if folder else opts
+    if inputs.static_trial is not None:
+        static = load_orientations(inputs.static_trial, inputs.sensor_map, inputs.ignore)
     name = recording_name(orientations)
-    output_dir(out_dir)
-    background = opts.rerun and trial.n_samples <= BACKGROUND_FRAMES
+    output_dir(out_dir, create=False)
+    background = outputs.rerun and trial.n_samples <= BACKGROUND_FRAMES
     if recorder is not None and not background:
         recorder.close()  # a long recording logs here (one process bounds the memory)
         recorder = None
@@ -151,8 +119,7 @@ def run_ik(
     try:
         with output_set() as out:
             try:
-                summary = _outputs(out, out_dir, name, orientations, trial, static, measures,
-                                   opts, run_opts, worker)  # fmt: skip
+                run = _outputs(out, out_dir, name, trial, static, settings, worker)
             except BaseException:
                 if worker is not None:
                     worker.close()  # the child is gone before its temporary file is removed
@@ -160,7 +127,7 @@ def run_ik(
     finally:
         if worker is not None:
             worker.close()
-    return summary
+    return run
 
 
 #: Recordings up to this many frames are logged by a forked child
@@ -170,40 +137,56 @@ def run_ik(
 BACKGROUND_FRAMES = 20_000
 
 
-def _outputs(out, out_dir, name, orientations, trial, static, measures, opts, run_opts, worker):
-    run = process_recording(trial, measures, run_opts, static=static)
-    if run.flags and opts.strict:
-        raise QualityError(run.flags, file=orientations)
+def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) -> IKRun:
+    outputs = settings.outputs
+    run = process_recording(trial, settings.subject, settings.options, static=static)
+    run = dataclasses.replace(run, inputs=settings.inputs)
+    if run.flags and outputs.strict:
+        raise QualityError(run.flags, file=settings.inputs.orientations)
     for flag in run.flags:
         print(f"warning: {flag}", file=sys.stderr)
-    if opts.rerun:  # first: the child writes it while the other files are written
+    if outputs.rerun:  # first: the child writes it while the other files are written
         _record(run, out.path(out_dir / f"{name}.rrd"), name, worker)
     run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
     write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
     with out.open(out_dir / f"{name}_landmarks.csv") as fh:
         write_landmarks_csv(fh, run)
-    if opts.osim:
+    if outputs.osim:
         from pipeline.model.osim import osim_text
 
         with out.open(out_dir / f"{name}.osim") as fh:
             fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
                                name=name))  # fmt: skip
-    summary = summary_text(orientations, run, measures)
     with out.open(out_dir / f"{name}_summary.md") as fh:
-        fh.write(summary)
+        fh.write(summary_text(run))
     with out.open(out_dir / f"{name}_config.toml") as fh:
-        fh.write(_config(measures, opts, orientations, name))
+        fh.write(_config(settings, name))
+    with out.open(out_dir / f"{name}_figures.json") as fh:
+        fh.write(figures_json(run))
     if worker is not None:
         worker.wait()
-    return summary
+    return run
 
 
-def _config(measures: Measures, opts: IKOptions, orientations: Path, name: str) -> str:
+def _config(settings: IKSettings, name: str) -> str:
     from pipeline import __version__
 
     header = (f"pipeline ik configuration of {name} (pipeline {__version__}); to reproduce:\n"
               f"pipeline ik --config {name}_config.toml --out DIR")  # fmt: skip
-    return config_text(measures, opts, orientations=orientations, header=header)
+    return settings_text(settings, header)
+
+
+def figures_json(run: IKRun) -> str:
+    """The run's figures as JSON (what ``pipeline batch`` lists per trial): frames, duration,
+    median and 95th-percentile residual (deg), the quality flags."""
+    import json
+
+    res = np.degrees(run.residual_rms)
+    fig = {"frames": int(len(run.time)), "duration_s": float(run.time[-1] - run.time[0]),
+           "residual_median_deg": float(np.nanmedian(res)),
+           "residual_p95_deg": float(np.nanpercentile(res, 95)),
+           "flags": list(run.flags), "joints": list(run.sensors.joints)}  # fmt: skip
+    return json.dumps(fig, indent=1) + "\n"
 
 
 def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
@@ -238,8 +221,10 @@ def _record(run: IKRun, path: Path, name: str, worker) -> None:
     worker.submit(log_scene, str(path), motion_scene(*args, **kwargs))
 
 
-def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
+def summary_text(run: IKRun) -> str:
     """The run's ``_summary.md``: inputs, quality flags, corrections, calibrations, ranges."""
+    source = Path(run.inputs.orientations) if run.inputs else Path(run.source or "recording")
+    measures = run.measures
     name = recording_name(source)
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     o = run.options
@@ -247,7 +232,8 @@ def summary_text(source: Path, run: IKRun, measures: Measures) -> str:
     if run.filtered:
         by = (o.filter or DEFAULT_FILTER).upper()
         what = f"raw signals, orientations by {by} ({run.filtered})"
-    pose = f"{o.calibration_pose} pose " + (f"from {Path(o.static_trial).name}" if o.static_trial
+    static = run.inputs.static_trial if run.inputs else None
+    pose = f"{o.calibration_pose} pose " + (f"from {Path(static).name}" if static
                                              else "at the first sample")  # fmt: skip
     lines = [
         f"# IK of {source.name}",

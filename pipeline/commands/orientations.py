@@ -14,7 +14,7 @@ from pathlib import Path
 
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.errors import InputError
-from pipeline.io.imu_folder import read_imu_file, read_imu_folder
+from pipeline.io.formats import read_recording
 from pipeline.io.opensim import write_orientations_sto
 from pipeline.process.signals import orientations_from_signals
 
@@ -27,18 +27,14 @@ def run_orientations(
     *,
     filter: str = DEFAULT_FILTER,  # noqa: A002 (the CLI's name)
     sensor_map: dict[str, str] | None = None,
+    ignore: tuple[str, ...] = (),
 ) -> str:
-    """Filter every sensor of ``imu`` (a folder, :func:`read_imu_folder`, or one IMU CSV or
-    Movella DOT file) and write ``out`` (``.sto``); return the lines to print."""
+    """Filter every sensor of ``imu`` (any recording :func:`read_recording` reads: a folder of
+    raw recordings, one IMU file) and write ``out`` (``.sto``); return the lines to print."""
     imu, out = Path(imu), Path(out)
     if out.suffix.lower() != ".sto":
         raise InputError("expected an output file ending in .sto", file=out)
-    if imu.is_dir():
-        rec = read_imu_folder(imu, sensor_map)
-    elif imu.is_file():
-        rec = read_imu_file(imu)
-    else:
-        raise InputError("no such file or folder", file=imu)
+    rec = read_recording(imu, sensor_map, ignore=ignore)
     notes: list[str] = []
     rec, _ = orientations_from_signals(rec, filter, notes, every_sensor=True)
     rec = rec.with_sensors({n: s for n, s in rec.sensors.items() if s.quat is not None})

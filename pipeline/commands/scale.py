@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import DEFAULT_KNEE
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import scale_model
 
 __all__ = ["run_scale"]

@@ -2,13 +2,15 @@
 
 :func:`run_simulation` simulates a trial on a default scaled subject (1.75 m male, Wang eq 14
 regression + population knee AoR, hinge knee) with :mod:`pipeline.simulate.model` and writes,
-all or nothing, one IMU CSV per sensor, ``truth.json``, the URDF, the landmark trajectories and
-the model configurations.
+all or nothing, the recording (``imu/``: one IMU CSV per sensor, what ``pipeline ik`` and
+``pipeline orientations`` read) and the truth (``truth/``: ``truth.json``, the URDF, the landmark
+trajectories and the model configurations).
 """
 
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +20,7 @@ from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.imu_csv import write_imu_csv
 from pipeline.io.jsonio import jsonable
 from pipeline.io.tables import write_array_csv
-from pipeline.model.anthropometry import Measures
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import log3
@@ -84,12 +86,12 @@ def run_simulation(
     """Simulate ``motion`` (one of :data:`pipeline.simulate.motions.MOTIONS`) on a
     default scaled subject and write (all or nothing) into ``out_dir``:
 
-    ``<imu frame>.csv`` per sensor (``time,gyr_x..acc_z,quat_w..quat_z``, SI units),
-    ``truth.json`` (sensor placements and misalignments, knee axis and joint centres in each
-    sensor frame, noise, seed, motion), ``model.urdf``, ``landmarks.csv`` (world positions, m)
-    and ``configuration.csv`` (model q). ``standing_s``: the trial starts with that long still
-    in the neutral standing pose (a calibration pose), then moves into the motion. Returns a
-    summary listing the files.
+    ``imu/<imu frame>.csv`` per sensor (``time,gyr_x..acc_z,quat_w..quat_z``, SI units);
+    ``truth/truth.json`` (sensor placements and misalignments, knee axis and joint centres in each
+    sensor frame, noise, seed, motion), ``truth/model.urdf``, ``truth/landmarks.csv`` (world
+    positions, m) and ``truth/configuration.csv`` (model q). ``standing_s``: the trial starts with
+    that long still in the neutral standing pose (a calibration pose), then moves into the motion.
+    Returns a summary listing the files.
     """
     out = Path(out_dir)
     duration_s = float(duration_s)
@@ -114,20 +116,21 @@ def run_simulation(
     lm_header = ["time"] + [f"{n}_{c}" for n in lm_names for c in "xyz"]
     q_header = ["time", "root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz"]
     q_header += ["root_qw"] + skeleton.joint_names[1:]
-    output_dir(out)
+    output_dir(out, create=False)
+    imu, truth_dir = out / "imu", out / "truth"
     with output_set() as outs:
         for name, fname in files.items():
-            write_imu_csv(outs.path(out / fname), trial.imus[name].recording)
-        with outs.open(out / "truth.json") as f:
+            write_imu_csv(outs.path(imu / fname), trial.imus[name].recording)
+        with outs.open(truth_dir / "truth.json") as f:
             json.dump(jsonable(truth), f, indent=2)
             f.write("\n")
-        with outs.open(out / "model.urdf") as f:
+        with outs.open(truth_dir / "model.urdf") as f:
             f.write(skeleton.urdf)
-        with outs.open(out / "landmarks.csv", newline="\n") as f:
+        with outs.open(truth_dir / "landmarks.csv", newline="\n") as f:
             write_array_csv(f, lm_header, lm)
-        with outs.open(out / "configuration.csv", newline="\n") as f:
+        with outs.open(truth_dir / "configuration.csv", newline="\n") as f:
             write_array_csv(f, q_header, np.column_stack([trial.time, trial.q]))
-    written = [p.name for p in outs.destinations]
+    written = [os.path.relpath(p, out) for p in outs.destinations]
     knee = truth["joints"]["right_knee"]
     lines = [
         f"simulated {duration_s:g} s of '{trial.motion}' at {truth['rate_hz']:g} Hz (seed {seed}) "

@@ -7,9 +7,9 @@ The public names below load their module on first use (:mod:`pipeline._lazy`).
 from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
-    "block_frame_rotations": "batch",
-    "block_setup": "batch",
-    "BlockSetup": "batch",
+    "block_frame_rotations": "block",
+    "block_setup": "block",
+    "BlockSetup": "block",
     "box_margin": "bounds",
     "box_step": "bounds",
     "frame_id": "problem",
@@ -21,7 +21,7 @@ _EXPORTS = {
     "OrientationTask": "problem",
     "remove_limits": "bounds",
     "setup_ik": "problem",
-    "solve_block": "batch",
+    "solve_block": "block",
     "solve_frame": "solver",
     "solve_ik": "solver",
     "solve_linear": "bounds",

@@ -3,7 +3,7 @@ how the other frames get their starting points.
 
 Anchors are frames solved one after the other, each from the one before, as the sequential solver
 does, so that the solution follows the motion's basin of the least-squares problem; the frames
-between them are solved in blocks (:mod:`pipeline.ik.batch`) from the cubic through the solved
+between them are solved in blocks (:mod:`pipeline.ik.block`) from the cubic through the solved
 frames around them (:func:`interpolate`). Anchors come every ``stride`` frames, and closer where
 the joint rotations are fast (:func:`anchor_frames`).
 """

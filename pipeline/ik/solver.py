@@ -52,7 +52,7 @@ import pinocchio as pin
 
 from pipeline.errors import InputError
 from pipeline.ik.anchors import ANCHOR_TOL, anchor_frames, interpolate
-from pipeline.ik.batch import BlockSetup, block_frame_rotations, block_setup, solve_block
+from pipeline.ik.block import BlockSetup, block_frame_rotations, block_setup, solve_block
 from pipeline.ik.bounds import box_margin, box_step, solve_linear
 from pipeline.ik.problem import IKProblem, OrientationTask, frame_id, setup_ik
 from pipeline.rotations import log3
@@ -233,7 +233,7 @@ def solve_ik(
     constant-velocity prediction of the warm start for Euclidean chains and frames with all targets
     present (off by default: with white orientation noise it costs iterations). ``stride``: every
     ``stride``-th frame is solved in sequence and the frames between them in blocks, every 8th
-    first (:mod:`pipeline.ik.batch`: the same optima, ~5x faster); ``stride=1`` solves every frame
+    first (:mod:`pipeline.ik.block`: the same optima, ~5x faster); ``stride=1`` solves every frame
     in sequence (also the path of regularised, extrapolated or non-vectorisable problems). Raises
     ``InputError`` on unknown frames, wrong shapes, non-rotation targets or weights < 0.
     """
@@ -268,7 +268,7 @@ def _solve_strided(
     :data:`~pipeline.ik.anchors.ANCHOR_TOL`, then to ``tol`` in a block, then the frames between
     them level by level (spacing divided by 8 per level,
     down to 1), each level in blocks started from the interpolation of the frames solved so far
-    (:func:`~pipeline.ik.anchors.interpolate`, :mod:`pipeline.ik.batch`). Frames with a
+    (:func:`~pipeline.ik.anchors.interpolate`, :mod:`pipeline.ik.block`). Frames with a
     missing target are solved last, in time order, each warm-started from the solution before
     it, so that the DoFs only the missing targets observe are held as in the sequential solver."""
     model = p.model

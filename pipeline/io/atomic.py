@@ -29,24 +29,32 @@ __all__ = [
 ]
 
 
-def output_dir(path: str | Path) -> Path:
-    """Check (and create) an output directory, refusing with an :class:`InputError` naming the
-    path: an existing file, a parent that is a file, or a folder that cannot be written."""
+def output_dir(path: str | Path, *, create: bool = True) -> Path:
+    """Check (and, with ``create``, create) an output directory, refusing with an
+    :class:`InputError` naming the path: an existing file, a parent that is a file, or a folder
+    that cannot be written. Without ``create`` a missing folder is checked by its nearest
+    existing parent, and :class:`OutputSet` creates it with the first file (and removes it again
+    if the set is aborted)."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError("expected an output directory, found a file", file=path, field="out")
+    existing = path
     for parent in path.parents:
         if parent.exists():
             if not parent.is_dir():
                 raise InputError(f"{parent} is a file, not a folder", file=path, field="out")
+            existing = parent if not path.exists() else path
             break
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create the output directory: {exc.strerror}", file=path,
-                         field="out") from exc  # fmt: skip
-    if not os.access(path, os.W_OK | os.X_OK):
-        raise InputError("the output directory is not writable", file=path, field="out")
+    if create:
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"cannot create the output directory: {exc.strerror}", file=path,
+                             field="out") from exc  # fmt: skip
+        existing = path
+    if not os.access(existing, os.W_OK | os.X_OK):
+        what = "the output directory" if existing == path else f"its parent {existing}"
+        raise InputError(f"{what} is not writable", file=path, field="out")
     return path
 
 
@@ -129,16 +137,20 @@ class OutputSet:
 
     def __init__(self) -> None:
         self._pending: dict[Path, Path] = {}  # destination -> temporary
+        self._created: list[Path] = []  # folders this set created (removed again on abort)
         self._done = False
 
     def path(self, dest: str | Path) -> Path:
-        """Temporary file (same directory as ``dest``) to write ``dest``'s content to."""
+        """Temporary file (same directory as ``dest``) to write ``dest``'s content to. A
+        destination that is a symbolic link is replaced by the file (the link is not followed)."""
         if self._done:
             raise RuntimeError("output set already committed or aborted")
-        d = Path(dest).resolve()
+        d = Path(os.path.abspath(dest))
         if d in self._pending:
             raise ValueError(f"{d} is already part of this output set")
+        missing = [p for p in (d.parent, *d.parent.parents) if not p.exists()]
         d.parent.mkdir(parents=True, exist_ok=True)
+        self._created += reversed(missing)
         tmp = _temp_path(d)
         self._pending[d] = tmp
         return tmp
@@ -188,10 +200,14 @@ class OutputSet:
         return tuple(self._pending)
 
     def abort(self) -> None:
-        """Delete every temporary file; destinations stay as they were."""
+        """Delete every temporary file and the folders the set created; destinations stay as
+        they were."""
         self._done = True
         for tmp in self._pending.values():
             _remove(tmp)
+        for folder in reversed(self._created):
+            with contextlib.suppress(OSError):
+                folder.rmdir()  # only if empty
 
 
 @contextlib.contextmanager

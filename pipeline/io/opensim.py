@@ -41,12 +41,12 @@ from pipeline.io.checks import (
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
 from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.io.sto_header import declared_rate, labels_and_rows, split_header
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_euler_xyz_fixed, matrix_from_quat, quat_from_matrix
 
 __all__ = [
-    "SENSOR_TO_SEGMENT",
     "map_sensors",
     "read_orientations_sto",
     "rotate_world",
@@ -54,17 +54,7 @@ __all__ = [
     "write_orientations_sto",
 ]
 
-SENSOR_TO_SEGMENT: dict[str, str] = {
-    "pelvis_imu": "pelvis",
-    "femur_r_imu": "right_femur",
-    "tibia_r_imu": "right_tibia",
-    "calcn_r_imu": "right_foot",
-    "femur_l_imu": "left_femur",
-    "tibia_l_imu": "left_tibia",
-    "calcn_l_imu": "left_foot",
-    "torso_imu": "torso",
-}
-"""OpenSense sensor column name -> segment name used by the pipeline."""
+
 
 
 def read_orientations_sto(

@@ -93,6 +93,10 @@ class Recording:
         """The same recording with other sensors (same time base)."""
         return dataclasses.replace(self, sensors=dict(sensors))
 
+    def with_notes(self, *notes: str) -> Recording:
+        """The same recording with more notes."""
+        return dataclasses.replace(self, notes=(*self.notes, *notes))
+
     # ---- names and views ----------------------------------------------------------------------
     @property
     def n_samples(self) -> int:

@@ -77,6 +77,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     data, idx = _columns(rows, labels, path, start + 2, required, "header")
     notes = Notes()
     time = _unwrap_ticks(data[:, idx["SampleTimeFine"]], 2.0**32) * 1e-6
+    clock = {"clock_start_s": repr(float(time[0])), "clock_wrap_s": repr(2.0**32 * 1e-6)}
     time = check_time(time - time[0], file=path, field="SampleTimeFine", first_line=start + 2)
     check_rate(time, notes=notes, file=path, field="SampleTimeFine")
 
@@ -95,7 +96,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
                                       "quaternion"), notes=notes, file=path,
                                  field="Quat")  # fmt: skip
     return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, mag=mag, source=path,
-                            notes=notes.as_tuple())  # fmt: skip
+                            header=clock, notes=notes.as_tuple())  # fmt: skip
 
 
 def _ximu3_csv(path: Path, names: tuple[str, ...]):

@@ -31,7 +31,6 @@ up to ``max_gap_s`` and reported, refused beyond); else the row index divided by
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -42,8 +41,6 @@ from pipeline.io.checks import (
     check_gyro_units,
     check_quaternions,
     check_rate,
-    check_same_length,
-    check_same_rate,
     check_time,
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
@@ -52,7 +49,7 @@ from pipeline.io.recording import Recording
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_euler_zyx, project_to_so3, quat_from_matrix
 
-__all__ = ["read_xsens_trial", "read_xsens_txt"]
+__all__ = ["read_xsens_txt"]
 
 QUAT_COLUMNS = ("Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3")
 MAT_COLUMNS = tuple(f"Mat[{r}][{c}]" for c in (1, 2, 3) for r in (1, 2, 3))
@@ -181,7 +178,10 @@ def read_xsens_txt(
     stf = data[:, col["SampleTimeFine"]] if "SampleTimeFine" in col else None
     pc = data[:, col["PacketCounter"]] if "PacketCounter" in col else None
     index = np.arange(len(rows))
+    clock: dict[str, str] = {}  # the device clock at the first sample (pipeline.io.clocks)
     if stf is not None and np.all(np.isfinite(stf)):
+        clock = {"clock_start_s": repr(float(stf[0]) / SAMPLE_TIME_FINE_HZ),
+                 "clock_wrap_s": repr(2.0**32 / SAMPLE_TIME_FINE_HZ)}  # fmt: skip
         ticks = np.concatenate([[0.0], np.cumsum(np.mod(np.diff(stf), 2.0**32))])
         time = check_time(
             ticks / SAMPLE_TIME_FINE_HZ, file=path, field="SampleTimeFine", first_line=first_line
@@ -211,6 +211,8 @@ def read_xsens_txt(
         rate = declared
         if pc is not None and np.all(np.isfinite(pc)):
             index = _counter_steps(pc, path, first_line)
+            clock = {"clock_start_s": repr(float(pc[0]) / rate),
+                     "clock_wrap_s": repr(65536.0 / rate)}  # fmt: skip
             n_drop = int(index[-1] + 1 - index.size)
             if n_drop:
                 notes.add(f"{n_drop} dropped packet(s) (PacketCounter jumps)", file=path)
@@ -239,7 +241,7 @@ def read_xsens_txt(
         if acc is None or gyr is None:
             raise InputError("the Acc and Gyr columns are empty and there are no orientation "
                              "columns", file=path, field="header")  # fmt: skip
-        header = {**comments, "orientation_from": "none"}
+        header = {**comments, **clock, "orientation_from": "none"}
         return Recording.single(_sensor_id(path), time, gyr=gyr, acc=acc, mag=mag,
                                 rate_hz=float(rate), header=header, notes=notes.as_tuple(),
                                 source=path)  # fmt: skip
@@ -274,46 +276,7 @@ def read_xsens_txt(
         field="orientation",
     )
     quat = check_quaternions(quat, notes=notes, file=path, field="orientation")
-    header = {**comments, "orientation_from": kind}
+    header = {**comments, **clock, "orientation_from": kind}
     return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
                             rate_hz=float(rate), header=header, notes=notes.as_tuple(),
                             source=path)  # fmt: skip
-
-
-def read_xsens_trial(
-    folder: str | Path,
-    sensors: Mapping[str, str],
-    *,
-    prefix: str = "",
-    extension: str = ".txt",
-    rate_hz: float | None = None,
-    max_gap_s: float = DEFAULT_MAX_GAP_S,
-) -> Recording:
-    """Read one file per sensor, ``folder / (prefix + sensor_id + extension)``, into one
-    recording (all signals of each sensor; the time base starts at 0).
-
-    ``sensors`` maps the sensor id in the file name (e.g. ``"00B421AF"``) to the column name
-    OpenSense uses (e.g. ``"pelvis_imu"``), like OpenSense's ``myIMUMappings.xml``. All files must
-    have the same number of samples and the same rate (refused otherwise).
-    """
-    folder = Path(folder)
-    recs: dict[str, Recording] = {}
-    for sid, name in sensors.items():
-        p = folder / f"{prefix}{sid}{extension}"
-        if not p.is_file():
-            raise InputError(f"no file for sensor {sid} ({name}); expected {p.name}", file=folder)
-        recs[name] = read_xsens_txt(p, rate_hz=rate_hz, max_gap_s=max_gap_s)
-    if not recs:
-        raise ValueError("no sensors given")
-    check_same_length({f"{n} ({r.source.name})": r.time.size for n, r in recs.items()}, file=folder)
-    rate = check_same_rate({n: r.rate_hz for n, r in recs.items()}, file=folder)
-    first = next(iter(recs.values()))
-    notes = tuple(m for r in recs.values() for m in r.notes)
-    return Recording(
-        time=first.time - first.time[0],
-        rate_hz=rate,
-        sensors={n: r.sensor for n, r in recs.items()},
-        header={"DataRate": f"{rate:.6f}", "DataType": "Quaternion", **first.header},
-        notes=notes,
-        source=folder,
-    )

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.model.measures import Measures
 from pipeline.model.resources import models_file
 
 __all__ = [
@@ -45,15 +46,11 @@ __all__ = [
     "EQUATION_TARGETS",
     "FEMUR_LANDMARKS",
     "GROUPS",
-    "PLAUSIBLE_M",
     "TIBIA_LANDMARKS",
     "LandmarkPositions",
-    "Measures",
     "RegressionEquation",
     "RegressionTable",
-    "check_length_m",
     "load_table1",
-    "normalize_sex",
     "predict_landmarks",
     "select_equation",
 ]
@@ -83,78 +80,6 @@ EQUATION_TARGETS: dict[str, tuple[tuple[str, str], ...]] = {
     "k": (("EFM", "z"), ("EFL", "z")),
     "h+a": (("MM", "x"), ("MM", "z"), ("LM", "x"), ("LM", "z")),
 }
-_FIELD_OF_INPUT = {
-    "h": "height_m",
-    "s_L": "shank_lateral_m",
-    "s_M": "shank_medial_m",
-    "k": "knee_width_m",
-    "a": "ankle_width_m",
-}
-#: Plausible adult ranges (m); outside them the value is rejected, with a unit hint if it fits.
-PLAUSIBLE_M = {
-    "height_m": (1.0, 2.5),
-    "shank_lateral_m": (0.2, 0.7),
-    "shank_medial_m": (0.2, 0.7),
-    "knee_width_m": (0.05, 0.2),
-    "ankle_width_m": (0.03, 0.15),
-}
-
-
-def normalize_sex(sex: str, *, field: str = "sex") -> str:
-    """'m' or 'f' from 'm', 'f', 'male', 'female' (any case); InputError otherwise."""
-    s = str(sex).strip().lower()
-    if s in ("m", "male"):
-        return "m"
-    if s in ("f", "female"):
-        return "f"
-    raise InputError(f"expected sex 'm' or 'f', got {sex!r}", field=field)
-
-
-def check_length_m(value: float, name: str, low: float, high: float) -> float:
-    """A length in metres within [low, high]; else InputError, hinting cm or mm when it fits."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise InputError(f"expected a length in metres, got {value!r}", field=name)
-    v = float(value)
-    if not math.isfinite(v) or v <= 0.0:
-        raise InputError(f"expected a positive length in metres, got {v:g}", field=name)
-    if low <= v <= high:
-        return v
-    for factor, unit in ((100.0, "centimetres"), (1000.0, "millimetres")):
-        if low <= v / factor <= high:
-            raise InputError(
-                f"{v:g} looks like {unit}; give metres, e.g. {v / factor:.4g}", field=name
-            )
-    raise InputError(f"expected metres in [{low:g}, {high:g}], got {v:g}", field=name)
-
-
-@dataclass(frozen=True)
-class Measures:
-    """A subject's body dimensions in metres (h required; the others optional, used if given)."""
-
-    sex: str
-    height_m: float
-    shank_lateral_m: float | None = None  # s_L = |EFL - LM|
-    shank_medial_m: float | None = None  # s_M = |EFM - MM|
-    knee_width_m: float | None = None  # k = |EFM - EFL|
-    ankle_width_m: float | None = None  # a = |MM - LM|
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "sex", normalize_sex(self.sex))
-        for name, (low, high) in PLAUSIBLE_M.items():
-            value = getattr(self, name)
-            if value is not None or name == "height_m":
-                object.__setattr__(self, name, check_length_m(value, name, low, high))
-
-    def inputs_mm(self) -> dict[str, float]:
-        """The available regression inputs ('h', 's_L', 's_M', 'k', 'a') in millimetres."""
-        out = {}
-        for key, name in _FIELD_OF_INPUT.items():
-            value = getattr(self, name)
-            if value is not None:
-                out[key] = 1000.0 * value
-        return out
-
-
 @dataclass(frozen=True)
 class RegressionEquation:
     """One row of Table I: p[mm] = b0 + b1 d1[mm] + b2 d2[mm], d = EQUATION_INPUTS[equation]."""

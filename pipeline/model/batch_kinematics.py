@@ -5,7 +5,7 @@ and the Python loop around the calls costs more than the kinematics. :class:`Joi
 evaluates the same joint and frame poses for a whole stack of configurations with array
 operations (checked against Pinocchio in ``tests/test_model_batch_kinematics.py``), for the
 joint types the subject models use: revolute (``RX``, ``RY``, ``RZ``, unaligned), spherical and
-free-flyer. Used by the block IK solver (:mod:`pipeline.ik.batch`) and the landmark trajectories
+free-flyer. Used by the block IK solver (:mod:`pipeline.ik.block`) and the landmark trajectories
 (:mod:`pipeline.analysis.landmarks`).
 """
 

@@ -9,7 +9,8 @@ about the knee AoR).
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_KNEE", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT", "SEGMENTS"]
+__all__ = ["DEFAULT_KNEE", "JOINT_SEGMENTS", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT",
+           "SEGMENTS"]
 
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
@@ -20,3 +21,6 @@ SEGMENTS = ("femur", "tibia", "foot")
 LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femur",
                     "AJC": "tibia", "MM": "tibia", "LM": "tibia",
                     "HEE": "foot", "MT1": "foot", "MT5": "foot", "TOE": "foot"}  # fmt: skip
+#: Joint -> (proximal, distal) segment of one leg (the pelvis has no side), from the pelvis down.
+JOINT_SEGMENTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"),
+                  "ankle": ("tibia", "foot")}  # fmt: skip

@@ -17,14 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.model.anthropometry import (
-    LandmarkPositions,
-    Measures,
-    RegressionTable,
-    predict_landmarks,
-)
+from pipeline.model.anthropometry import LandmarkPositions, RegressionTable, predict_landmarks
 from pipeline.model.builder import build_urdf
 from pipeline.model.geometry import SubjectGeometry
+from pipeline.model.measures import Measures
 from pipeline.model.resources import models_file
 from pipeline.rotations import normalize
 

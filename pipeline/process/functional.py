@@ -19,13 +19,13 @@ axes replace the AoR the orientations show (:func:`pipeline.process.run.process_
 step 5): the sensor-to-segment rotations are turned so that the hinge axis is the model's knee
 axis, ISB's medio-lateral direction (Hu 2021 eq 30-37 define the segment frame the same way).
 
-Why it is not the default (``scripts/bench_raw_path.py``, simulated gait, sensors misplaced by up
-to 15 deg): it gives the same joint angles as eq 1-8 once the sensors share one heading (a
-magnetometer, or the joints' heading alignment of 6-D orientations, :mod:`pipeline.process.drift`;
-within 0.2 deg RMS on every axis), and needs raw signals. Without that alignment it was worse
-(knee axes other than flexion 11-21 deg RMS against 4-6 deg): the filter's heading difference
-between the thigh and shank sensors dominated, and eq 1-8, fitted to the orientations, absorbed
-its constant part where a correct placement cannot.
+Why it is not the default (``scripts/bench_raw_path.py``, simulated gait, sensors misplaced by up to
+15 deg): it gives the same joint angles as eq 1-8 once the sensors share one heading (a
+magnetometer, or the joints' heading alignment of 6-D orientations,
+:mod:`pipeline.process.heading_alignment`; within 0.2 deg RMS on every axis), and needs raw signals.
+Without that alignment it was worse (knee axes other than flexion 11-21 deg RMS against 4-6 deg):
+the filter's heading difference between the thigh and shank sensors dominated, and eq 1-8, fitted to
+the orientations, absorbed its constant part where a correct placement cannot.
 """
 
 from __future__ import annotations
@@ -127,7 +127,7 @@ def with_placements(
     model_axes: dict[str, tuple[np.ndarray, np.ndarray]],
 ) -> list[KneeCalibration]:
     """The calibrations with ``vs_model_deg`` recomputed for new ``placements`` (e.g. after the
-    sensors' headings were made consistent, :mod:`pipeline.process.drift`)."""
+    sensors' headings were made consistent, :mod:`pipeline.process.heading_alignment`)."""
     out = []
     for c in calibrations:
         vs = _vs_model(c.axis_thigh, c.axis_shank, placements, c.side, model_axes[c.side])

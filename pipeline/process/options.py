@@ -1,111 +1,120 @@
-"""Every option of ``pipeline ik`` in one checked value: :class:`IKOptions`.
+"""Every option of ``pipeline ik``, each defined once (:func:`pipeline.option.option`): its type,
+default, help, flag, configuration-file key and manifest column all follow from its field here.
 
-The CLI, the configuration file (:mod:`pipeline.io.config`) and the Python API
-(:func:`pipeline.process.process_recording`) all build one of these, so an option means the same
-thing everywhere and a configuration file written by a run holds exactly what made it.
+Four groups, one dataclass each, each checking its own values:
+
+* :class:`~pipeline.model.measures.Measures`: the subject (``[subject]`` in the file);
+* :class:`InputOptions`: what is read (the recording, a static trial, the sensor map);
+* :class:`IKOptions`: how a recording becomes joint angles (what
+  :func:`pipeline.process.process_recording` takes; it writes nothing);
+* :class:`OutputOptions`: what is written and where (the output folder, the switches).
+
+:func:`resolve_settings` merges a configuration file (:mod:`pipeline.io.config`) with the values
+a user gave (flags, a manifest row), which override it, into :class:`IKSettings`;
+:func:`settings_text` writes them back as the file that reproduces the run. Importable at no
+cost (no NumPy): ``pipeline --help`` is built from it.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-
-import numpy as np
+from dataclasses import dataclass
+from numbers import Real
+from pathlib import Path
 
 from pipeline.calibration.conventions import (
     CALIBRATION_POSES,
     CORRECTIONS,
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
+    DEFAULT_FILTER,
     DEFAULT_METHOD,
     DRIFT_CORRECTIONS,
     FILTERS,
+    HEADINGS,
     METHODS,
 )
-from pipeline.calibration.heading import HEADINGS
 from pipeline.errors import InputError
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
+from pipeline.io.sensor_names import SENSOR_NAMES
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
-from pipeline.process.sensors import SENSOR_ALIASES
+from pipeline.model.measures import Measures
+from pipeline.option import Spec, option, specs
 
-__all__ = ["IKOptions", "check_sensor_to_model"]
+__all__ = [
+    "GROUPS",
+    "IKOptions",
+    "IKSettings",
+    "InputOptions",
+    "OutputOptions",
+    "all_specs",
+    "check_sensor_to_model",
+    "resolve_settings",
+    "settings_text",
+]
 
 _FOOT_LENGTH_RANGE_M = (0.15, 0.35)
+_FORMATS = ("an OpenSim .sto of quaternions, one IMU file (our CSV, Movella DOT .csv, Xsens MT "
+            ".txt), or a folder of them (Xsens MT .txt exports, <sensor>.csv, Movella DOT "
+            ".csv, x-IMU3 device folders)")  # fmt: skip
 
 
 @dataclass(frozen=True)
 class IKOptions:
-    """How a recording is turned into joint angles and landmarks (SI units, radians).
+    """How a recording is turned into joint angles and landmarks (SI units, radians); each field's
+    help says what it does (``pipeline ik --help`` prints the same)."""
 
-    Attributes:
-        knee: ``'free'`` (3 rotations, Wang eq 15-17) or ``'hinge'`` (one about the knee AoR).
-        correction: knee-AoR orientation correction ``'none'``, ``'aor'`` (Wang eq 9-13, the
-            default) or ``'aor-ipopt'`` (:mod:`pipeline.calibration.correction`).
-        knee_axis_femur, knee_axis_tibia: the subject's own knee AoR (right-leg ISB femoral and
-            tibial frames, pointing right; normalised); default the population mean of the
-            subject's sex (``models/wang2023_knee_aor.csv``). The hinge knee turns about it and
-            the correction aims at it. Both or neither.
-        segment_orientations: the recording holds segment orientations (ISB frames) rather than
-            sensor orientations: no sensor placement is estimated.
-        calibration_pose: what the first sample (or the static trial) shows: ``'standing'``,
-            ``'supine'`` or ``'seated'``.
-        static_trial: path of a separate static recording that gives the calibration pose (the
-            mean orientation of each sensor over it); None: the first sample of the trial.
-        filter: the attitude filter for raw signals, ``'vqf'`` or ``'pi'``; None: the
-            recording's own orientations, VQF where it has none (:mod:`pipeline.process.signals`).
-        sensor_to_model: fixed world rotation (rad, space-fixed XYZ, OpenSense's
-            ``sensor_to_opensim_rotations``) making the world's y axis point up; None: y-up.
-        heading: ``'anatomical'`` or ``'pelvis_imu:<axis>'``
-            (:mod:`pipeline.calibration.heading`).
-        foot_length_m: heel-to-toe foot length; default from the height (Drillis & Contini).
-        joint_limits: keep the joints within the model's ranges (the knee cannot hyperextend).
-        sensor_map: our sensor name (``pelvis_imu``, ``femur_r_imu``, ...) -> the name (or a
-            unique part of it, e.g. an Xsens id) of the recording's sensor to use for it.
-        strict: implausible results raise :class:`~pipeline.errors.QualityError`.
-        calibration_method: the joint-constraint calibration of knees with raw signals
-            (:mod:`pipeline.process.functional`; reported): ``'ipopt'``, ``'gn'``,
-            ``'dwpso'``, ``'gwo'``, or ``'none'`` to skip it.
-        drift: heading drift between the sensors (:mod:`pipeline.process.drift`): ``'auto'``
-            (corrected for 6-D filter output), ``'joints'`` (always, where the joints'
-            calibrations hold) or ``'none'``.
-        rerun: write the rerun recording (``pipeline ik`` only).
-        osim: also write the model as an OpenSim ``.osim`` whose coordinates are the ``.mot``'s
-            columns (``pipeline ik`` only).
-    """
-
-    knee: str = DEFAULT_KNEE
-    correction: str = DEFAULT_CORRECTION
-    knee_axis_femur: tuple[float, float, float] | None = None
-    knee_axis_tibia: tuple[float, float, float] | None = None
-    segment_orientations: bool = False
-    calibration_pose: str = DEFAULT_CALIBRATION_POSE
-    static_trial: str | None = None
-    filter: str | None = None
-    sensor_to_model: tuple[float, float, float] | None = None
-    heading: str = "anatomical"
-    foot_length_m: float | None = None
-    joint_limits: bool = True
-    sensor_map: Mapping[str, str] = field(default_factory=dict)
-    strict: bool = False
-    calibration_method: str = DEFAULT_METHOD
-    drift: str = "auto"
-    rerun: bool = True
-    osim: bool = False
+    knee: str = option(DEFAULT_KNEE, "choice", "knee model: free (3 rotations, Wang eq 15-17) or "
+                       "hinge (one about the knee AoR)", choices=KNEE_MODES)  # fmt: skip
+    correction: str = option(DEFAULT_CORRECTION, "choice", "knee-AoR orientation correction: "
+                             "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt), "
+                             "towards the gyroscopes' hinge axis where the knee's functional "
+                             "calibration is trusted (functional), or none",
+                             choices=CORRECTIONS)  # fmt: skip
+    knee_axis_femur: tuple[float, float, float] | None = option(
+        None, "vec3", "the subject's knee AoR in the femur frame (pointing right), for the hinge "
+        "and the correction; both or neither (default: the population mean of the subject's sex)")
+    knee_axis_tibia: tuple[float, float, float] | None = option(
+        None, "vec3", "the subject's knee AoR in the tibia frame (pointing right)")
+    segment_orientations: bool = option(False, "bool", "the orientations are segment frames "
+                                        "(ISB), e.g. an Xsens MVN suit export: no sensor "
+                                        "placement is estimated")  # fmt: skip
+    calibration_pose: str = option(DEFAULT_CALIBRATION_POSE, "choice", "the pose at the first "
+                                   "sample (or in --static-trial)",
+                                   choices=CALIBRATION_POSES)  # fmt: skip
+    filter: str | None = option(None, "choice", "attitude filter for raw gyroscope and "
+                                "accelerometer (and magnetometer) signals; also replaces "
+                                "orientations the recording has (default: the recording's own "
+                                f"orientations, {DEFAULT_FILTER} where it has none)",
+                                choices=FILTERS)  # fmt: skip
+    sensor_to_model: tuple[float, float, float] | None = option(
+        None, "vec3", "fixed world rotation (rad, space-fixed XYZ) as OpenSense's "
+        "sensor_to_opensim_rotations, making the world's y axis point up (default: y up already); "
+        "an Xsens z-up world needs -1.5708 0 0", metavar=("RX", "RY", "RZ"))
+    heading: str = option("anatomical", "choice", "how the subject's forward direction is found "
+                          "at the calibration pose: from hip and knee flexion (anatomical, "
+                          "independent of sensor mounting) or OpenSense's pelvis_imu:-z style",
+                          choices=HEADINGS, metavar="{anatomical,pelvis_imu:AXIS}")  # fmt: skip
+    foot_length_m: float | None = option(None, "float", "heel-to-toe foot length in metres "
+                                         "(default: 0.152 x height, Drillis & Contini 1966)")
+    joint_limits: bool = option(True, "bool", "keep the joints within the model's ranges (the "
+                                "flag --no-joint-limits lets them leave)")  # fmt: skip
+    calibration_method: str = option(DEFAULT_METHOD, "choice", "joint-constraint calibration of "
+                                     "knees with raw signals, reported with its trust decision "
+                                     "(none skips it)", choices=(*METHODS, "none"))  # fmt: skip
+    drift: str = option("auto", "choice", "heading drift between the sensors: turned into the "
+                        "pelvis sensor's heading by the joint constraints where their calibrations "
+                        "hold (joints), only for 6-D filter output (auto), or never (none)",
+                        choices=DRIFT_CORRECTIONS)  # fmt: skip
 
     def __post_init__(self) -> None:
-        _choice("knee", self.knee, KNEE_MODES)
-        _choice("correction", self.correction, CORRECTIONS)
-        _choice("calibration_pose", self.calibration_pose, CALIBRATION_POSES)
-        _choice("heading", self.heading, HEADINGS)
-        if self.filter is not None:
-            _choice("filter", self.filter, FILTERS)
-        _choice("calibration_method", self.calibration_method, (*METHODS, "none"))
-        _choice("drift", self.drift, DRIFT_CORRECTIONS)
-        for name in ("segment_orientations", "joint_limits", "strict", "rerun", "osim"):
-            if not isinstance(getattr(self, name), bool):
-                raise InputError(f"expected true or false, got {getattr(self, name)!r}",
-                                 field=name)  # fmt: skip
+        for s in specs(IKOptions):
+            value = getattr(self, s.name)
+            if s.kind == "choice" and not (value is None and s.default is None):
+                _choice(s.name, value, s.choices)
+            elif s.kind == "bool":
+                _bool(s.name, value)
         axes = (self.knee_axis_femur, self.knee_axis_tibia)
         if (axes[0] is None) != (axes[1] is None):
             raise InputError("expected both knee axes (femur and tibia) or neither",
@@ -123,36 +132,176 @@ class IKOptions:
                 raise InputError(f"expected a foot length of {lo}-{hi} m, got {v}{hint}",
                                  field="foot_length_m")  # fmt: skip
             object.__setattr__(self, "foot_length_m", v)
-        if self.static_trial is not None and not isinstance(self.static_trial, str):
-            object.__setattr__(self, "static_trial", str(self.static_trial))
+
+    def replace(self, **changes: object) -> IKOptions:
+        """A copy with some options changed (checked again)."""
+        return _replace(self, changes)
+
+    def as_dict(self) -> dict[str, object]:
+        """Option name -> value (lists for vectors), None for an unset optional value."""
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
+                for f in dataclasses.fields(self)}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class InputOptions:
+    """What ``pipeline ik`` reads: the recording, a static trial, and our sensor names for the
+    recording's (``pelvis_imu`` -> ``00B421AF``, or any unique part of a name)."""
+
+    orientations: str = option(None, "path", f"the recording: {_FORMATS}", required=True,
+                               metavar="PATH")  # fmt: skip
+    static_trial: str | None = option(None, "path", "a separate static recording (same sensors) "
+                                      "that gives the calibration pose (default: the first sample "
+                                      "of the trial)", metavar="PATH")  # fmt: skip
+    sensor_map: Mapping[str, str] = option({}, "pairs", "our sensor name = the recording's "
+                                           "sensor name, label or device id (a unique part of "
+                                           "it), e.g. pelvis_imu=00B421AF femur_r_imu=thigh_R "
+                                           "(default: the names as they are)", section="sensors",
+                                           metavar="NAME=ID",
+                                           aliases=("--xsens-map",))  # fmt: skip
+    ignore: tuple[str, ...] = option((), "words", "entries of a recording folder to leave out "
+                                     "(file name patterns, e.g. notes.txt '*.log'), each named "
+                                     "in the summary (default: none; any other entry that is not "
+                                     "a recording is an error)", metavar="PATTERN")  # fmt: skip
+
+    def __post_init__(self) -> None:
+        if isinstance(self.ignore, str) or not all(isinstance(p, str) for p in self.ignore):
+            raise InputError(f"expected file name patterns, got {self.ignore!r}", field="ignore")
+        object.__setattr__(self, "ignore", tuple(self.ignore))
+        for name in ("orientations", "static_trial"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, (str, Path)):
+                raise InputError(f"expected a path, got {v!r}", field=name)
+            if v is not None:
+                object.__setattr__(self, name, str(v))
         if not isinstance(self.sensor_map, Mapping):
             raise InputError("expected a table of sensor = name pairs", field="sensor_map")
         for key, value in self.sensor_map.items():
-            if key not in SENSOR_TO_SEGMENT and key not in SENSOR_ALIASES:
-                names = sorted(set(SENSOR_TO_SEGMENT) | set(SENSOR_ALIASES))
-                raise InputError(f"expected a sensor name among {names}, got "
+            if key not in SENSOR_NAMES:
+                raise InputError(f"expected a sensor name among {list(SENSOR_NAMES)}, got "
                                  f"{key!r}", field=f"sensors.{key}")  # fmt: skip
             if not isinstance(value, str) or not value:
                 raise InputError(f"expected the recording's sensor name or id as text, got "
                                  f"{value!r}", field=f"sensors.{key}")  # fmt: skip
         object.__setattr__(self, "sensor_map", dict(self.sensor_map))
 
-    def replace(self, **changes: object) -> IKOptions:
-        """A copy with some options changed (checked again)."""
-        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
-        if unknown:
-            raise InputError(f"unknown option(s) {sorted(unknown)}; expected some of "
-                             f"{[f.name for f in dataclasses.fields(self)]}")  # fmt: skip
-        return dataclasses.replace(self, **changes)
+    def replace(self, **changes: object) -> InputOptions:
+        return _replace(self, changes)
 
-    def as_dict(self) -> dict[str, object]:
-        """Option name -> value (lists for vectors), None for an unset optional value."""
-        out: dict[str, object] = {}
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            out[f.name] = list(v) if isinstance(v, tuple) else (dict(v) if f.name == "sensor_map"
-                                                                 else v)  # fmt: skip
-        return out
+
+@dataclass(frozen=True)
+class OutputOptions:
+    """What ``pipeline ik`` writes, and where."""
+
+    out: str = option(None, "path", "output folder", required=True, metavar="DIR")
+    rerun: bool = option(True, "bool", "write the .rrd recording (the flag --no-rerun leaves it "
+                         "out)")  # fmt: skip
+    osim: bool = option(False, "bool", "also write <name>.osim, an OpenSim model whose "
+                        "coordinates are the .mot's columns")  # fmt: skip
+    strict: bool = option(False, "bool", "implausible results (e.g. a large orientation "
+                          "residual) exit with code 3 and write nothing (otherwise they are "
+                          "flagged in the summary and on stderr)")  # fmt: skip
+
+    def __post_init__(self) -> None:
+        if self.out is not None and not isinstance(self.out, (str, Path)):
+            raise InputError(f"expected a path, got {self.out!r}", field="out")
+        if self.out is not None:
+            object.__setattr__(self, "out", str(self.out))
+        for s in specs(OutputOptions):
+            if s.kind == "bool":
+                _bool(s.name, getattr(self, s.name))
+
+    def replace(self, **changes: object) -> OutputOptions:
+        return _replace(self, changes)
+
+
+#: The option groups of ``pipeline ik``, in the order of its help.
+GROUPS = (InputOptions, Measures, IKOptions, OutputOptions)
+
+
+def all_specs() -> list[Spec]:
+    """Every option of ``pipeline ik`` (the flags, the file's keys, the manifest's columns)."""
+    return specs(*GROUPS)
+
+
+@dataclass(frozen=True)
+class IKSettings:
+    """A run of ``pipeline ik`` resolved: the subject, the inputs, the options, the outputs."""
+
+    subject: Measures
+    inputs: InputOptions
+    options: IKOptions
+    outputs: OutputOptions
+
+
+def resolve_settings(config: str | Path | None, values: Mapping[str, object]) -> IKSettings:
+    """:class:`IKSettings` from a configuration file (optional) and ``values`` (option name ->
+    value, None = not given; flags or a manifest row), which override the file's. Refused with
+    the file and the key when an option is missing, unknown or wrong."""
+    from pipeline.io.config import read_config
+
+    merged: dict[str, object] = {}
+    where = None
+    if config is not None:
+        merged.update(read_config(config, all_specs()))
+        where = Path(config)
+    known = {s.name for s in all_specs()}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise InputError(f"unknown option(s) {unknown}", file=where)
+    for key, value in values.items():
+        if value is None:
+            continue
+        if key == "sensor_map" and merged.get("sensor_map"):  # flags add to the file's table
+            value = {**merged["sensor_map"], **value}  # type: ignore[dict-item]
+        merged[key] = value
+    for s in all_specs():
+        if s.required and s.name not in merged:
+            table = f"[{s.section}] {s.name}"
+            raise InputError(f"{s.flag} is required (or {table} in the configuration file)",
+                             file=where)  # fmt: skip
+    try:
+        return IKSettings(*(_build(cls, merged) for cls in (Measures, InputOptions, IKOptions,
+                                                            OutputOptions)))  # fmt: skip
+    except InputError as exc:
+        if exc.file is None and where is not None:
+            raise InputError(exc.message, file=where, field=exc.field) from None
+        raise
+
+
+def settings_text(settings: IKSettings, header: str = "") -> str:
+    """The resolved configuration as TOML text (every option with the value used, absolute
+    paths; unset optional values left out): ``pipeline ik --config`` with it reproduces the run
+    (the output folder is not written: ``--out`` names it)."""
+    from pipeline.io.config import config_text
+    from pipeline.option import to_toml
+
+    doc: dict[str, dict[str, object]] = {"subject": {}, "sensors": {}, "ik": {}}
+    for group in (settings.subject, settings.inputs, settings.options, settings.outputs):
+        for s in specs(type(group)):
+            if s.name == "out":
+                continue
+            v = to_toml(s, getattr(group, s.name))
+            if v is None:
+                continue
+            if s.kind == "pairs":
+                doc[s.section].update(v)  # type: ignore[arg-type]
+            else:
+                doc[s.section][s.name] = v
+    return config_text({k: v for k, v in doc.items() if v}, header)
+
+
+def _build(cls: type, values: Mapping[str, object]) -> object:
+    names = {s.name for s in specs(cls)}
+    return cls(**{k: v for k, v in values.items() if k in names})
+
+
+def _replace(obj, changes: Mapping[str, object]):
+    unknown = set(changes) - {f.name for f in dataclasses.fields(obj)}
+    if unknown:
+        raise InputError(f"unknown option(s) {sorted(unknown)}; expected some of "
+                         f"{[f.name for f in dataclasses.fields(obj)]}")  # fmt: skip
+    return dataclasses.replace(obj, **changes)
 
 
 def _choice(name: str, value: object, choices: tuple[str, ...]) -> None:
@@ -160,50 +309,55 @@ def _choice(name: str, value: object, choices: tuple[str, ...]) -> None:
         raise InputError(f"expected one of {list(choices)}, got {value!r}", field=name)
 
 
+def _bool(name: str, value: object) -> None:
+    if not isinstance(value, bool):
+        raise InputError(f"expected true or false, got {value!r}", field=name)
+
+
 def _number(v: object, name: str) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
+    if isinstance(v, bool) or not isinstance(v, Real):
         raise InputError(f"expected a number, got {v!r}", field=name)
     x = float(v)
-    if not np.isfinite(x):
+    if not math.isfinite(x):
         raise InputError(f"expected a finite number, got {v!r}", field=name)
     return x
 
 
-def _unit(a: object, name: str) -> tuple[float, float, float]:
+def _three(a: object, name: str) -> list[float]:
     try:
         seq = list(a)  # type: ignore[call-overload]
     except TypeError:
         raise InputError(f"expected three numbers, got {a!r}", field=name) from None
-    v = np.array([_number(x, name) for x in seq])
-    if v.shape != (3,):
-        raise InputError(f"expected three numbers, got {len(v)}", field=name)
-    n = float(np.linalg.norm(v))
+    if len(seq) != 3:
+        raise InputError(f"expected three numbers, got {len(seq)}", field=name)
+    return [_number(x, name) for x in seq]
+
+
+def _unit(a: object, name: str) -> tuple[float, float, float]:
+    v = _three(a, name)
+    n = math.sqrt(sum(x * x for x in v))
     if n < 1e-9:
         raise InputError("expected a non-zero axis, got a zero vector", field=name)
     if v[2] <= 0:
         raise InputError(f"expected an axis pointing right (z > 0 in the right-leg frame), got "
-                         f"{v.tolist()}", field=name)  # fmt: skip
-    return tuple(float(x) for x in v / n)  # type: ignore[return-value]
+                         f"{v}", field=name)  # fmt: skip
+    return tuple(x / n for x in v)  # type: ignore[return-value]
 
 
 def check_sensor_to_model(angles: object) -> tuple[float, float, float]:
     """The three ``sensor_to_model`` angles (rad) if finite and within [-2 pi, 2 pi]; refused
     otherwise, with a hint when they look like degrees (e.g. ``-90 0 0`` for ``-1.5708 0 0``)."""
     try:
-        a = np.asarray(angles, dtype=float).ravel()
+        seq = [float(x) for x in (angles if hasattr(angles, "__iter__") else [angles])]  # type: ignore[union-attr]
     except (TypeError, ValueError):
         raise InputError(f"expected three angles in radians, got {angles!r}",
                          field="sensor_to_model") from None  # fmt: skip
-    if a.shape != (3,):
-        raise InputError(f"expected three angles, got {a.size}", field="sensor_to_model")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"expected finite angles in radians, got {a.tolist()}",
-                         field="sensor_to_model")  # fmt: skip
-    if np.any(np.abs(a) > 2 * np.pi + 1e-9):
-        rad = " ".join(f"{v:.4f}" for v in np.radians(a))
-        raise InputError(
-            f"angles {a.tolist()} exceed 2 pi: they are radians; if you meant degrees, give "
-            f"{rad}",
-            field="sensor_to_model",
-        )
-    return float(a[0]), float(a[1]), float(a[2])
+    if len(seq) != 3:
+        raise InputError(f"expected three angles, got {len(seq)}", field="sensor_to_model")
+    if not all(math.isfinite(x) for x in seq):
+        raise InputError(f"expected finite angles in radians, got {seq}", field="sensor_to_model")
+    if any(abs(x) > 2 * math.pi + 1e-9 for x in seq):
+        rad = " ".join(f"{math.radians(x):.4f}" for x in seq)
+        raise InputError(f"angles {seq} exceed 2 pi: they are radians; if you meant degrees, give "
+                         f"{rad}", field="sensor_to_model")  # fmt: skip
+    return seq[0], seq[1], seq[2]

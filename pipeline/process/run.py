@@ -4,21 +4,22 @@
 Wang reproduction share; it writes nothing (outputs are the commands' job). On our scaled Pinocchio
 model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang et al. 2023:
 
-1. **Sensors** (:mod:`pipeline.process.sensors`): the recording's names mapped to ours; the
-   joints the sensors observe (hip, knee, ankle of each leg); any set observing one joint works.
+1. **Sensors** (:mod:`pipeline.process.sensors`): the joints the sensors observe (hip, knee,
+   ankle of each leg; the recording carries our sensor names, :mod:`pipeline.io.formats`); any
+   set observing one joint works.
 2. **World.** Orientations ``R_s(t)`` are pre-multiplied by a fixed ``sensor_to_model`` rotation
    (OpenSense's ``sensor_to_opensim_rotations``, space-fixed XYZ angles; ``-pi/2 0 0`` for Xsens'
    z-up world) so that the world's y axis points up.
 3. **Heading** (:mod:`pipeline.calibration.heading`): the subject's right at the calibration pose,
    from hip and knee flexion by default or from an axis of the pelvis sensor (OpenSense's way).
    Orientations from a 6-D filter (each sensor's heading its own, drifting) are first put in one
-   heading by the joint constraints (``drift``, :mod:`pipeline.process.drift`: hip and ankle
-   centres, the knee's hinge axis), and the calibration pose is read from them.
+   heading by the joint constraints (``drift``, :mod:`pipeline.process.heading_alignment`: hip
+   and ankle centres, the knee's hinge axis), and the calibration pose is read from them.
 4. **Calibration pose** (:mod:`pipeline.calibration.placement`): the first sample (or the mean of a
    static trial) shows a standing, supine or seated pose; each sensor's rotation on its segment
    follows from it. With ``segment_orientations`` the recording holds segment frames and the
    placements are the identity.
-5. **Correction** (:mod:`pipeline.calibration.correction`): per leg with a knee, the segment
+5. **Correction** (:mod:`pipeline.process.knee_correction`): per leg with a knee, the segment
    orientations implied by step 4 are corrected towards the reference knee AoR (Wang eq 9-13 or
    the IPOPT version); the correction becomes part of the sensor placements. Where the knee's
    sensors have gyroscopes and accelerometers, the joint-constraint calibration
@@ -37,41 +38,33 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.landmarks import frame_trajectories, joint_angles, landmark_trajectories
+from pipeline.analysis.joint_angles import joint_angles
+from pipeline.analysis.landmarks import frame_trajectories, landmark_trajectories
 from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
-from pipeline.calibration.correction import (
-    KneeCorrection,
-    carried_correction,
-    correct_knee,
-    correct_knee_to_axes,
-    corrected_placement,
-    population_correction,
-)
-from pipeline.calibration.drift import HeadingDrift
-from pipeline.calibration.heading import check_vertical, heading_rotation, subject_right
-from pipeline.calibration.placement import (
-    mean_rotation,
-    placements_from_pose,
-    pose_configuration,
-    pose_rotations,
-)
+from pipeline.calibration.correction import KneeCorrection
+from pipeline.calibration.heading import check_vertical
+from pipeline.calibration.heading_offset import HeadingDrift
+from pipeline.calibration.placement import pose_configuration
 from pipeline.errors import InputError
 from pipeline.ik.bounds import remove_limits
-from pipeline.ik.solver import solve_ik
+from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
 from pipeline.io.recording import Recording
-from pipeline.model.anthropometry import Measures
 from pipeline.model.conventions import LANDMARK_SEGMENT
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
-from pipeline.process.drift import align_headings, uses_drift_correction
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.options import IKOptions
-from pipeline.process.sensors import SensorSet, apply_sensor_map, known_segments, sensor_set
+from pipeline.process.heading_alignment import align_headings, uses_drift_correction
+from pipeline.process.knee_correction import KneeInputs, apply_correction, choose_correction
+from pipeline.process.options import IKOptions, InputOptions
+from pipeline.process.pose import CalibrationPose, read_calibration_pose, static_orientations
+from pipeline.process.sensors import SensorSet, known_segments, sensor_set
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
 from pipeline.rotations import (
     euler_zxy_from_matrix,
@@ -109,12 +102,13 @@ class IKRun:
     carry the placements and corrections applied), ``q`` its configurations. ``placements``: IMU
     frame -> 4x4 placement in its segment (the calibration applied); ``corrections``: side ->
     :class:`~pipeline.calibration.correction.KneeCorrection`; ``heading_drifts``:
-    ``'<side>_<joint>'`` -> the :class:`~pipeline.calibration.drift.HeadingDrift` applied
-    (:mod:`pipeline.process.drift`); ``sensors``: what the sensors
-    observe; ``heading_right``: the subject's right at the calibration pose (world);
-    ``residual_rms`` (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`);
-    ``options``: the options used; ``filtered``: ``'6-D'``/``'9-D'`` when the orientations were
-    estimated from raw signals here, else None.
+    ``'<side>_<joint>'`` -> the :class:`~pipeline.calibration.heading_offset.HeadingDrift`
+    applied (:mod:`pipeline.process.heading_alignment`); ``sensors``: what the sensors observe;
+    ``heading_right``: the subject's right at the calibration pose (world); ``residual_rms``
+    (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`); ``options``: the
+    options used; ``filtered``: ``'6-D'``/``'9-D'`` when the orientations were estimated from raw
+    signals here, else None; ``measures``: the subject; ``source``: the recording's file or
+    folder; ``inputs``: what ``pipeline ik`` read (None from the Python API).
     """
 
     time: np.ndarray
@@ -135,6 +129,9 @@ class IKRun:
     knee_calibrations: list[KneeCalibration] = field(default_factory=list)
     heading_drifts: dict[str, HeadingDrift] = field(default_factory=dict)
     filtered: str | None = None
+    measures: Measures | None = None
+    source: Path | None = None
+    inputs: InputOptions | None = None
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -151,43 +148,17 @@ def process_recording(
     static: Recording | None = None,
     **changes: object,
 ) -> IKRun:
-    """Steps 1-6 of the module docstring on a read recording; nothing is written.
+    """Steps 1-6 of the module docstring on a read recording (our sensor names); nothing is
+    written.
 
     ``options`` (default :class:`IKOptions`) with any of its fields overridden by keyword, e.g.
     ``process_recording(rec, Measures("m", 1.8), correction="none", knee="hinge")``. ``static``:
-    the static recording that gives the calibration pose (read by the caller; the options'
-    ``static_trial`` only names it).
+    the static recording that gives the calibration pose.
     """
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
     notes = list(trial.notes)
-    world = np.eye(3)
-    trial = apply_sensor_map(trial, opts.sensor_map)
-    trial, filtered = orientations_from_signals(trial, opts.filter, notes)
-    if static is not None:
-        static = apply_sensor_map(static, opts.sensor_map)
-        notes += [f"static trial: {n}" for n in static.notes]
-        static, _ = orientations_from_signals(static, opts.filter if filtered else None, [])
-    to_model = opts.sensor_to_model
-    if filtered:
-        if to_model is not None:
-            raise InputError("--sensor-to-model applies to a recording's own orientations; the "
-                             "filter's world is z up and is turned to y up already",
-                             file=trial.source, field="sensor_to_model")  # fmt: skip
-        to_model = Z_UP_TO_Y_UP
-    if to_model is not None:
-        world = sensor_to_opensim_matrix(to_model)
-        trial = rotate_world(trial, world)
-        static = rotate_world(static, world) if static is not None else None
-    rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()
-                 if seg != "torso"}  # fmt: skip
-    sensors = sensor_set(set(rotations), source=trial.source)
-    ignored = sorted(set(trial.sensor_names) - set(known_segments(trial)))
-    if ignored:
-        notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
-    unused = sorted(s for s in rotations if _side(s) not in sensors.legs and s != "pelvis")
-    if unused:
-        notes.append(f"segments whose sensor observes no joint, ignored: {unused}")
-    rotations = {s: R for s, R in rotations.items() if s == "pelvis" or _side(s) in sensors.legs}
+    trial, static, filtered, world = _in_model_world(trial, static, opts, notes)
+    rotations, sensors = _segment_rotations(trial, notes)
     if sensors.pelvis and not filtered:  # the filter's world is vertical by construction
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
     elif not sensors.pelvis:
@@ -198,123 +169,144 @@ def process_recording(
                          file=trial.source, field="heading")  # fmt: skip
     static_pose = None
     if static is not None:
-        static_pose = _static_orientations(static, rotations, notes, opts.calibration_pose)
+        static_pose = static_orientations(static, list(rotations), notes, opts.calibration_pose)
+    geometry = _geometry(measures, opts)
+    legs = sensors.legs
+    pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
+
+    def read_pose(rotations, notes) -> CalibrationPose:
+        return read_calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs,
+                                     notes)  # fmt: skip
+
+    cal = read_pose(rotations, notes)
+    knee_axes = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
+                 for s in legs if sensors.observes(s, "knee")}  # fmt: skip
+    knee_cal = []
+    if opts.calibration_method != "none":
+        knee_cal = calibrate_knees(trial, cal.placements, knee_axes, opts.calibration_method,
+                                   shared_world=filtered != "6-D")  # fmt: skip
+    drifts: dict[str, HeadingDrift] = {}
+    aligning = uses_drift_correction(opts.drift, filtered)
+    if aligning:
+        method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
+        rotations, drifts = align_headings(trial, rotations, knee_cal, legs, method, notes)
+        if drifts:  # the calibration pose read again from the aligned orientations
+            cal = read_pose(rotations, None)
+            knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    placements, corrections = _correct_knees(rotations, cal, knee_axes, knee_cal, opts,
+                                             aligning, drifts, trial.rate_hz, notes)  # fmt: skip
+    t0 = _time.perf_counter()
+    sk, Q, result = _solve(geometry, opts, legs, placements, rotations, cal, sensors.pelvis)
+    seconds = _time.perf_counter() - t0
+    if not np.all(result.converged):
+        notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
+    angles = _angles(sk, Q, sensors, rotations, placements, cal.H)
+    landmarks = _landmarks(sk, Q, sensors)
+    flags = quality_flags(sk, Q, result.residual_rms, notes,
+                          joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
+    return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
+                 sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
+                 drifts, filtered, measures, trial.source)  # fmt: skip
+
+
+def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
+    """Step 2: ``(trial, static, filtered, world)``: orientations estimated from raw signals
+    where asked or needed, and every orientation in the model's y-up world."""
+    trial, filtered = orientations_from_signals(trial, opts.filter, notes)
+    if static is not None:
+        notes += [f"static trial: {n}" for n in static.notes]
+        static, _ = orientations_from_signals(static, opts.filter if filtered else None, [])
+    to_model = opts.sensor_to_model
+    if filtered:
+        if to_model is not None:
+            raise InputError("--sensor-to-model applies to a recording's own orientations; the "
+                             "filter's world is z up and is turned to y up already",
+                             file=trial.source, field="sensor_to_model")  # fmt: skip
+        to_model = Z_UP_TO_Y_UP
+    world = np.eye(3)
+    if to_model is not None:
+        world = sensor_to_opensim_matrix(to_model)
+        trial = rotate_world(trial, world)
+        static = rotate_world(static, world) if static is not None else None
+    return trial, static, filtered, world
+
+
+def _segment_rotations(trial: Recording, notes: list[str]):
+    """Step 1: segment -> (N, 3, 3) sensor orientations of the segments whose sensors observe a
+    joint, and the :class:`SensorSet`; the others noted."""
+    rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()
+                 if seg != "torso"}  # fmt: skip
+    sensors = sensor_set(set(rotations), source=trial.source)
+    ignored = sorted(set(trial.sensor_names) - set(known_segments(trial)))
+    if ignored:
+        notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
+    unused = sorted(s for s in rotations if _side(s) not in sensors.legs and s != "pelvis")
+    if unused:
+        notes.append(f"segments whose sensor observes no joint, ignored: {unused}")
+    rotations = {s: R for s, R in rotations.items() if s == "pelvis" or _side(s) in sensors.legs}
+    return rotations, sensors
+
+
+def _geometry(measures: Measures, opts: IKOptions):
     axes = {}
     if opts.knee_axis_femur is not None:
         axes = dict(knee_axis_femur=np.array(opts.knee_axis_femur),
                     knee_axis_tibia=np.array(opts.knee_axis_tibia))  # fmt: skip
     geometry, _ = geometry_from_measures(measures, foot_length_m=opts.foot_length_m, **axes)
-    legs = sensors.legs
-    # the model's segment orientations in the calibration pose (free knee: the heading; a hinge
-    # about a tilted AoR turns the tibia and foot by the aligning rotation)
-    pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
+    return geometry
 
-    def read_pose(rotations, notes):
-        return _calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs, notes)
 
-    right, H, pose, placements = read_pose(rotations, notes)
+def _correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, opts: IKOptions,
+                   aligning: bool, drifts, rate_hz: float, notes: list[str]):  # fmt: skip
+    """Step 5: ``(placements, corrections)`` (:mod:`pipeline.process.knee_correction`)."""
+    placements = dict(cal.placements)
+    corrections: dict[str, KneeCorrection] = {}
+    if opts.correction == "none":
+        return placements, corrections
+    calibrations = {c.side: c for c in knee_cal}
+    for side, (a_F, a_T) in knee_axes.items():
+        fem, tib = f"{side}_femur", f"{side}_tibia"
+        P_F, P_T = placements[f"{fem}_imu"][:3, :3], placements[f"{tib}_imu"][:3, :3]
+        k = KneeInputs(side, rotations[fem] @ P_F.T, rotations[tib] @ P_T.T, a_F, a_T,
+                       cal.pose[fem].T @ cal.pose[tib], P_F, P_T, rate_hz,
+                       calibrations.get(side),
+                       headings_shared=not aligning or f"{side}_knee" in drifts)  # fmt: skip
+        c = choose_correction(k, opts.correction, notes)
+        corrections[side] = c
+        placements = apply_correction(placements, c, cal.pose)
+    return placements, corrections
 
-    knee_cal = []
-    axes_by_side = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
-                    for s in legs if sensors.observes(s, "knee")}  # fmt: skip
-    if opts.calibration_method != "none":
-        knee_cal = calibrate_knees(trial, placements, axes_by_side, opts.calibration_method,
-                                   shared_world=filtered != "6-D")  # fmt: skip
-    drifts = {}
-    if uses_drift_correction(opts.drift, filtered):
-        method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
-        rotations, drifts = align_headings(trial, rotations, knee_cal, legs, method, notes)
-        if drifts:  # the calibration pose read again from the aligned orientations
-            right, H, pose, placements = read_pose(rotations, None)
-            knee_cal = with_placements(knee_cal, placements, axes_by_side)
-    functional = {c.side: c for c in knee_cal if c.trusted}
 
-    corrections = {}
-    if opts.correction != "none":
-        for side in legs:
-            if not sensors.observes(side, "knee"):
-                continue
-            fem, tib = f"{side}_femur", f"{side}_tibia"
-            S_F = rotations[fem] @ placements[f"{fem}_imu"][:3, :3].T
-            S_T = rotations[tib] @ placements[f"{tib}_imu"][:3, :3].T
-            g = geometry.for_side(side)
-            c, method, unseen = None, opts.correction, None
-            if uses_drift_correction(opts.drift, filtered) and f"{side}_knee" not in drifts:
-                unseen = ("its thigh and shank sensors' headings were not aligned: the AoR seen "
-                          "across two worlds is turned by their heading difference")
-            elif method == "functional":
-                if side in functional:
-                    # the gyroscopes' hinge axis (Hu eq 4-6) instead of the one the orientations
-                    # show (eq 1-8): the sensor placement is right, but the filter's heading
-                    # errors stay (eq 1-8 absorbs their constant part; pipeline.process.functional)
-                    f = functional[side]
-                    v_F = placements[f"{fem}_imu"][:3, :3] @ f.axis_thigh
-                    v_T = placements[f"{tib}_imu"][:3, :3] @ f.axis_shank
-                    c = correct_knee_to_axes(S_F, S_T, v_F, v_T, g.knee_axis_femur,
-                                             g.knee_axis_tibia, side=side)  # fmt: skip
-                    why = f"its functional axis is not used: {c.reason}"
-                elif any(k.side == side for k in knee_cal):
-                    why = "its functional calibration is not trusted"
-                else:
-                    why = ("no functional calibration (raw gyroscope and accelerometer signals "
-                           "of both sensors are needed)")
-                if c is None or not c.applied:
-                    notes.append(f"{side} knee: {why}; corrected by eq 1-8 ('aor') instead")
-                    c, method = None, "aor"
-            if c is None and unseen is None:
-                c = correct_knee(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia,
-                                 method=method, side=side, rate_hz=trial.rate_hz)  # fmt: skip
-            if unseen is not None or not c.applied:  # as the reference population's knee
-                R_ft = pose[fem].T @ pose[tib]  # the tibia in the femur in the calibration pose
-                c = population_correction(S_F, S_T, g.knee_axis_femur, g.knee_axis_tibia, R_ft,
-                                          side=side, reason=unseen or c.reason)  # fmt: skip
-                notes.append(f"{side} knee: its AoR is not seen ({c.reason}); corrected as the "
-                             "reference population's knee")  # fmt: skip
-            corrections[side] = c
-            placements[f"{fem}_imu"] = corrected_placement(placements[f"{fem}_imu"],
-                                                           c.femur_rotation)  # fmt: skip
-            placements[f"{tib}_imu"] = corrected_placement(placements[f"{tib}_imu"],
-                                                           c.tibia_rotation)  # fmt: skip
-            if f"{side}_foot_imu" in placements:  # placed with the ankle at neutral
-                R_c = pose[tib].T @ pose[f"{side}_foot"]
-                placements[f"{side}_foot_imu"] = corrected_placement(
-                    placements[f"{side}_foot_imu"], carried_correction(c.tibia_rotation, R_c))
-
+def _solve(geometry, opts: IKOptions, legs, placements, rotations, cal: CalibrationPose,
+           pelvis: bool) -> tuple[Skeleton, np.ndarray, IKResult]:  # fmt: skip
+    """Step 6: the IK of every sensor frame; ``(skeleton, Q, result)`` with Q the spherical-root
+    configurations. Without a pelvis sensor the pelvis is held in its calibration-pose
+    orientation and the hips absorb the thighs' whole orientation, so they are not limited."""
     targets = {f"{seg}_imu": R for seg, R in rotations.items()}
-    t0 = _time.perf_counter()
-    if sensors.pelvis:
+    if pelvis:
         sk = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements,
                             root="spherical")  # fmt: skip
-        q0 = _pose_q(sk, opts.calibration_pose, pose["pelvis"])
+        q0 = _pose_q(sk, opts.calibration_pose, cal.pose["pelvis"])
         result = solve_ik(sk.model, targets, q0=q0, limits=opts.joint_limits)
-        Q = result.q
-    else:
-        # the pelvis held in its calibration-pose orientation; the hips absorb the thighs'
-        # whole orientation, so they must not be limited
-        fixed = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements)
-        remove_limits(fixed.model, [f"{s}_hip_{a}" for s in legs for a in "ZXY"])
-        q0 = _pose_q(fixed, opts.calibration_pose, None)
-        result = solve_ik(fixed.model, targets, q0=q0, root=pose["pelvis"],
-                          limits=opts.joint_limits)  # fmt: skip
-        sk = fixed.with_root("spherical")
-        root = np.tile(quat_xyzw_from_matrix(pose["pelvis"]), (len(result.q), 1))
-        Q = np.hstack([root, result.q])
-    seconds = _time.perf_counter() - t0
-    if not np.all(result.converged):
-        notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
+        return sk, result.q, result
+    fixed = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements)
+    remove_limits(fixed.model, [f"{s}_hip_{a}" for s in legs for a in "ZXY"])
+    q0 = _pose_q(fixed, opts.calibration_pose, None)
+    result = solve_ik(fixed.model, targets, q0=q0, root=cal.pose["pelvis"],
+                      limits=opts.joint_limits)  # fmt: skip
+    root = np.tile(quat_xyzw_from_matrix(cal.pose["pelvis"]), (len(result.q), 1))
+    return fixed.with_root("spherical"), np.hstack([root, result.q]), result
+
+
+def _angles(sk, Q, sensors: SensorSet, rotations, placements, H) -> dict[str, np.ndarray]:
+    """The observed joints' ISB angles and, with a pelvis sensor, the pelvis' ZXY angles in the
+    subject's heading; continuous (a subject turning round must not jump by 360 deg)."""
     angles = {k: v for k, v in joint_angles(sk, Q).items() if _observed(k, sensors)}
     if sensors.pelvis:
         pelvis_world = rotations["pelvis"] @ placements["pelvis_imu"][:3, :3].T
         zxy = euler_zxy_from_matrix(np.einsum("ij,njk->nik", H.T, pelvis_world))
         angles.update(zip(_PELVIS_ANGLES, zxy.T, strict=True))
-    # continuous angles: a subject turning round must not make pelvis_rotation jump by 360 deg
-    angles = {name: unwrap_angles(a) for name, a in angles.items()}
-    landmarks = _landmarks(sk, Q, sensors)
-    flags = quality_flags(sk, Q, result.residual_rms, notes,
-                          joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
-    return IKRun(trial.time, Q, angles, landmarks, right, opts.heading, result.residual_rms,
-                 sk, seconds, notes, flags, opts, sensors, placements, corrections,
-                 knee_cal, drifts, filtered)  # fmt: skip
+    return {name: unwrap_angles(a) for name, a in angles.items()}
 
 
 def _side(segment: str) -> str:
@@ -332,40 +324,6 @@ def _pose_q(sk: Skeleton, pose: str, pelvis: np.ndarray | None) -> np.ndarray:
     if pelvis is not None:
         q[:4] = quat_xyzw_from_matrix(pelvis)
     return q
-
-
-def _calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs, notes):
-    """``(right, H, pose, placements)`` from the calibration pose: the first sample, or the
-    static trial's mean orientations ``static_pose`` put in front of the motion so that the
-    heading is found from the motion relative to that pose (steps 3-4)."""
-    if static_pose is not None:
-        at_pose = dict(static_pose)
-        cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
-    else:
-        at_pose = {seg: R[0] for seg, R in rotations.items()}
-        cue = rotations
-    start = (np.pi / 2, np.pi / 2) if opts.calibration_pose == "seated" else (0.0, 0.0)
-    pose0 = pose_rotations(pose_model, opts.calibration_pose, np.eye(3))  # zero heading
-    knee_axes = {s: pose0[f"{s}_femur"] @ geometry.for_side(s).knee_axis_femur for s in legs}
-    right = subject_right(cue, opts.heading, notes=notes, start_flexion=start,
-                          knee_axes=knee_axes)  # fmt: skip
-    H = heading_rotation(right)
-    pose = pose_rotations(pose_model, opts.calibration_pose, H)
-    if opts.segment_orientations:
-        at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
-    return right, H, pose, placements_from_pose(pose, geometry, at_pose, legs)
-
-
-def _static_orientations(static, rotations, notes, pose_name):
-    """Each sensor's mean orientation over the static trial (:func:`mean_rotation`)."""
-    still = {seg: matrix_from_quat(q) for seg, q in map_sensors(static).items()}
-    missing = sorted(set(rotations) - set(still))
-    if missing:
-        raise InputError(f"the static trial lacks sensors for {missing}", file=static.source,
-                         field="static_trial")  # fmt: skip
-    notes.append(f"calibration pose ({pose_name}) from the static trial: mean of "
-                 f"{static.n_samples} samples")  # fmt: skip
-    return {seg: mean_rotation(still[seg]) for seg in rotations}
 
 
 def _landmarks(sk: Skeleton, Q: np.ndarray, sensors: SensorSet) -> dict[str, np.ndarray]:

@@ -7,33 +7,20 @@ every segment between it and the hip carry a sensor (the femur for the femoral l
 and tibia for the malleoli; femur, tibia and foot for the foot's), relative to the pelvis when the
 pelvis carries one and to the leg's own hip centre otherwise.
 
-Sensor names are OpenSense's (``pelvis_imu``, ``femur_r_imu``, ``tibia_r_imu``, ``calcn_r_imu``,
-...; ``foot_r_imu`` is accepted for ``calcn_r_imu``). :func:`apply_sensor_map` renames a
-recording's own sensor names (a lab's labels, an Xsens id) to those.
+Sensor names are ours (OpenSense's, :mod:`pipeline.io.sensor_names`); the readers give them
+(:func:`pipeline.io.formats.read_recording`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 
 from pipeline.errors import InputError
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.conventions import JOINT_SEGMENTS
 
-__all__ = [
-    "JOINT_SEGMENTS",
-    "SENSOR_ALIASES",
-    "SensorSet",
-    "apply_sensor_map",
-    "known_segments",
-    "sensor_set",
-]
-
-#: Joint -> (proximal, distal) segment of one leg (the pelvis has no side).
-JOINT_SEGMENTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"),
-                  "ankle": ("tibia", "foot")}  # fmt: skip
-SENSOR_ALIASES = {"foot_r_imu": "calcn_r_imu", "foot_l_imu": "calcn_l_imu"}
+__all__ = ["SensorSet", "known_segments", "sensor_set"]
 _LANDMARK_CHAIN = {"femur": ("femur",), "tibia": ("femur", "tibia"),
                    "foot": ("femur", "tibia", "foot")}  # fmt: skip
 
@@ -86,46 +73,6 @@ def sensor_set(segments: set[str] | frozenset[str], source: object = None) -> Se
         if all(f"{side}_{c}" in segs for c in chain)
     )
     return SensorSet(segs, tuple(joints), legs, landmarks)
-
-
-def apply_sensor_map(trial: Recording, sensor_map: Mapping[str, str]) -> Recording:
-    """The recording with its sensors renamed to ours.
-
-    ``sensor_map``: our name -> the recording's sensor name, or a part of it that only one sensor
-    name contains (a device id such as ``00B421AF``). Aliases (``foot_r_imu``) become
-    OpenSense's names. A name that matches no sensor, or several, is refused naming the key.
-    """
-    sensors = dict(trial.sensors)
-    renamed: dict[str, object] = {}
-    taken: set[str] = set()
-    for ours, theirs in sensor_map.items():
-        if theirs in sensors:
-            match = theirs
-        else:
-            hits = [s for s in sensors if theirs in s]
-            if len(hits) != 1:
-                what = "no sensor" if not hits else f"several sensors ({hits})"
-                raise InputError(
-                    f"{what} of the recording matches {theirs!r}; its sensors: {sorted(sensors)}",
-                    file=trial.source, field=f"sensors.{ours}",
-                )  # fmt: skip
-            match = hits[0]
-        if match in taken:
-            raise InputError(f"sensor {match!r} is mapped twice", file=trial.source,
-                             field=f"sensors.{ours}")  # fmt: skip
-        taken.add(match)
-        renamed[ours] = sensors[match]
-    out: dict[str, object] = {}
-    items = [(n, s) for n, s in sensors.items() if n not in taken] + list(renamed.items())
-    for name, signals in items:
-        key = SENSOR_ALIASES.get(name, name)
-        if key in out:
-            raise InputError(f"two sensors for {key} (is {name!r} the same as {key!r}?)",
-                             file=trial.source, field=f"sensors.{key}")  # fmt: skip
-        out[key] = signals
-    if set(out) == set(sensors) and not renamed:
-        return trial
-    return trial.with_sensors(out)
 
 
 def known_segments(trial: Recording) -> dict[str, str]:

@@ -35,12 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.analysis.joint_angles import joint_angles as isb_joint_angles
 from pipeline.analysis.landmarks import frame_trajectories
-from pipeline.analysis.landmarks import joint_angles as isb_joint_angles
 from pipeline.errors import InputError
+from pipeline.io.checks import check_time
 from pipeline.model.skeleton import Skeleton
 from pipeline.viz.layout import up_axis_index as _check_up_axis
-from pipeline.viz.recording import check_series, check_time
+from pipeline.viz.recording import check_series
 from pipeline.viz.scene import (
     ANGLE_COLORS,
     BONE_COLOR,
@@ -150,7 +151,7 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
            up_axis, recording_name, app_id, imu_axis_length, point_radius):  # fmt: skip
     """``(scene, poses)``: the scene (its poses over every shown sample if ``precompute``) and
     ``poses(start, stop)``, the forward kinematics of ``shown[start:stop]``."""
-    t = check_time(time)
+    t = check_time(time, min_samples=1)
     n = len(t)
     vertical = _check_up_axis(up_axis)
     Q = check_series(Q, n, (skeleton.nq,), "Q")

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.io.checks import check_time
 from pipeline.model.resources import example_robot_data_share
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.viz.arrow import pandas_shortcut_if_asked
@@ -51,7 +52,6 @@ from pipeline.viz.rrd import VIEW_COORDINATES, Layout, RrdWriter, pack_colors
 
 __all__ = [
     "check_series",
-    "check_time",
     "log_landmarks",
     "log_poses",
     "log_scalars",
@@ -116,13 +116,6 @@ def _env(name: str, value: str):
             os.environ.pop(name, None)
         else:
             os.environ[name] = old
-
-
-def check_time(time: np.ndarray) -> np.ndarray:
-    t = np.asarray(time, dtype=float)
-    if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
-        raise InputError(f"time must be a finite (N,) array, got shape {t.shape}", field="time")
-    return t
 
 
 @contextmanager
@@ -264,7 +257,7 @@ def log_trial(
     and the URDF's parent folders). :func:`pipeline.viz.model.log_motion` draws a model's motion.
     """
     path = Path(path)
-    t = check_time(time)
+    t = check_time(time, min_samples=1)
     _check_up_axis(up_axis)
     plots = [("joint angles (deg)", "/plots")] if joint_angles else []
     with open_recording(path, app_id, recording_name, up_axis, _layout(plots, up_axis)) as rec:

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.io.tables import csv_text, markdown_table, mean_sd
-from pipeline.model.anthropometry import Measures, load_table1, predict_landmarks
+from pipeline.model.anthropometry import load_table1, predict_landmarks
+from pipeline.model.measures import Measures
 from pipeline.reproduce.wang2023.dataset import IMC_OMC_INDEX_OFFSET
 from pipeline.reproduce.wang2023.evaluation import align, angular_speed, estimate_lag
 from pipeline.reproduce.wang2023.imc import (

@@ -12,7 +12,8 @@ import numpy as np
 
 from pipeline.calibration.full_correction import full_correction_ipopt
 from pipeline.calibration.priors import CorrectionPriors, KneeTrial, correction_priors
-from pipeline.model.anthropometry import Measures, predict_landmarks
+from pipeline.model.anthropometry import predict_landmarks
+from pipeline.model.measures import Measures
 from pipeline.reproduce.wang2023.optical import hip_centred_paths
 from pipeline.rotations import log3
 

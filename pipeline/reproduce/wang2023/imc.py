@@ -44,8 +44,9 @@ from pipeline.errors import InputError
 from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.io.opensim import sensor_to_opensim_matrix
 from pipeline.io.recording import Recording
-from pipeline.model.anthropometry import Measures, predict_landmarks
+from pipeline.model.anthropometry import predict_landmarks
 from pipeline.model.geometry import SubjectGeometry
+from pipeline.model.measures import Measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process.options import IKOptions
 from pipeline.process.run import process_recording
@@ -142,7 +143,7 @@ def user_path_options(correction: str, sex_aor, own_aor, female_aor) -> IKOption
         knee="hinge" if correction == "hinge_ik" else "free", correction=method,
         knee_axis_femur=tuple(aor.femur_axis), knee_axis_tibia=tuple(aor.tibia_axis),
         segment_orientations=True, calibration_pose="supine",
-        sensor_to_model=IMC_SENSOR_TO_MODEL, joint_limits=False, rerun=False,
+        sensor_to_model=IMC_SENSOR_TO_MODEL, joint_limits=False,
     )  # fmt: skip
 
 

@@ -37,10 +37,10 @@ from pipeline.model.anthropometry import (
     EQUATION_INPUTS,
     EQUATION_TARGETS,
     GROUPS,
-    Measures,
     RegressionEquation,
     RegressionTable,
 )
+from pipeline.model.measures import Measures
 
 __all__ = [
     "FitResult",

@@ -1,17 +1,18 @@
-"""pipeline.process.drift: each leg's sensors turned into the pelvis sensor's heading by the joint
-constraints, against the simulator's truth (6-D filter output: every sensor's heading its own)."""
+"""pipeline.process.heading_alignment: each leg's sensors turned into the pelvis sensor's heading
+by the joint constraints, against the simulator's truth (6-D filter output: every sensor's heading
+its own)."""
 
 import numpy as np
 import pytest
 
 from pipeline.calibration.attitude import filter_orientations
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.model.anthropometry import Measures
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process import IKOptions, process_recording
-from pipeline.process.drift import uses_drift_correction
+from pipeline.process.heading_alignment import uses_drift_correction
 from pipeline.rotations import matrix_from_quat
 from pipeline.simulate.model import simulate_trial
 
@@ -34,7 +35,7 @@ def _raw(trial, mag: bool) -> Recording:
 
 
 def _knee_rms_deg(trial, run) -> tuple[float, float]:
-    from pipeline.analysis.landmarks import joint_angles
+    from pipeline.analysis.joint_angles import joint_angles
 
     truth = joint_angles(trial.skeleton, trial.q)
     flex, other = [], []
@@ -106,10 +107,10 @@ def test_vendor_orientations_are_not_aligned_unless_asked(trial):
 def test_the_summary_reports_each_aligned_joint(runs, tmp_path):
     from pipeline.commands.ik import summary_text
 
-    text = summary_text(tmp_path / "raw", runs["auto"], SUBJECT)
+    text = summary_text(runs["auto"])
     assert "Sensor headings aligned by the joints (`--drift auto`" in text
     assert all(f"| {s} {j} |" in text for s in ("right", "left") for j in ("hip", "knee", "ankle"))
-    assert "Sensor headings aligned" not in summary_text(tmp_path / "raw", runs["none"], SUBJECT)
+    assert "Sensor headings aligned" not in summary_text(runs["none"])
 
 
 @pytest.mark.dataset
@@ -121,8 +122,8 @@ def test_the_real_ximu3_recording_without_its_magnetometers():
     the alignment (median RMS difference measured 2.4 against 7.0 deg)."""
     from pathlib import Path
 
-    from pipeline.io.imu_folder import read_imu_folder
-    from pipeline.process.drift import MAX_RESIDUAL_DEG
+    from pipeline.io.formats import read_recording as read_imu_folder
+    from pipeline.process.heading_alignment import MAX_RESIDUAL_DEG
 
     folder = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ximu3_lower_body"
     if not folder.exists():
@@ -154,9 +155,10 @@ def test_a_still_leg_lying_supine_without_magnetometers():
     as the reference population's knee instead, and the summary says so; the hips come out
     within 2 deg on every axis (measured 0.1-1.2; the left femur had been 18 deg off), the left
     leg's landmarks within 10 mm."""
-    from pipeline.analysis.landmarks import frame_trajectories, joint_angles
-    from pipeline.io.opensim import SENSOR_TO_SEGMENT
+    from pipeline.analysis.joint_angles import joint_angles
+    from pipeline.analysis.landmarks import frame_trajectories
     from pipeline.io.recording import Recording, SensorSignals
+    from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
     from pipeline.model import Skeleton
     from pipeline.model.scaling import geometry_from_measures
     from pipeline.simulate.model import simulate_trial

@@ -1,14 +1,14 @@
 """All sensors of a leg in the pelvis sensor's heading: joint constraints against heading drift.
 
-A 6-D attitude filter (no magnetometer, or a disturbed one) gives every sensor a heading of its
-own: VQF starts each at its sensor's first orientation, and the vertical component of the gyro
-bias, unobservable in motion, turns it further (0.005 rad/s is 3 deg a minute). The standing
-calibration turns the sensors' frames, not their worlds, so it cannot undo either: a segment's
-motion is then expressed about axes turned by its heading error, and the joint angles mix
-flexion into ab/adduction and rotation. Joint constraints tie the headings together without a
-magnetometer (:mod:`pipeline.calibration.drift`, eq 1 there), joint by joint down the chain, each
-distal sensor's orientations turned into its proximal neighbour's heading by ``psi(t)`` before
-the calibration pose is read:
+A 6-D attitude filter (no magnetometer, or a disturbed one) gives every sensor a heading of its own:
+VQF starts each at its sensor's first orientation, and the vertical component of the gyro bias,
+unobservable in motion, turns it further (0.005 rad/s is 3 deg a minute). The standing calibration
+turns the sensors' frames, not their worlds, so it cannot undo either: a segment's motion is then
+expressed about axes turned by its heading error, and the joint angles mix flexion into ab/adduction
+and rotation. Joint constraints tie the headings together without a magnetometer
+(:mod:`pipeline.calibration.heading_offset`, eq 1 there), joint by joint down the chain, each distal
+sensor's orientations turned into its proximal neighbour's heading by ``psi(t)`` before the
+calibration pose is read:
 
 * **hip** (pelvis -> thigh) and **ankle** (shank -> foot), ball joints: the specific force at the
   joint centre seen by both sensors, with the joint positions of Hu 2021's spherical calibration
@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.calibration.drift import (
+from pipeline.calibration.heading_offset import (
     MIN_ACCELERATION,
     HeadingDrift,
     heading_between,
@@ -36,22 +36,20 @@ from pipeline.calibration.drift import (
     turn_about_vertical,
 )
 from pipeline.errors import InputError
-from pipeline.io.opensim import SENSOR_TO_SEGMENT
 from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SEGMENT_SENSOR
+from pipeline.model.conventions import JOINT_SEGMENTS
 from pipeline.process.functional import KneeCalibration, fit_joint
 
-__all__ = ["JOINT_CHAIN", "align_headings", "uses_drift_correction"]
+__all__ = ["MAX_RESIDUAL_DEG", "align_headings", "uses_drift_correction"]
 
 _UP = np.array([0.0, 1.0, 0.0])
-_SENSOR_OF = {seg: name for name, seg in SENSOR_TO_SEGMENT.items()}
-#: (joint, proximal, distal) from the pelvis down: the order the headings are aligned in.
-JOINT_CHAIN = (("hip", "pelvis", "femur"), ("knee", "femur", "tibia"), ("ankle", "tibia", "foot"))
 #: A joint's heading is not used when the constraint's RMS residual after the turn (the angle
 #: between the two sensors' views of its axis or centre force, over the windows used) exceeds
 #: this (deg). The simulated joints leave 0.1-1 deg. On the real x-IMU3 recording (6-D, its 9-D
 #: orientations as the reference) the knees and ankles leave 11-15 deg and aligning them brings
 #: the joint angles closer to the 9-D ones (median RMS difference 4.3 deg against 8.2 unaligned);
-#: no window of the hips agrees (:data:`~pipeline.calibration.drift.MIN_AGREEMENT`).
+#: no window of the hips agrees (:data:`~pipeline.calibration.heading_offset.MIN_AGREEMENT`).
 MAX_RESIDUAL_DEG = 20.0
 
 
@@ -73,12 +71,12 @@ def align_headings(
     """``(rotations, drifts)``: segment -> (N, 3, 3) sensor orientations (y-up world) with each
     leg's sensors turned into the pelvis sensor's heading as far down the chain as the joints
     allow (module docstring), and ``'<side>_<joint>'`` -> the
-    :class:`~pipeline.calibration.drift.HeadingDrift` applied. ``knees``: the knees'
+    :class:`~pipeline.calibration.heading_offset.HeadingDrift` applied. ``knees``: the knees'
     calibrations; ``method``: the ball joints' calibration method."""
     out = dict(rotations)
     drifts: dict[str, HeadingDrift] = {}
     for side in legs:
-        for joint, prox, dist in JOINT_CHAIN:
+        for joint, (prox, dist) in JOINT_SEGMENTS.items():  # from the pelvis down
             p = prox if prox == "pelvis" else f"{side}_{prox}"
             d = f"{side}_{dist}"
             if p not in out or d not in out:
@@ -118,8 +116,8 @@ def _knee(R_1, R_2, side, knees, rate_hz) -> tuple[HeadingDrift | None, str]:
 
 
 def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> HeadingDrift:
-    s1 = trial.sensors.get(_SENSOR_OF[prox])
-    s2 = trial.sensors.get(_SENSOR_OF[dist])
+    s1 = trial.sensors.get(SEGMENT_SENSOR[prox])
+    s2 = trial.sensors.get(SEGMENT_SENSOR[dist])
     if any(s is None or s.gyr is None or s.acc is None for s in (s1, s2)):
         raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
     from pipeline.calibration.joint_constraints import joint_data, joint_force

@@ -1,10 +1,10 @@
-"""pipeline.calibration.drift: eq (1), the least-squares heading between two sensors' views of one
-vector (a hinge axis, a joint centre's force), on cases checked by hand."""
+"""pipeline.calibration.heading_offset: eq (1), the least-squares heading between two sensors'
+views of one vector (a hinge axis, a joint centre's force), on cases checked by hand."""
 
 import numpy as np
 import pytest
 
-from pipeline.calibration.drift import (
+from pipeline.calibration.heading_offset import (
     MIN_HORIZONTAL,
     heading_between,
     hinge_heading,

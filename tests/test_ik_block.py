@@ -1,4 +1,4 @@
-"""Tests of pipeline.ik.batch: the strided solver (anchors in sequence, blocks between) against
+"""Tests of pipeline.ik.block: the strided solver (anchors in sequence, blocks between) against
 the sequential one (``stride=1``)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 from test_ik_solver import FRAMES, gait, leg_model
 
 from pipeline.errors import InputError
-from pipeline.ik.batch import block_setup
+from pipeline.ik.block import block_setup
 from pipeline.ik.problem import setup_ik
 from pipeline.ik.solver import frame_rotations, solve_ik
 from pipeline.rotations import exp3
