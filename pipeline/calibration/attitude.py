@@ -216,8 +216,16 @@ def filter_orientations(
         if a.shape != (t.size, 3) or not np.all(np.isfinite(a)):
             raise InputError(f"expected {t.size} finite samples of 3 values, got {a.shape}",
                              field=name)  # fmt: skip
-    if method == "pi":
-        return mahony_filter(t, gyr, acc, **TUNED).quat
+    return _FILTERS[method](t, gyr, acc, mag)
+
+
+def _pi(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:
+    """Hu 2021's PI filter (eq 43-50) with :data:`TUNED` gains; 6-D (``mag`` is not used)."""
+    return mahony_filter(t, gyr, acc, **TUNED).quat
+
+
+def _vqf(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:
+    """VQF (offline), 9-D with ``mag``, after a still start's gyro bias is removed."""
     from vqf import offlineVQF  # the field's reference filter (compiled)
 
     bias = rest_bias(t, gyr, acc)
@@ -230,3 +238,7 @@ def filter_orientations(
             raise InputError(f"expected {t.size} finite magnetometer samples", field="mag")
         return np.asarray(offlineVQF(gyr, acc, mag, period)["quat9D"])
     return np.asarray(offlineVQF(gyr, acc, None, period)["quat6D"])
+
+
+#: Filter name (:data:`~pipeline.calibration.conventions.FILTERS`) -> the function that runs it.
+_FILTERS = {"vqf": _vqf, "pi": _pi}

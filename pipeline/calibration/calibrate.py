@@ -30,7 +30,8 @@ from pipeline.calibration.solvers import CalibrationResult, calibrate_classic
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between
 
-__all__ = ["AGREEMENT_DEG", "AGREEMENT_M", "calibrate", "verify"]
+__all__ = ["AGREEMENT_DEG", "AGREEMENT_M", "ITERATION_OPTION", "POPULATION_OPTION", "SOLVERS",
+           "calibrate", "verify"]
 
 AGREEMENT_DEG = 1.0  # axes of two independent starts must agree within this (deg)
 AGREEMENT_M = 0.005  # and joint positions within this (m)
@@ -66,13 +67,28 @@ def calibrate(
     return verify(result, second)
 
 
-def _solve(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
-    if method == "ipopt":
-        from pipeline.calibration.ipopt import calibrate_ipopt  # CasADi only when needed
+def _ipopt(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
+    from pipeline.calibration.ipopt import calibrate_ipopt  # CasADi only when needed
 
-        return calibrate_ipopt(data, joint, seed=seed, quat_1=quat_1, quat_2=quat_2, **options)
+    return calibrate_ipopt(data, joint, seed=seed, quat_1=quat_1, quat_2=quat_2, **options)
+
+
+def _classic(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
     return calibrate_classic(data, joint, method, seed=seed, quat_1=quat_1, quat_2=quat_2,
                              **options)  # fmt: skip
+
+
+#: Method name -> how it calibrates (adding a method: one function and one entry here, its name
+#: in :data:`~pipeline.calibration.conventions.METHODS`), the name of its iteration-limit option
+#: and of its population option (swarms).
+SOLVERS = {"ipopt": _ipopt, "gn": _classic, "dwpso": _classic, "gwo": _classic}
+ITERATION_OPTION = {"ipopt": "max_iter", "gn": "max_iter", "dwpso": "iterations",
+                    "gwo": "iterations"}  # fmt: skip
+POPULATION_OPTION = {"dwpso": "particles", "gwo": "wolves"}
+
+
+def _solve(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
+    return SOLVERS[method](data, joint, method, seed, quat_1, quat_2, options)
 
 
 def verify(result: CalibrationResult, second: CalibrationResult) -> CalibrationResult:

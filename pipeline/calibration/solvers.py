@@ -41,6 +41,7 @@ from pipeline.calibration.observability import Observability, diagnose
 from pipeline.errors import InputError
 
 __all__ = [
+    "CLASSIC_SOLVERS",
     "CalibrationResult",
     "Subproblem",
     "calibrate_classic",
@@ -271,26 +272,40 @@ def solve_subproblem(
 ) -> tuple[np.ndarray, float, int]:
     """``(x, cost, iterations)`` of :func:`subproblem` ``which`` by ``method`` (gn/dwpso/gwo)."""
     p = subproblem(d, which)
-    pop_cost, res, jac, lo, hi, wrap = (p.population_cost, p.residual, p.jacobian, p.lo, p.hi,
-                                        p.wrap)  # fmt: skip
-    if method == "gn":
-        rng = np.random.default_rng(seed)
-        best = None
-        total = 0
-        for _ in range(opts.get("restarts", 4 if which == "axes" else 2)):
-            x0 = lo + (hi - lo) * rng.random(lo.size)
-            x, c, it = gauss_newton(res, jac, x0, max_iter=opts.get("max_iter", 50))
-            total += it
-            if best is None or c < best[1]:
-                best = (x, c)
-        return best[0], best[1], total
-    if method == "dwpso":
-        kw = {k: opts[k] for k in ("particles", "iterations", "jump") if k in opts}
-        return dwpso(pop_cost, lo, hi, wrap=wrap, seed=seed, **kw)
-    if method == "gwo":
-        kw = {k: opts[k] for k in ("wolves", "iterations") if k in opts}
-        return gwo(pop_cost, lo, hi, wrap=wrap, seed=seed, **kw)
-    raise InputError(f"expected method 'gn', 'dwpso' or 'gwo', got {method!r}", field="method")
+    solve = CLASSIC_SOLVERS.get(method)
+    if solve is None:
+        raise InputError(f"expected method in {list(CLASSIC_SOLVERS)}, got {method!r}",
+                         field="method")  # fmt: skip
+    return solve(p, which, seed, opts)
+
+
+def _gn_restarts(p, which: str, seed: int, opts: dict) -> tuple[np.ndarray, float, int]:
+    """Gauss-Newton (eq 7-15) from random starts in the bounds; the best."""
+    rng = np.random.default_rng(seed)
+    best = None
+    total = 0
+    for _ in range(opts.get("restarts", 4 if which == "axes" else 2)):
+        x0 = p.lo + (p.hi - p.lo) * rng.random(p.lo.size)
+        x, c, it = gauss_newton(p.residual, p.jacobian, x0, max_iter=opts.get("max_iter", 50))
+        total += it
+        if best is None or c < best[1]:
+            best = (x, c)
+    return best[0], best[1], total
+
+
+def _dwpso(p, which: str, seed: int, opts: dict) -> tuple[np.ndarray, float, int]:
+    kw = {k: opts[k] for k in ("particles", "iterations", "jump") if k in opts}
+    return dwpso(p.population_cost, p.lo, p.hi, wrap=p.wrap, seed=seed, **kw)
+
+
+def _gwo(p, which: str, seed: int, opts: dict) -> tuple[np.ndarray, float, int]:
+    kw = {k: opts[k] for k in ("wolves", "iterations") if k in opts}
+    return gwo(p.population_cost, p.lo, p.hi, wrap=p.wrap, seed=seed, **kw)
+
+
+#: The paper's solvers of one subproblem (Hu eq 7-15, 17-24, 25-29): method name -> function of
+#: ``(subproblem, which, seed, options)`` returning ``(x, cost, iterations)``.
+CLASSIC_SOLVERS = {"gn": _gn_restarts, "dwpso": _dwpso, "gwo": _gwo}
 
 
 def calibrate_classic(

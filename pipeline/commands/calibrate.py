@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.calibration.calibrate import calibrate
+from pipeline.calibration.calibrate import ITERATION_OPTION, POPULATION_OPTION, calibrate
 from pipeline.calibration.conventions import DEFAULT_METHOD, JOINTS, METHODS
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.calibration.observability import Observability
@@ -120,12 +120,12 @@ def run_calibration(
     quats = {"quat_1": r1.quat, "quat_2": r2.quat} if have_quats else {}
     options = {}
     if iterations is not None:
-        options["max_iter" if method in ("gn", "ipopt") else "iterations"] = int(iterations)
+        options[ITERATION_OPTION[method]] = int(iterations)
     if population is not None:
-        if method not in ("dwpso", "gwo"):
-            raise InputError(f"--population applies to the swarms (dwpso, gwo), not {method}",
-                             field="population")  # fmt: skip
-        options["particles" if method == "dwpso" else "wolves"] = int(population)
+        if method not in POPULATION_OPTION:
+            raise InputError(f"--population applies to the swarms ({', '.join(POPULATION_OPTION)})"
+                             f", not {method}", field="population")  # fmt: skip
+        options[POPULATION_OPTION[method]] = int(population)
     res = calibrate(data, joint, method, seed=seed, **quats, **options)
     obs = _observability_summary(res.observability)
     out = {
