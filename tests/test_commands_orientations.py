@@ -42,10 +42,13 @@ def test_writes_an_sto_that_pipeline_ik_reads_like_the_folder(raw_folder, tmp_pa
     from pipeline.io.formats import read_recording as read_imu_folder
 
     from_raw = process_recording(read_imu_folder(raw_folder), m, filter="pi",
-                                 calibration_method="none", drift="none")  # fmt: skip
+                                 calibration_method="none", drift="none",
+                                 posture="neutral")  # fmt: skip
+    # within 0.05 deg: the raw folder's still start also gives each sensor's accelerometer
+    # vertical at the calibration pose (pipeline.process.pose.still_gravity)
     for key in ("right_knee_flexion", "left_hip_flexion"):
         np.testing.assert_allclose(from_sto.joint_angles[key], from_raw.joint_angles[key],
-                                   atol=1e-6)  # fmt: skip
+                                   atol=np.radians(0.05))  # fmt: skip
 
 
 def test_one_file_and_bad_output_name(raw_folder, tmp_path):

@@ -101,7 +101,9 @@ def test_free_knee_correction_carries_the_foot_with_the_tibia():
 
     geometry, _ = geometry_from_measures(Measures("m", 1.75))  # the estimator's own geometry
     sk = Skeleton.build(geometry, knee="hinge", root="freeflyer")
-    trial = simulate_trial(sk, "gait", duration_s=8.0, seed=1, standing_s=2.0)
+    # upright: orientations alone cannot show a standing lean (pipeline.process.posture)
+    trial = simulate_trial(sk, "gait", duration_s=8.0, seed=1, standing_s=2.0,
+                           standing_lean_deg=(0.0, 0.0))  # fmt: skip
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
                                         for f, imu in trial.imus.items()})  # fmt: skip
@@ -267,7 +269,7 @@ def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
     sys.path.insert(0, str(Path(__file__).parent))
     from test_io_xsens import _write
 
-    from pipeline.rotations import matrix_from_quat
+    from pipeline.rotations import log3, matrix_from_quat
 
     _, _, trial, _ = _walk(tmp_path, n=400)
     sto = tmp_path / "walk.sto"
@@ -278,9 +280,14 @@ def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
     for k, (name, q) in enumerate(trial.orientations().items()):
         ids[name] = f"00B421{k:02d}"
         R = matrix_from_quat(q)
-        zeros = np.zeros((len(R), 3))
-        _write(folder / f"MT_012005D6_009-001_{ids[name]}.txt", R, zeros + [0, 0, 9.81], zeros)
-    common = ["--sex", "m", "--height-m", "1.75", "--knee", "free"]
+        # raw columns consistent with the orientations: gravity alone, the body rates
+        acc = np.einsum("nji,j->ni", R, [0.0, 9.81, 0.0])  # this walk's world is y up
+        gyr = np.vstack([log3(np.swapaxes(R[:-1], 1, 2) @ R[1:]) * 100.0, np.zeros((1, 3))])
+        _write(folder / f"MT_012005D6_009-001_{ids[name]}.txt", R, acc, gyr)
+    # the same information as the .sto: the exports' raw columns (gravity and the body rates
+    # alone, a constant field) carry no joint accelerations to align headings or measure a lean by
+    common = ["--sex", "m", "--height-m", "1.75", "--knee", "free", "--posture", "neutral",
+              "--drift", "none"]  # fmt: skip
     assert main(["ik", "--orientations", str(sto), "--out", str(tmp_path / "a"), *common]) == 0
     pairs = [f"{n}={i}" for n, i in ids.items()]
     args = ["ik", "--orientations", str(folder), "--xsens-map", *pairs, "--out",

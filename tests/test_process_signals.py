@@ -58,8 +58,9 @@ def test_a_recording_that_mixes_orientations_and_raw_signals_needs_a_filter(walk
     rec = raw.with_sensors(mixed)
     with pytest.raises(InputError, match="give --filter"):
         orientations_from_signals(rec, None, [])
-    out, filtered = orientations_from_signals(rec, "vqf", notes := [])
-    assert filtered == "6-D" and "replacing the recording's own" in notes[0]
+    out = orientations_from_signals(rec, "vqf", notes := [])
+    assert out.filtered == "6-D" and "replacing the recording's own" in notes[0]
+    assert out.shared == frozenset()  # 6-D: every heading its own
     with pytest.raises(InputError, match="filter's world is z up"):
         process_recording(raw, M, sensor_to_model=(-np.pi / 2, 0, 0))
 
@@ -94,3 +95,30 @@ def test_real_ximu3_recording_through_the_raw_path():
     left = np.degrees(ours.joint_angles["left_knee_flexion"]).max()
     assert abs(right - left) < 15.0
     assert np.degrees(np.nanmedian(ours.residual_rms)) < 6.0
+
+
+def test_a_disturbed_magnetometer_is_not_used_and_its_heading_is_not_shared(walk):
+    """Four sensors with the simulator's undisturbed field, one whose field a magnet bends (its
+    strength doubled and turned by 40 deg): that sensor is filtered 6-D, named with the evidence,
+    and left out of the shared world; a vendor's orientations with the same fields likewise."""
+    trial, raw, quats = walk
+    sensors = {}
+    for f, i in trial.imus.items():
+        mag = i.recording.mag
+        if NAMES[f] == "tibia_l_imu":
+            from pipeline.rotations import exp3
+
+            mag = 2.0 * mag @ exp3(np.array([0.0, np.radians(40.0), 0.0])).T
+        sensors[NAMES[f]] = SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc, mag=mag)
+    rec = Recording(trial.time, 100.0, sensors)
+    out = orientations_from_signals(rec, "vqf", notes := [])
+    assert out.filtered == "9-D and 6-D" and out.untrusted_fields == ["tibia_l_imu"]
+    assert out.shared == frozenset(NAMES.values()) - {"tibia_l_imu"}
+    assert any(n.startswith("tibia_l_imu: magnetometer not trusted") and "disturbed" in n
+               for n in notes)  # fmt: skip
+    vendor = rec.with_sensors({n: s.replace(quat=quats[n]) for n, s in sensors.items()})
+    own = orientations_from_signals(vendor, None, [])
+    assert own.filtered is None and "tibia_l_imu" not in own.shared
+    run = process_recording(vendor, M, sensor_to_model=(-np.pi / 2, 0, 0))
+    assert set(run.heading_drifts) == {"left_knee"}  # the shank aligned to its thigh
+    assert run.magnetometers["tibia_l_imu"].trusted is False

@@ -48,6 +48,7 @@ from pipeline.errors import InputError
 from pipeline.rotations import matrix_from_quat, quat_from_matrix, rotation_aligning
 
 __all__ = [
+    "MAGNETOMETER_FILTERS",
     "TUNED",
     "AttitudeEstimate",
     "filter_orientations",
@@ -242,3 +243,5 @@ def _vqf(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None
 
 #: Filter name (:data:`~pipeline.calibration.conventions.FILTERS`) -> the function that runs it.
 _FILTERS = {"vqf": _vqf, "pi": _pi}
+#: The filters that take a magnetometer (9-D) when the sensor has a trusted one.
+MAGNETOMETER_FILTERS = ("vqf",)

@@ -17,6 +17,7 @@ __all__ = [
     "HEADINGS",
     "JOINTS",
     "METHODS",
+    "POSTURES",
 ]
 
 METHODS = ("gn", "dwpso", "gwo", "ipopt")
@@ -38,11 +39,12 @@ DEFAULT_CALIBRATION_POSE = "standing"
 #: Attitude filters for raw signals: VQF (Laidig & Seel 2023, the default) and Hu's PI filter.
 FILTERS = ("vqf", "pi")
 DEFAULT_FILTER = "vqf"
-#: Heading-drift corrections (:mod:`pipeline.process.heading_alignment`): ``'joints'`` turns each
-#: leg's sensors into the pelvis sensor's heading by the joint constraints (hip and ankle centres,
-#: the knee's hinge axis) where their calibrations hold; ``'auto'`` does so where the orientations
-#: come from a 6-D filter (each sensor's heading its own, drifting with the vertical gyro bias);
-#: ``'none'`` never.
+#: The standing posture at the calibration pose (:mod:`pipeline.process.posture`): measured from
+#: the joint centres, or the model's neutral pose.
+POSTURES = ("measured", "neutral")
+#: Heading alignment by the joints (:mod:`pipeline.process.heading_alignment`): ``'auto'`` turns
+#: every sensor whose heading is its own (6-D filter output, a disturbed magnetometer's sensor)
+#: into its neighbour's world by the joint constraints; ``'joints'`` every sensor; ``'none'`` none.
 DRIFT_CORRECTIONS = ("auto", "joints", "none")
 #: How the subject's forward direction is found at the calibration pose
 #: (:mod:`pipeline.calibration.heading`): from the motion, or an axis of the pelvis sensor

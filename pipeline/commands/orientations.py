@@ -36,7 +36,7 @@ def run_orientations(
         raise InputError("expected an output file ending in .sto", file=out)
     rec = read_recording(imu, sensor_map, ignore=ignore)
     notes: list[str] = []
-    rec, _ = orientations_from_signals(rec, filter, notes, every_sensor=True)
+    rec = orientations_from_signals(rec, filter, notes, every_sensor=True).recording
     rec = rec.with_sensors({n: s for n, s in rec.sensors.items() if s.quat is not None})
     write_orientations_sto(out, rec, header={"WorldUp": "z", "SensorToOpenSimRotations":
                                              "-1.5708 0 0"})  # fmt: skip

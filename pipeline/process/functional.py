@@ -7,14 +7,18 @@ evidence that holds on real data, all three of:
 
 * **determined**: the observability test passes and the independent start agrees
   (:mod:`pipeline.calibration.observability`);
-* **split-half agreement**: the axes fitted to the first and the second half of the trial within
-  :data:`SPLIT_HALF_DEG` of each other in both sensor frames (on a real recording the shank axis
-  moved by 58-69 deg between halves while the formal SDs claimed 1-4 mm);
+* **split-half agreement**: the axes fitted to the first and the second half of the moving samples
+  (a standing start is no half of the motion) within :data:`SPLIT_HALF_DEG` of each other in both
+  sensor frames (on a real recording the shank axis moved by 58-69 deg between halves while the
+  formal SDs claimed 1-4 mm);
 * **hinge residual**: the RMS of the eq-6 residual (``|w_1 x j_1| - |w_2 x j_2|``) below
   :data:`RESIDUAL_BOUND_RAD_S`.
 
 Reported per knee, with the angle between the functional axis, carried into the segment by the
-sensor's placement, and the model's knee axis. With ``correction='functional'`` a trusted knee's
+sensor's placement, and the model's knee axis. ``axes_trusted`` asks the same of the axes alone
+(their directions determined, the halves agreeing, the residual within bounds): what aligning two
+sensors' headings by the hinge axis needs (:mod:`pipeline.process.heading_alignment`), whatever
+the motion leaves of the knee centre's position. With ``correction='functional'`` a trusted knee's
 axes replace the AoR the orientations show (:func:`pipeline.process.run.process_recording`,
 step 5): the sensor-to-segment rotations are turned so that the hinge axis is the model's knee
 axis, ISB's medio-lateral direction (Hu 2021 eq 30-37 define the segment frame the same way).
@@ -38,13 +42,15 @@ import numpy as np
 from pipeline.io.recording import Recording
 from pipeline.rotations import angle_between
 
-__all__ = ["MAX_SAMPLES", "RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG", "KneeCalibration",
-           "calibrate_knees", "fit_joint", "with_placements"]
+__all__ = ["MAX_SAMPLES", "MOVING_RAD_S", "RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG",
+           "KneeCalibration", "calibrate_knees", "fit_joint", "with_placements"]
 
 SPLIT_HALF_DEG = 5.0
+#: Samples whose two gyroscopes' speeds add up to more than this (rad/s) are the motion.
+MOVING_RAD_S = 0.5
 #: Samples one fit uses at most: a longer (half) trial is subsampled evenly after the angular
-#: accelerations are taken on every sample (the hinge residuals are per sample), so that an hour
-#: of raw signals costs a calibration of a minute's size, not an NLP of 360,000 residuals.
+#: accelerations are taken on every sample (the hinge residuals are per sample), so that an hour of
+#: raw signals costs a calibration of a minute's size, not an NLP of 360,000 residuals.
 MAX_SAMPLES = 6000
 RESIDUAL_BOUND_RAD_S = 0.35
 _SENSORS = {"right": ("femur_r_imu", "tibia_r_imu"), "left": ("femur_l_imu", "tibia_l_imu")}
@@ -63,6 +69,7 @@ class KneeCalibration:
     vs_model_deg: float
     trusted: bool
     reason: str
+    axes_trusted: bool = False
 
 
 def calibrate_knees(
@@ -90,10 +97,12 @@ def calibrate_knees(
         if any(v is None for v in (s1.gyr, s1.acc, s2.gyr, s2.acc)):
             continue
         n = trial.n_samples
-        if n < 2 * min_samples:
+        moving = np.flatnonzero(np.linalg.norm(s1.gyr, axis=1) + np.linalg.norm(s2.gyr, axis=1)
+                                > MOVING_RAD_S)  # fmt: skip
+        if n < 2 * min_samples or moving.size < 2 * min_samples:
             continue
-
-        halves = (slice(None), slice(0, n // 2), slice(n // 2, None))
+        middle = int(moving[moving.size // 2])
+        halves = (slice(None), slice(0, middle), slice(middle, None))
         # the independent start checks the whole trial's fit; the halves only give axes
         full, first, second = (fit_joint(trial.time, s1, s2, rows, method,
                                          shared_world=shared_world,
@@ -115,9 +124,11 @@ def calibrate_knees(
             reasons.append(f"the halves' axes are {split:.1f} deg apart (> {SPLIT_HALF_DEG:g})")
         if residual > RESIDUAL_BOUND_RAD_S:
             reasons.append(f"hinge residual {residual:.2f} rad/s (> {RESIDUAL_BOUND_RAD_S:g})")
+        axes_ok = (not any(u.startswith("ax") for u in full.observability.undetermined)
+                   and split <= SPLIT_HALF_DEG and residual <= RESIDUAL_BOUND_RAD_S)  # fmt: skip
         out.append(KneeCalibration(side, full.axis_1, full.axis_2, split, residual,
                                    full.observability.determined, vs_model, not reasons,
-                                   "; ".join(reasons)))  # fmt: skip
+                                   "; ".join(reasons), axes_ok))  # fmt: skip
     return out
 
 

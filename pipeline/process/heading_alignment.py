@@ -1,33 +1,50 @@
-"""All sensors of a leg in the pelvis sensor's heading: joint constraints against heading drift.
+"""Sensors whose headings are their own, put in one world by the joints (magnetometer-free).
 
-A 6-D attitude filter (no magnetometer, or a disturbed one) gives every sensor a heading of its own:
-VQF starts each at its sensor's first orientation, and the vertical component of the gyro bias,
-unobservable in motion, turns it further (0.005 rad/s is 3 deg a minute). The standing calibration
+A 6-D attitude filter observes each sensor's inclination from gravity but not its heading: every
+sensor's world turns about the vertical by a heading of its own (a constant from its start plus
+the integrated vertical gyro bias); a disturbed magnetometer gives a 9-D filter (or a vendor's
+fusion) a wrong heading too (:mod:`pipeline.calibration.magnetometer`). A standing calibration
 turns the sensors' frames, not their worlds, so it cannot undo either: a segment's motion is then
-expressed about axes turned by its heading error, and the joint angles mix flexion into ab/adduction
-and rotation. Joint constraints tie the headings together without a magnetometer
-(:mod:`pipeline.calibration.heading_offset`, eq 1 there), joint by joint down the chain, each distal
-sensor's orientations turned into its proximal neighbour's heading by ``psi(t)`` before the
-calibration pose is read:
+expressed about axes turned by its heading error, and flexion leaks into ab/adduction and
+rotation. The joints tie the headings together, joint by joint down each leg, each distal
+sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
+(:mod:`pipeline.calibration.heading_offset`, eq 1 there, on windows of :data:`WINDOW_S`):
 
-* **hip** (pelvis -> thigh) and **ankle** (shank -> foot), ball joints: the specific force at the
-  joint centre seen by both sensors, with the joint positions of Hu 2021's spherical calibration
-  (eq 1-3) from the gyroscopes and accelerometers;
-* **knee** (thigh -> shank), a hinge: its axis in both sensor frames from the knee's
-  joint-constraint calibration (eq 4-6, :mod:`pipeline.process.functional`) where it is trusted
-  (a wrong axis would turn the shank by a flexion-dependent error), else the knee centre's force
-  as for a ball joint (any point on the axis is one physical point).
+* **hip** (pelvis -> thigh) and **ankle** (shank -> foot): the specific force at the joint's
+  centre seen by both sensors (Hu 2021 eq 2, the centre from Hu's spherical calibration, eq 1-3),
+  one physical vector whose horizontal part fixes the heading while the joint accelerates
+  (Laidig et al. 2017; Weygers et al. 2020). The signals are low-passed first
+  (:data:`CUTOFF_HZ`): above it soft tissue and heel strikes
+  break the rigid-body constraint, and on the real walk ``gaittoolbox_s02`` no window agreed
+  without the filter;
+* **knee** (thigh -> shank): its hinge axis in both sensors' frames from the knee's
+  joint-constraint calibration (Hu 2021 eq 4-6, :mod:`pipeline.process.functional`) where its
+  axes are trusted (exact for a hinge); else the knee centre's force as for the hip, where its
+  windows agree; else (on real gait the thigh sensor's soft tissue breaks both the hinge fit and
+  the knee centre's constraint: ``gaittoolbox_s02``'s knees) each segment's flexion axis in its
+  sensor's frame, from the sensor's own gait
+  (:func:`pipeline.calibration.flexion_axis.flexion_axis`: the principal axis of its horizontal
+  angular velocity, signed alike by :func:`~pipeline.calibration.flexion_axis.leg_flexion_axes`):
+  in walking the thigh and the shank turn about the same medio-lateral direction, so
+  ``R_1 j_1`` and ``R_2 j_2`` are one line in the world.
 
-A joint whose constraint is not met after the turn (:data:`MAX_RESIDUAL_DEG`) is not used.
+Windows of :data:`WINDOW_S` hold several whole strides, over which a real knee's rotation and
+ab/adduction, the hip's rotation and the soft tissue average out; a window whose samples do not
+agree is left out (:data:`~pipeline.calibration.heading_offset.MIN_AGREEMENT`), and a joint whose
+constraint is not met after the turn (:data:`MAX_RESIDUAL_DEG`) is not used. On the real walk
+``gaittoolbox_s02`` without magnetometers this takes the six sagittal angles' median RMS error
+from 18.8 to the vendor orientations' (``results/bench_real_gait.txt``).
 
-The notes say which joints were aligned, how far the headings drifted and the constraint's
-residual before and after, or why a joint was not.
+Which sensors are aligned (:func:`sensors_to_align`): ``drift='auto'`` aligns every sensor whose
+heading is not in the shared world (6-D filter output, a disturbed magnetometer's sensor);
+``'joints'`` every sensor; ``'none'`` none.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from pipeline.calibration.flexion_axis import FlexionAxis, leg_flexion_axes
 from pipeline.calibration.heading_offset import (
     MIN_ACCELERATION,
     HeadingDrift,
@@ -36,99 +53,150 @@ from pipeline.calibration.heading_offset import (
     turn_about_vertical,
 )
 from pipeline.errors import InputError
+from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.conventions import JOINT_SEGMENTS
-from pipeline.process.functional import KneeCalibration, fit_joint
+from pipeline.process.functional import KneeCalibration
 
-__all__ = ["MAX_RESIDUAL_DEG", "align_headings", "uses_drift_correction"]
+__all__ = ["CUTOFF_HZ", "MAX_RESIDUAL_DEG", "WINDOW_S", "align_headings", "sensors_to_align"]
 
 _UP = np.array([0.0, 1.0, 0.0])
+#: Window of eq (1) (s): several whole strides (a stride takes ~1-1.3 s).
+WINDOW_S = 4.0
+#: Low-pass cut-off (Hz) of the signals the hip's and ankle's centre force is computed from: on
+#: the simulator 4 Hz already bent the force's harmonics (the hips' headings 2.1-2.8 deg off,
+#: 0.8-1.9 at 6 Hz); on the real walk 6 Hz keeps every hip and ankle window that agrees.
+CUTOFF_HZ = 6.0
 #: A joint's heading is not used when the constraint's RMS residual after the turn (the angle
 #: between the two sensors' views of its axis or centre force, over the windows used) exceeds
-#: this (deg). The simulated joints leave 0.1-1 deg. On the real x-IMU3 recording (6-D, its 9-D
-#: orientations as the reference) the knees and ankles leave 11-15 deg and aligning them brings
-#: the joint angles closer to the 9-D ones (median RMS difference 4.3 deg against 8.2 unaligned);
-#: no window of the hips agrees (:data:`~pipeline.calibration.heading_offset.MIN_AGREEMENT`).
+#: this (deg). The simulated joints leave 0.1-1 deg; the real walk gaittoolbox_s02 4.6-6.8 deg
+#: (knees and ankles) and 3-4 deg (hips); the x-IMU3 recording's knees and ankles 11-15 deg.
 MAX_RESIDUAL_DEG = 20.0
 
 
-def uses_drift_correction(mode: str, filtered: str | None) -> bool:
-    """Whether ``mode`` (:data:`~pipeline.calibration.conventions.DRIFT_CORRECTIONS`) applies to
-    orientations ``filtered`` as :func:`~pipeline.process.signals.orientations_from_signals`
-    says (``'auto'``: only 6-D filter output)."""
-    return mode == "joints" or (mode == "auto" and filtered == "6-D")
+def sensors_to_align(mode: str, segments: list[str], shared: frozenset[str]) -> set[str]:
+    """The segments whose sensor's heading the joints align (module docstring): ``mode`` is the
+    ``drift`` option, ``shared`` the sensors whose headings are in one world
+    (:class:`~pipeline.process.signals.Orientations`)."""
+    if mode == "none":
+        return set()
+    if mode == "joints":
+        return set(segments)
+    return {seg for seg in segments if SEGMENT_SENSOR[seg] not in shared}
 
 
 def align_headings(
     trial: Recording,
     rotations: dict[str, np.ndarray],
-    knees: list[KneeCalibration],
     legs: list[str] | tuple[str, ...],
+    align: set[str],
+    knees: list[KneeCalibration],
     method: str,
     notes: list[str],
 ) -> tuple[dict[str, np.ndarray], dict[str, HeadingDrift]]:
     """``(rotations, drifts)``: segment -> (N, 3, 3) sensor orientations (y-up world) with each
-    leg's sensors turned into the pelvis sensor's heading as far down the chain as the joints
-    allow (module docstring), and ``'<side>_<joint>'`` -> the
+    segment in ``align`` turned into its proximal neighbour's heading, down each leg
+    (module docstring), and ``'<side>_<joint>'`` -> the
     :class:`~pipeline.calibration.heading_offset.HeadingDrift` applied. ``knees``: the knees'
-    calibrations; ``method``: the ball joints' calibration method."""
+    functional calibrations; ``method``: the hip's spherical calibration method."""
     out = dict(rotations)
     drifts: dict[str, HeadingDrift] = {}
     for side in legs:
+        axes = _leg_axes(trial, out, side)
         for joint, (prox, dist) in JOINT_SEGMENTS.items():  # from the pelvis down
             p = prox if prox == "pelvis" else f"{side}_{prox}"
             d = f"{side}_{dist}"
-            if p not in out or d not in out:
+            if p not in out or d not in out or d not in align:
                 continue
             name = f"{side} {joint}"
             try:
-                drift, how = None, "the joint centre's acceleration"
-                if joint == "knee":
-                    drift, why = _knee(out[p], out[d], side, knees, trial.rate_hz)
-                    how = "the hinge axis" if drift else f"the knee centre's acceleration ({why})"
-                drift = drift or _ball(trial, out[p], out[d], p, d, method)
+                if joint != "knee":
+                    drift = _ball(trial, out[p], out[d], p, d, method)
+                    how = f"the {joint} centre's acceleration"
+                else:
+                    drift, how = _knee(trial, out[p], out[d], p, d, side, knees, axes, method)
                 if drift.residual_deg > MAX_RESIDUAL_DEG:
                     raise InputError(f"the constraint's residual after the turn is "
                                      f"{drift.residual_deg:.1f} deg (> {MAX_RESIDUAL_DEG:g})")
             except InputError as e:
-                notes.append(f"{name}: heading not aligned: {e.message}")
+                notes.append(f"{name}: {dist} sensor's heading not aligned: {e.message}")
                 continue
             out[d] = turn_about_vertical(out[d], drift.psi, _UP)
             drifts[f"{side}_{joint}"] = drift
             notes.append(f"{name}: {dist} sensor turned into the {prox} sensor's heading by {how} "
                          f"({np.degrees(drift.psi.min()):.1f} to {np.degrees(drift.psi.max()):.1f}"
-                         f" deg, drift {drift.drift_deg:.1f} deg; constraint residual "
-                         f"{drift.residual_deg:.1f} deg, {drift.before_deg:.1f} deg with a "
-                         "constant heading)")  # fmt: skip
+                         f" deg; constraint residual {drift.residual_deg:.1f} deg, "
+                         f"{drift.before_deg:.1f} deg with a constant heading)")  # fmt: skip
     return out, drifts
 
 
-def _knee(R_1, R_2, side, knees, rate_hz) -> tuple[HeadingDrift | None, str]:
-    """The hinge axis' heading if the knee's functional calibration is trusted, else None and
-    why not."""
-    c = next((k for k in knees if k.side == side), None)
-    if c is None:
-        return None, "no functional calibration of the knee"
-    if not c.trusted:
-        return None, f"its hinge calibration is not trusted: {c.reason}"
-    return hinge_heading(R_1, R_2, c.axis_thigh, c.axis_shank, rate_hz, up=_UP), ""
+def _signals(trial: Recording, segment: str):
+    s = trial.sensors.get(SEGMENT_SENSOR[segment])
+    if s is None or s.gyr is None or s.acc is None:
+        raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
+    return s
+
+
+def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[HeadingDrift, str]:
+    """The knee's heading by the first constraint that holds: the trusted hinge axes, the knee
+    centre's force (its windows agree and its residual is within :data:`MAX_RESIDUAL_DEG`), the
+    segments' flexion axes (module docstring)."""
+    c = next((k for k in knees if k.side == side and k.axes_trusted), None)
+    if c is not None:
+        drift = hinge_heading(R_1, R_2, c.axis_thigh, c.axis_shank, trial.rate_hz, up=_UP,
+                              window_s=WINDOW_S)  # fmt: skip
+        return drift, "the knee's hinge axis"
+    try:
+        drift = _ball(trial, R_1, R_2, prox, dist, method)
+        if drift.residual_deg <= MAX_RESIDUAL_DEG:
+            return drift, "the knee centre's acceleration"
+    except InputError:
+        pass
+    return _flexion(trial, R_1, R_2, axes, prox, dist), "the segments' flexion axes"
+
+
+def _leg_axes(trial: Recording, rotations, side: str) -> dict[str, FlexionAxis] | str:
+    """One leg's flexion axes in its sensors' frames, or why there are none."""
+    segments = {}
+    for seg in ("femur", "tibia"):
+        name = f"{side}_{seg}"
+        s = trial.sensors.get(SEGMENT_SENSOR[name])
+        if name in rotations and s is not None and s.gyr is not None:
+            up = np.einsum("nji,j->ni", rotations[name], _UP)  # the vertical in the sensor frame
+            segments[seg] = (s.gyr, up)
+    try:
+        return {f"{side}_{k}": a for k, a in leg_flexion_axes(trial.rate_hz, segments).items()}
+    except InputError as e:
+        return e.message
+
+
+def _flexion(trial: Recording, R_1, R_2, axes, prox: str, dist: str) -> HeadingDrift:
+    """Eq (1) on the two segments' flexion axes (module docstring)."""
+    if isinstance(axes, str):
+        raise InputError(f"no flexion axes: {axes}")
+    if prox not in axes or dist not in axes:
+        raise InputError("raw gyroscope signals of both sensors are needed")
+    return hinge_heading(R_1, R_2, axes[prox].axis, axes[dist].axis, trial.rate_hz, up=_UP,
+                         window_s=WINDOW_S)  # fmt: skip
 
 
 def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> HeadingDrift:
-    s1 = trial.sensors.get(SEGMENT_SENSOR[prox])
-    s2 = trial.sensors.get(SEGMENT_SENSOR[dist])
-    if any(s is None or s.gyr is None or s.acc is None for s in (s1, s2)):
-        raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
+    """Eq (1) on the specific force at the joint's centre (module docstring)."""
     from pipeline.calibration.joint_constraints import joint_data, joint_force
+    from pipeline.process.functional import fit_joint
 
+    rate = trial.rate_hz
+    s1, s2 = (_signals(trial, seg) for seg in (prox, dist))
+    s1 = s1.replace(gyr=lowpass(s1.gyr, rate, CUTOFF_HZ), acc=lowpass(s1.acc, rate, CUTOFF_HZ))
+    s2 = s2.replace(gyr=lowpass(s2.gyr, rate, CUTOFF_HZ), acc=lowpass(s2.acc, rate, CUTOFF_HZ))
     fit = fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
                     joint="spherical", verify_start=False)
-    # no observability test: a direction the fit leaves free (a pelvis that hardly turns, a
-    # centre anywhere on a hinge-like ankle's axis) moves the centre without changing its force
-    # much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)
+    # no observability test: a direction the fit leaves free moves the centre without changing
+    # its force much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)
     data = joint_data(trial.time, s1.gyr, s1.acc, s2.gyr, s2.acc)
     f1, f2 = joint_force(data, fit.position_1_m, fit.position_2_m)
     u = np.einsum("nij,nj->ni", R_1, f1)
     v = np.einsum("nij,nj->ni", R_2, f2)
-    return heading_between(u, v, trial.rate_hz, up=_UP, min_weight=MIN_ACCELERATION**2)
+    return heading_between(u, v, rate, up=_UP, window_s=WINDOW_S,
+                           min_weight=MIN_ACCELERATION**2)  # fmt: skip

@@ -35,6 +35,7 @@ from pipeline.calibration.conventions import (
     FILTERS,
     HEADINGS,
     METHODS,
+    POSTURES,
 )
 from pipeline.errors import InputError
 from pipeline.io.sensor_names import SENSOR_NAMES
@@ -103,10 +104,15 @@ class IKOptions:
     calibration_method: str = option(DEFAULT_METHOD, "choice", "joint-constraint calibration of "
                                      "knees with raw signals, reported with its trust decision "
                                      "(none skips it)", choices=(*METHODS, "none"))  # fmt: skip
-    drift: str = option("auto", "choice", "heading drift between the sensors: turned into the "
-                        "pelvis sensor's heading by the joint constraints where their calibrations "
-                        "hold (joints), only for 6-D filter output (auto), or never (none)",
+    drift: str = option("auto", "choice", "sensors whose headings are their own (6-D filter "
+                        "output, a disturbed magnetometer's sensor) turned into their neighbours' "
+                        "world by the joints (auto), every sensor so (joints), or none",
                         choices=DRIFT_CORRECTIONS)  # fmt: skip
+    posture: str = option("measured", "choice", "the standing posture at the calibration pose: "
+                          "the femurs' and tibias' forward lean measured from the joint centres "
+                          "the raw signals locate (measured; upright where they cannot), or the "
+                          "model's neutral pose with every joint at zero (neutral)",
+                          choices=POSTURES)  # fmt: skip
 
     def __post_init__(self) -> None:
         for s in specs(IKOptions):

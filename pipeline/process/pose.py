@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.calibration.attitude import still_start
 from pipeline.calibration.heading import heading_rotation, subject_right
 from pipeline.calibration.placement import (
     mean_rotation,
@@ -24,22 +25,50 @@ from pipeline.calibration.placement import (
 from pipeline.errors import InputError
 from pipeline.io.opensim import map_sensors
 from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import matrix_from_quat
+from pipeline.rotations import matrix_from_quat, rotation_aligning
 
-__all__ = ["CalibrationPose", "read_calibration_pose", "static_orientations"]
+__all__ = ["MIN_STILL_S", "CalibrationPose", "read_calibration_pose", "static_orientations",
+           "still_gravity"]  # fmt: skip
+
+#: A still start shorter than this (s) gives no accelerometer vertical (:func:`still_gravity`).
+MIN_STILL_S = 0.5
 
 
 @dataclass(frozen=True)
 class CalibrationPose:
     """The subject's ``right`` (world) at the calibration pose and the heading rotation ``H``;
     ``pose``: segment -> its orientation in the pose (world); ``placements``: IMU frame -> 4x4
-    placement on its segment."""
+    placement on its segment; ``at_pose``: segment -> its sensor's orientation at the pose."""
 
     right: np.ndarray
     H: np.ndarray
     pose: dict[str, np.ndarray]
     placements: dict[str, np.ndarray]
+    at_pose: dict[str, np.ndarray]
+
+    def with_pose(self, pose: dict[str, np.ndarray], geometry, legs) -> CalibrationPose:
+        """The same calibration with other segment orientations in the pose (e.g. the measured
+        standing posture, :mod:`pipeline.process.posture`), the placements read again."""
+        placements = placements_from_pose(pose, geometry, self.at_pose, legs)
+        return CalibrationPose(self.right, self.H, pose, placements, self.at_pose)
+
+
+def still_gravity(trial: Recording, segments) -> dict[str, np.ndarray]:
+    """Segment -> the vertical in its sensor's frame over the recording's still start: the mean
+    accelerometer direction (at rest it reads gravity alone), for the sensors that start still
+    for at least :data:`MIN_STILL_S` (:func:`~pipeline.calibration.attitude.still_start`)."""
+    out = {}
+    for seg in segments:
+        s = trial.sensors.get(SEGMENT_SENSOR[seg])
+        if s is None or s.acc is None or s.gyr is None:
+            continue
+        n0 = still_start(s.gyr, s.acc)
+        if n0 >= 2 and trial.time[n0 - 1] - trial.time[0] >= MIN_STILL_S:
+            a = s.acc[:n0].mean(axis=0)
+            out[seg] = a / np.linalg.norm(a)
+    return out
 
 
 def read_calibration_pose(
@@ -50,14 +79,25 @@ def read_calibration_pose(
     geometry,
     legs: tuple[str, ...],
     notes: list[str] | None,
+    gravity: dict[str, np.ndarray] | None = None,
 ) -> CalibrationPose:
     """The calibration pose (module docstring) from the sensors' orientations ``rotations``
-    (segment -> (N, 3, 3), y-up world) and, if given, the static trial's mean orientations."""
+    (segment -> (N, 3, 3), y-up world) and, if given, the static trial's mean orientations.
+
+    ``gravity``: segment -> the vertical in its sensor's frame at a still first sample
+    (:func:`still_gravity`): the sensor's orientation there is tilted, by the smallest turn,
+    onto it. At rest the accelerometer reads the vertical to a tenth of a degree, where a
+    filter's estimate carries what its smoothing brings back from the motion that follows (VQF's
+    offline filter put the simulated sensors' vertical 1 deg off during the still start)."""
     if static_pose is not None:
         at_pose = dict(static_pose)
         cue = {seg: np.concatenate([at_pose[seg][None], R]) for seg, R in rotations.items()}
     else:
         at_pose = {seg: R[0] for seg, R in rotations.items()}
+        for seg, g in (gravity or {}).items():
+            if seg in at_pose:  # the sensor's vertical (y up) turned onto the accelerometer's
+                u = at_pose[seg].T @ np.array([0.0, 1.0, 0.0])
+                at_pose[seg] = at_pose[seg] @ rotation_aligning(g, u)
         cue = rotations
     start = (np.pi / 2, np.pi / 2) if options.calibration_pose == "seated" else (0.0, 0.0)
     pose0 = pose_rotations(pose_model, options.calibration_pose, np.eye(3))  # zero heading
@@ -68,7 +108,8 @@ def read_calibration_pose(
     pose = pose_rotations(pose_model, options.calibration_pose, H)
     if options.segment_orientations:
         at_pose = {seg: pose[seg] for seg in rotations}  # placements: the identity
-    return CalibrationPose(right, H, pose, placements_from_pose(pose, geometry, at_pose, legs))
+    return CalibrationPose(right, H, pose, placements_from_pose(pose, geometry, at_pose, legs),
+                           at_pose)
 
 
 def static_orientations(

@@ -49,6 +49,7 @@ from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import KneeCorrection
 from pipeline.calibration.heading import check_vertical
 from pipeline.calibration.heading_offset import HeadingDrift
+from pipeline.calibration.magnetometer import FieldTrust
 from pipeline.calibration.placement import pose_configuration
 from pipeline.errors import InputError
 from pipeline.ik.bounds import remove_limits
@@ -60,10 +61,16 @@ from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.heading_alignment import align_headings, uses_drift_correction
+from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import KneeInputs, apply_correction, choose_correction
 from pipeline.process.options import IKOptions, InputOptions
-from pipeline.process.pose import CalibrationPose, read_calibration_pose, static_orientations
+from pipeline.process.pose import (
+    CalibrationPose,
+    read_calibration_pose,
+    static_orientations,
+    still_gravity,
+)
+from pipeline.process.posture import Posture, lean_pose, standing_posture
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
 from pipeline.rotations import (
@@ -129,6 +136,8 @@ class IKRun:
     knee_calibrations: list[KneeCalibration] = field(default_factory=list)
     heading_drifts: dict[str, HeadingDrift] = field(default_factory=dict)
     filtered: str | None = None
+    magnetometers: dict[str, FieldTrust] = field(default_factory=dict)
+    posture: Posture | None = None
     measures: Measures | None = None
     source: Path | None = None
     inputs: InputOptions | None = None
@@ -157,7 +166,8 @@ def process_recording(
     """
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
     notes = list(trial.notes)
-    trial, static, filtered, world = _in_model_world(trial, static, opts, notes)
+    trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
+    filtered = oriented.filtered
     rotations, sensors = _segment_rotations(trial, notes)
     if sensors.pelvis and not filtered:  # the filter's world is vertical by construction
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
@@ -172,29 +182,39 @@ def process_recording(
         static_pose = static_orientations(static, list(rotations), notes, opts.calibration_pose)
     geometry = _geometry(measures, opts)
     legs = sensors.legs
+    method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
+    align = sensors_to_align(opts.drift, list(rotations), oriented.shared)
     pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
+
+    gravity = still_gravity(trial, rotations)
 
     def read_pose(rotations, notes) -> CalibrationPose:
         return read_calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs,
-                                     notes)  # fmt: skip
+                                     notes, gravity)  # fmt: skip
 
     cal = read_pose(rotations, notes)
     knee_axes = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
                  for s in legs if sensors.observes(s, "knee")}  # fmt: skip
     knee_cal = []
     if opts.calibration_method != "none":
+        thighs_shanks = {f"{s}_{seg}" for s in legs for seg in ("femur", "tibia")}
         knee_cal = calibrate_knees(trial, cal.placements, knee_axes, opts.calibration_method,
-                                   shared_world=filtered != "6-D")  # fmt: skip
+                                   shared_world=not align & thighs_shanks)  # fmt: skip
     drifts: dict[str, HeadingDrift] = {}
-    aligning = uses_drift_correction(opts.drift, filtered)
-    if aligning:
-        method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
-        rotations, drifts = align_headings(trial, rotations, knee_cal, legs, method, notes)
+    if align:
+        rotations, drifts = align_headings(trial, rotations, legs, align, knee_cal, method, notes)
         if drifts:  # the calibration pose read again from the aligned orientations
             cal = read_pose(rotations, None)
             knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    posture = None
+    if opts.posture == "measured" and opts.calibration_pose == "standing":
+        posture = _measured_posture(trial, rotations, cal, geometry, legs, notes)
+        cal = cal.with_pose(lean_pose(cal.pose, posture), geometry, legs)
+        knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    unaligned = {f"{side}_tibia" for side in legs
+                 if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
     placements, corrections = _correct_knees(rotations, cal, knee_axes, knee_cal, opts,
-                                             aligning, drifts, trial.rate_hz, notes)  # fmt: skip
+                                             unaligned, trial.rate_hz, notes)  # fmt: skip
     t0 = _time.perf_counter()
     sk, Q, result = _solve(geometry, opts, legs, placements, rotations, cal, sensors.pelvis)
     seconds = _time.perf_counter() - t0
@@ -206,16 +226,27 @@ def process_recording(
                           joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
-                 drifts, filtered, measures, trial.source)  # fmt: skip
+                 drifts, filtered, oriented.magnetometers, posture, measures,
+                 trial.source)  # fmt: skip
+
+
+def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:
+    """The standing lean of each leg (:mod:`pipeline.process.posture`)."""
+    lengths = {f"{side}_tibia": geometry.for_side(side).shank_length for side in legs}
+    forward = cal.H[:, 0]
+    return standing_posture(trial, rotations, cal.at_pose, cal.pose, forward, lengths, legs, notes)
 
 
 def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
-    """Step 2: ``(trial, static, filtered, world)``: orientations estimated from raw signals
-    where asked or needed, and every orientation in the model's y-up world."""
-    trial, filtered = orientations_from_signals(trial, opts.filter, notes)
+    """Step 2: ``(trial, static, oriented, world)``: orientations estimated from raw signals
+    where asked or needed (:class:`~pipeline.process.signals.Orientations`), and every
+    orientation in the model's y-up world."""
+    oriented = orientations_from_signals(trial, opts.filter, notes)
+    trial, filtered = oriented.recording, oriented.filtered
     if static is not None:
         notes += [f"static trial: {n}" for n in static.notes]
-        static, _ = orientations_from_signals(static, opts.filter if filtered else None, [])
+        static = orientations_from_signals(static, opts.filter if filtered else None,
+                                           []).recording  # fmt: skip
     to_model = opts.sensor_to_model
     if filtered:
         if to_model is not None:
@@ -228,7 +259,7 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
         world = sensor_to_opensim_matrix(to_model)
         trial = rotate_world(trial, world)
         static = rotate_world(static, world) if static is not None else None
-    return trial, static, filtered, world
+    return trial, static, oriented, world
 
 
 def _segment_rotations(trial: Recording, notes: list[str]):
@@ -257,7 +288,7 @@ def _geometry(measures: Measures, opts: IKOptions):
 
 
 def _correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, opts: IKOptions,
-                   aligning: bool, drifts, rate_hz: float, notes: list[str]):  # fmt: skip
+                   unaligned: set[str], rate_hz: float, notes: list[str]):  # fmt: skip
     """Step 5: ``(placements, corrections)`` (:mod:`pipeline.process.knee_correction`)."""
     placements = dict(cal.placements)
     corrections: dict[str, KneeCorrection] = {}
@@ -270,7 +301,7 @@ def _correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, opts: I
         k = KneeInputs(side, rotations[fem] @ P_F.T, rotations[tib] @ P_T.T, a_F, a_T,
                        cal.pose[fem].T @ cal.pose[tib], P_F, P_T, rate_hz,
                        calibrations.get(side),
-                       headings_shared=not aligning or f"{side}_knee" in drifts)  # fmt: skip
+                       headings_shared=tib not in unaligned)  # fmt: skip
         c = choose_correction(k, opts.correction, notes)
         corrections[side] = c
         placements = apply_correction(placements, c, cal.pose)

@@ -1,62 +1,119 @@
-"""Orientations from raw signals: where a recording's sensors have no orientation (or the user
-asks for a filter), each one's gyroscope, accelerometer and, if present, magnetometer go through an
-attitude filter (:func:`pipeline.calibration.attitude.filter_orientations`: VQF by default, Hu's
-PI filter with ``filter='pi'``).
+"""Orientations from raw signals, and which sensors' headings share one world.
 
-The filters' world is z up (VQF 9-D: east-north-up; 6-D: a heading of each sensor's own), so the
-filtered recording is turned to the model's y-up world here (``sensor_to_model`` of an Xsens-style
-z-up world, ``-pi/2 0 0``); a ``sensor_to_model`` of the user's would then be a mistake and is
-refused. A recording whose sensors have orientations for some and not for others is refused unless
-a filter is named (mixing a vendor's world with a filter's would put the segments in different
-worlds).
+Where a recording's sensors have no orientation (or the user asks for a filter), each one's
+gyroscope, accelerometer and, if present and trusted, magnetometer go through an attitude filter
+(:func:`pipeline.calibration.attitude.filter_orientations`: VQF by default, Hu's PI filter with
+``filter='pi'``). The filters' world is z up (VQF 9-D: east-north-up; 6-D: a heading of each
+sensor's own), so the filtered recording is turned to the model's y-up world by the caller
+(:data:`Z_UP_TO_Y_UP`); a ``sensor_to_model`` of the user's would then be a mistake and is
+refused. A recording whose sensors have orientations for some and not for others is refused
+unless a filter is named (mixing a vendor's world with a filter's would put the segments in
+different worlds).
+
+**Magnetometers are trusted only where they agree** (:mod:`pipeline.calibration.magnetometer`:
+field strength and dip against the other sensors' and over time). A sensor whose field is
+disturbed is filtered without it (6-D), and its heading, like every 6-D sensor's, is its own:
+:class:`Orientations` says which sensors' headings share one world (``shared``), so that the
+joints align the others (:mod:`pipeline.process.heading_alignment`). The same check applies to a
+vendor's orientations when the recording has the raw magnetometer: a sensor whose field was
+disturbed may carry a wrong heading from the vendor's fusion.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
-from pipeline.calibration.attitude import filter_orientations
+from pipeline.calibration.attitude import MAGNETOMETER_FILTERS, filter_orientations
 from pipeline.calibration.conventions import DEFAULT_FILTER
+from pipeline.calibration.magnetometer import FieldTrust, field_trust
 from pipeline.errors import InputError
 from pipeline.io.recording import Recording
 from pipeline.process.sensors import known_segments
+from pipeline.rotations import matrix_from_quat
 
-__all__ = ["Z_UP_TO_Y_UP", "orientations_from_signals"]
+__all__ = ["Z_UP_TO_Y_UP", "Orientations", "orientations_from_signals"]
 
 #: ``sensor_to_model`` of a z-up world (space-fixed XYZ angles, rad), as OpenSense's for Xsens.
 Z_UP_TO_Y_UP = (-float(np.pi) / 2, 0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class Orientations:
+    """A recording with every model sensor's orientation, and how they were obtained.
+
+    ``filtered``: None for the recording's own orientations, else ``'9-D'`` (every sensor with a
+    trusted magnetometer), ``'6-D'`` (none) or ``'9-D and 6-D'``; ``shared``: the sensors whose
+    headings are in one world (a vendor's or 9-D orientations with a trusted or no magnetometer);
+    ``magnetometers``: sensor -> :class:`~pipeline.calibration.magnetometer.FieldTrust`
+    of each sensor with a magnetometer."""
+
+    recording: Recording
+    filtered: str | None
+    shared: frozenset[str]
+    magnetometers: dict[str, FieldTrust] = field(default_factory=dict)
+
+    @property
+    def untrusted_fields(self) -> list[str]:
+        return sorted(n for n, f in self.magnetometers.items() if not f.trusted)
+
+
+def _inclination_up(time: np.ndarray, s) -> np.ndarray:
+    """The world's vertical in the sensor frame per sample, from a 6-D filter (gravity)."""
+    q = filter_orientations(time, s.gyr, s.acc, None, method=DEFAULT_FILTER)
+    return matrix_from_quat(q)[:, 2, :]  # the world's z (up) in the sensor frame: R^T e_z
+
+
+def check_fields(trial: Recording, names: list[str]) -> dict[str, FieldTrust]:
+    """:func:`~pipeline.calibration.magnetometer.field_trust` of the sensors ``names`` that have
+    a magnetometer and raw gyroscope and accelerometer signals."""
+    fields = {}
+    for n in names:
+        s = trial.sensors[n]
+        if s.mag is not None and s.gyr is not None and s.acc is not None:
+            fields[n] = (s.mag, _inclination_up(trial.time, s))
+    return field_trust(fields) if fields else {}
+
+
 def orientations_from_signals(
     trial: Recording, method: str | None, notes: list[str], *, every_sensor: bool = False
-) -> tuple[Recording, str | None]:
-    """``(recording, filtered)``: the recording with every model sensor's orientation estimated by
-    ``method`` (None: only if no sensor has one, then :data:`DEFAULT_FILTER`); ``filtered`` is
-    None for the recording's own orientations, else ``'9-D'`` (every sensor with a magnetometer)
-    or ``'6-D'`` (world z up either way). ``every_sensor``: all sensors, not only those with a
-    segment in the model."""
+) -> Orientations:
+    """Every model sensor's orientation (module docstring): by ``method`` (None: only if no
+    sensor has one, then :data:`DEFAULT_FILTER`). ``every_sensor``: all sensors, not only those
+    with a segment in the model."""
     names = list(trial.sensor_names) if every_sensor else list(known_segments(trial))
     have = [n for n in names if trial.sensors[n].quat is not None]
-    if method is None and len(have) == len(names):
-        return trial, None
-    if method is None and have:
+    if method is None and have and len(have) < len(names):
         missing = sorted(set(names) - set(have))
         raise InputError(f"sensors {have} have orientations and {missing} do not: give --filter "
                          "vqf|pi to estimate all of them from their raw signals",
                          file=trial.source, field="filter")  # fmt: skip
+    fields = check_fields(trial, names)
+    for n, f in sorted(fields.items()):
+        if not f.trusted:
+            notes.append(f"{n}: magnetometer not trusted for its heading: {f.evidence}")
+    if method is None and len(have) == len(names):
+        shared = frozenset(n for n in names if n not in fields or fields[n].trusted)
+        return Orientations(trial, None, shared, fields)
     method = method or DEFAULT_FILTER
     sensors = dict(trial.sensors)
-    dims = set()
+    dims: dict[str, str] = {}
     for n in names:
         s = trial.sensors[n]
         if s.gyr is None or s.acc is None:
             raise InputError(f"sensor {n} has no gyroscope and accelerometer signals to estimate "
                              "its orientation from", file=trial.source, field=n)  # fmt: skip
-        mag = s.mag if method == "vqf" else None
+        use_mag = method in MAGNETOMETER_FILTERS and n in fields and fields[n].trusted
+        mag = s.mag if use_mag else None
         sensors[n] = s.replace(quat=filter_orientations(trial.time, s.gyr, s.acc, mag,
                                                         method=method))  # fmt: skip
-        dims.add("9-D (magnetometer)" if mag is not None else "6-D (no magnetometer)")
-    notes.append(f"orientations estimated from the raw signals by {method.upper()}, "
-                 f"{' and '.join(sorted(dims))}"
+        dims[n] = "9-D" if use_mag else "6-D"
+    kinds = sorted(set(dims.values()), reverse=True)
+    filtered = " and ".join(kinds)
+    six = sorted(n for n, d in dims.items() if d == "6-D")
+    what = f"{method.upper()}, {filtered}" + (f" (6-D: {six})" if len(kinds) > 1 else "")
+    notes.append(f"orientations estimated from the raw signals by {what}"
                  + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
-    return trial.with_sensors(sensors), ("9-D" if dims == {"9-D (magnetometer)"} else "6-D")
+    shared = frozenset(n for n, d in dims.items() if d == "9-D")
+    return Orientations(trial.with_sensors(sensors), filtered, shared, fields)

@@ -40,6 +40,7 @@ from pipeline.simulate.motions import joint_trajectories, motion_name, standing_
 
 __all__ = [
     "GRAVITY",
+    "STANDING_LEAN_DEG",
     "MAGNETIC_FIELD",
     "SensorNoise",
     "SimulatedImu",
@@ -48,6 +49,13 @@ __all__ = [
 ]
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
+#: How far each leg leans forward, as a whole, in a standing start (deg, drawn uniformly): in
+#: quiet standing the shank leans forward over the foot (on the real walk gaittoolbox_s02 the
+#: optical joint centres put the tibias at 5.6 and 6.7 deg, the ankles at 6-8 deg of
+#: dorsiflexion); the knee straight.
+STANDING_LEAN_DEG = (2.0, 6.0)
+#: The motions whose rest pose is standing (the others rest lying or seated).
+STANDING_MOTIONS = ("gait", "static")
 #: The earth's magnetic field in the simulator's world (x east, y north, z up; uT): 46 uT,
 #: inclination 62 deg (central Europe).
 MAGNETIC_FIELD = np.array([0.0, 21.6, -40.6])
@@ -193,6 +201,7 @@ def simulate_trial(
     misalignment_deg: float = 15.0,
     offset_m: float = 0.02,
     standing_s: float = 0.0,
+    standing_lean_deg: tuple[float, float] = STANDING_LEAN_DEG,
 ) -> SimulatedTrial:
     """Simulate ``motion`` on ``skeleton`` (reloaded with a free-flyer root if needed; None:
     a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, built in memory).
@@ -202,7 +211,10 @@ def simulate_trial(
     in a random direction. ``noise`` defaults to :class:`SensorNoise` ``()``. ``standing_s > 0``
     starts the trial with that long still in the neutral standing pose, then a smooth transition
     into the motion (:func:`pipeline.simulate.motions.standing_start`): a calibration pose in the
-    same continuous recording, as a lab records it.
+    same continuous recording, as a lab records it. Standing (:data:`STANDING_MOTIONS`), each
+    leg leans forward as a whole
+    by ``U(*standing_lean_deg)`` degrees (hip flexion ``-lean``, knee 0, ankle dorsiflexion
+    ``+lean``, the foot flat), as people stand (:data:`STANDING_LEAN_DEG`); ``(0, 0)``: upright.
     """
     motion = motion_name(motion)
     if not (np.isfinite(duration_s) and duration_s > 0 and np.isfinite(rate_hz) and rate_hz > 0):
@@ -216,12 +228,17 @@ def simulate_trial(
     skeleton = skeleton.with_root("freeflyer")
     # streams by index (spawn's children do not depend on how many are spawned): the
     # magnetometer's noise has its own, so that adding it changed no other signal
-    r_motion, r_place, r_noise, r_mag = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4)
+    r_motion, r_place, r_noise, r_mag, r_posture = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5)
     )
     t = np.arange(n) / rate_hz
+    posture: dict[str, float] = {}
+    if standing_s > 0 and motion in STANDING_MOTIONS:  # the others start lying or seated
+        for side in skeleton.legs:
+            lean = np.deg2rad(r_posture.uniform(*standing_lean_deg))
+            posture[f"{side}_hip_Z"], posture[f"{side}_ankle_Z"] = -lean, lean
     if standing_s > 0:
-        q, v, a = standing_start(skeleton, motion, t, standing_s, r_motion)
+        q, v, a = standing_start(skeleton, motion, t, standing_s, r_motion, posture)
     else:
         q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
     lo, hi = skeleton.lower_limits[7:], skeleton.upper_limits[7:]

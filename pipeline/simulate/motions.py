@@ -146,16 +146,17 @@ def _follow(fn: Callable, clock: _Clock | None) -> Callable:
     return warped
 
 
-def _grow(fn: Callable, clock: _Clock | None) -> Callable:
-    """``fn`` grown from zero by the ramp: ``s g(tau)``, ``s' g + s^2 g'``,
-    ``s'' g + 3 s s' g' + s^3 g''`` (None: ``fn``)."""
+def _grow(fn: Callable, clock: _Clock | None, start: float = 0.0) -> Callable:
+    """``fn`` grown from ``start`` by the ramp: ``c + s (g(tau) - c)``, ``s' (g - c) + s^2 g'``,
+    ``s'' (g - c) + 3 s s' g' + s^3 g''`` with ``c = start`` (None: ``fn``)."""
     if clock is None:
         return fn
     s, ds, dds, tau = clock
 
     def warped(_t: np.ndarray):
         g, dg, ddg = fn(tau)
-        return s * g, ds * g + s * s * dg, dds * g + 3 * s * ds * dg + s**3 * ddg
+        g = g - start
+        return start + s * g, ds * g + s * s * dg, dds * g + 3 * s * ds * dg + s**3 * ddg
 
     return warped
 
@@ -217,7 +218,7 @@ def joint_trajectories(
 
 def _trajectories(
     skeleton: Skeleton, motion: str, time: np.ndarray, seed: int | np.random.Generator,
-    clock: _Clock | None,
+    clock: _Clock | None, posture: dict[str, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if skeleton.root != "freeflyer":
         raise InputError("expected a skeleton with root='freeflyer'", field="root")
@@ -242,7 +243,8 @@ def _trajectories(
                 continue
             j = model.joints[model.getJointId(name)]
             fn = fns.get(name[len(side) + 1 :], Sinusoids(0.0))
-            q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v] = _grow(fn, clock)(t)
+            start = (posture or {}).get(name, 0.0)
+            q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v] = _grow(fn, clock, start)(t)
     return q, v, a
 
 
@@ -264,11 +266,11 @@ def _ramp(t: np.ndarray, start: float) -> tuple[np.ndarray, ...]:
 
 def standing_start(
     skeleton: Skeleton, motion: str, time: np.ndarray, standing_s: float,
-    seed: int | np.random.Generator = 0,
+    seed: int | np.random.Generator = 0, posture: dict[str, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``q, v, a`` of ``motion`` preceded by ``standing_s`` s still in the neutral pose (the
-    joints at zero, the pelvis upright at the motion's starting place and heading), then a
-    :data:`RAMP_S` s transition.
+    """``q, v, a`` of ``motion`` preceded by ``standing_s`` s still in a standing pose (the
+    joints at ``posture``, joint name -> angle in rad, zero where not given; the pelvis upright
+    at the motion's starting place and heading), then a :data:`RAMP_S` s transition.
 
     Exact: with the ramp ``s(t)`` and the motion clock ``tau(t) = int s`` (:func:`_ramp`), the
     path and heading follow the motion at ``tau`` (``x' = s x_m'(tau)``,
@@ -279,4 +281,4 @@ def standing_start(
     gait's pelvis tilt: the posture a standing calibration asks of the subject.
     """  # fmt: skip
     t = np.asarray(time, dtype=float)
-    return _trajectories(skeleton, motion, t, seed, _ramp(t, float(standing_s)))
+    return _trajectories(skeleton, motion, t, seed, _ramp(t, float(standing_s)), posture)

@@ -1,0 +1,151 @@
+"""The standing posture at the calibration pose: how far the leg leans forward, from the joint
+centres the sensors' own signals locate.
+
+A standing calibration that assumes the model's neutral pose (every joint at zero) puts the
+subject's standing posture into the sensor placements: a tibia that leans forward by ``t``
+degrees while the foot is flat reads afterwards as an ankle ``t`` degrees less dorsiflexed than
+it is (on the real walk ``gaittoolbox_s02`` the optical systems see the subject stand with 6-7 deg
+of dorsiflexion, and the neutral calibration's ankle angles are 7-10 deg low over the whole walk).
+The lean is observable: each joint's centre in the sensors' frames follows from their signals
+(:func:`pipeline.calibration.joint_centres.joint_centre`, eq 2 there), so the tibia's long axis in
+its sensor's frame is the line from the ankle's centre to the knee's (Hu 2021 eq 30-37 build the
+segment frames from the same centres), and at the calibration pose its forward lean is
+
+    lean = atan2(v . x_H, v . y),  v = R_s (o_knee - o_ankle)                      (1)
+
+with ``x_H`` the subject's forward direction (the heading) and ``y`` the vertical. A knee that turns
+like a hinge does not determine where its centre lies along its axis (the fit's matrix is then
+ill-conditioned, :data:`MIN_CONDITIONING`; a real knee's is not: 0.30-0.34 on S02, the simulator's
+hinge 0.01-0.02); that direction is left out of ``o_knee - o_ankle`` (on the simulator the centre
+had slid 28 cm along an axis 8 deg from the heading's medio-lateral direction: a 4 deg lean that is
+not there). The leg is taken straight, as in the neutral pose, leaning as its tibia does: the femur
+and the tibia turn by ``-lean`` about their medio-lateral axis (``+z``: a forward lean of the top
+turns ``y`` towards ``-x``), so the pose has hip flexion ``-lean``, knee flexion 0 and ankle
+dorsiflexion ``lean``, the foot flat. Why the tibia's lean for the whole leg and not the femur's
+own: the shank's sensor sits close to the bone and the knee and ankle move it in every stride, while
+the thigh's sensor rides on soft tissue; on S02 the femur's own centres put the standing knee 3-5
+deg into hyperextension, which the model's knee cannot take, and the hips 3-9 deg further from both
+optical references than the straight leg does (``results/bench_real_gait.txt``). The pelvis's tilt
+has no centre line the sensors can see and stays at the model's neutral.
+
+A lean is used only when the centres are plausible: the distance between them within
+:data:`LENGTH_TOL` of the model's shank length, the fit's residual below :data:`MAX_RESIDUAL`,
+and the lean within :data:`MAX_LEAN_DEG`; the notes say why a leg was taken upright.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.calibration.joint_centres import JointCentre, joint_centre
+from pipeline.errors import InputError
+from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SEGMENT_SENSOR
+from pipeline.rotations import rot_z
+
+__all__ = ["LENGTH_TOL", "MAX_LEAN_DEG", "MAX_RESIDUAL", "MIN_CONDITIONING", "Posture",
+           "lean_pose", "standing_posture"]  # fmt: skip
+
+#: The centres' distance must be within this fraction of the model's shank length.
+LENGTH_TOL = 0.25
+#: Largest RMS residual of the centres' fit (m/s^2); real gait leaves 0.4-0.8.
+MAX_RESIDUAL = 1.5
+#: Largest plausible standing lean of a thigh or shank (deg).
+MAX_LEAN_DEG = 20.0
+#: Below this conditioning (:class:`~pipeline.calibration.joint_centres.JointCentre`) the knee's
+#: weakest direction is not determined and is left out of the tibia's line.
+MIN_CONDITIONING = 0.1
+
+
+@dataclass(frozen=True)
+class Posture:
+    """``lean``: segment (``right_femur``, ``right_tibia``, ...) -> forward lean (rad) at the
+    calibration pose, for the legs whose lean was measured; ``length``: leg -> the distance (m)
+    between the knee's and the ankle's centres; ``residual``: leg -> the worse of the two
+    centres' fits (m/s^2)."""
+
+    lean: dict[str, float]
+    length: dict[str, float]
+    residual: dict[str, float]
+
+    def joint_angles(self, side: str) -> dict[str, float]:
+        """The standing pose's hip flexion, knee flexion and ankle dorsiflexion (rad) of one
+        leg (module docstring); a leg without a lean stands upright."""
+        t = self.lean.get(f"{side}_tibia", 0.0)
+        return {"hip_flexion": -t, "knee_flexion": 0.0, "ankle_flexion": t}
+
+
+def _centre(trial: Recording, rotations, prox: str, dist: str) -> JointCentre:
+    s1, s2 = (trial.sensors.get(SEGMENT_SENSOR[seg]) for seg in (prox, dist))
+    if any(s is None or s.gyr is None or s.acc is None for s in (s1, s2)):
+        raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
+    return joint_centre(trial.time, s1.gyr, s1.acc, rotations[prox], s2.gyr, s2.acc,
+                        rotations[dist])  # fmt: skip
+
+
+def standing_posture(
+    trial: Recording,
+    rotations: dict[str, np.ndarray],
+    at_pose: dict[str, np.ndarray],
+    pose: dict[str, np.ndarray],
+    forward: np.ndarray,
+    lengths: dict[str, float],
+    legs: tuple[str, ...],
+    notes: list[str],
+) -> Posture:
+    """Each leg's lean (module docstring), beyond the model's own in the pose (a hinge knee's
+    tibia is turned by its axis's tilt). ``rotations``: segment -> (N, 3, 3) sensor orientations
+    in one y-up world (headings aligned); ``at_pose``: segment -> the sensor's orientation at the
+    calibration pose; ``pose``: segment -> the model's orientation in the pose; ``forward``: the
+    subject's forward direction; ``lengths``: tibia segment -> the model's shank length (m)."""
+    up = np.array([0.0, 1.0, 0.0])
+    lean: dict[str, float] = {}
+    length: dict[str, float] = {}
+    residual: dict[str, float] = {}
+    for side in legs:
+        femur, tibia, foot = (f"{side}_{s}" for s in ("femur", "tibia", "foot"))
+        if not all(s in rotations for s in (femur, tibia, foot)):
+            continue  # the knee and the ankle must both be observed
+        try:
+            knee = _centre(trial, rotations, femur, tibia)
+            ankle = _centre(trial, rotations, tibia, foot)
+        except InputError as e:
+            notes.append(f"{side} leg: standing lean not measured ({e.message}); taken upright")
+            continue
+        v_s = knee.o_2 - ankle.o_1  # in the tibia's sensor frame
+        if knee.conditioning < MIN_CONDITIONING:  # a hinge: its centre's place on its axis
+            d = knee.weakest[1] / np.linalg.norm(knee.weakest[1])
+            v_s = v_s - (v_s @ d) * d
+        L, res = float(np.linalg.norm(v_s)), max(knee.residual, ankle.residual)
+        v = at_pose[tibia] @ v_s
+        model = pose[tibia] @ np.array([0.0, 1.0, 0.0])  # the model's tibia line in the pose
+        angle = float(np.arctan2(v @ forward, v @ up) - np.arctan2(model @ forward, model @ up))
+        why = None
+        if abs(L / lengths[tibia] - 1.0) > LENGTH_TOL:
+            why = f"the knee and ankle centres are {L:.3f} m apart (shank {lengths[tibia]:.3f} m)"
+        elif res > MAX_RESIDUAL:
+            why = f"the centres' fit leaves {res:.2f} m/s^2 (> {MAX_RESIDUAL:g})"
+        elif abs(np.degrees(angle)) > MAX_LEAN_DEG:
+            why = f"the tibia would lean {np.degrees(angle):.0f} deg (> {MAX_LEAN_DEG:g})"
+        if why:
+            notes.append(f"{side} leg: standing lean not measured, {why}; taken upright")
+            continue
+        lean[femur] = lean[tibia] = angle
+        length[side], residual[side] = L, res
+    if lean:
+        notes.append("standing posture from the knee and ankle centres: " + ", ".join(
+            f"{side} leg leans {np.degrees(lean[f'{side}_tibia']):+.1f} deg"
+            for side in legs if f"{side}_tibia" in lean))  # fmt: skip
+    return Posture(lean, length, residual)
+
+
+def lean_pose(pose: dict[str, np.ndarray], posture: Posture) -> dict[str, np.ndarray]:
+    """The calibration pose's segment orientations with each measured lean applied (a turn of
+    ``-lean`` about the segment's own medio-lateral axis, module docstring)."""
+    out = dict(pose)
+    for seg, angle in posture.lean.items():
+        if seg in out:
+            out[seg] = out[seg] @ rot_z(-angle)
+    return out

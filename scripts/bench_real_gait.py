@@ -1,0 +1,273 @@
+"""A real walk against optical truth: joint angles and joint centres of ``gaittoolbox_s02``.
+
+The sample S02 of the public gait-tech/gaittoolbox (7 Xsens MTw sensors as MT Manager writes
+them, raw signals and the vendor's orientations; Vicon truth; ``../shared/data/gaittoolbox_s02``,
+read its README): 11 s standing, then walking in a 4 x 4 m room with a 180 deg turn. Each input
+path goes through :func:`pipeline.process.process_recording` as ``pipeline ik`` runs it:
+
+* ``vendor``: the vendor's orientations (and raw signals) as the files hold them;
+* ``vqf9``: ``--filter vqf`` with the magnetometers (9-D where a sensor's field is trusted);
+* ``vqf6`` / ``pi6``: VQF and Hu's PI filter without magnetometers (the ``Mag_`` columns dropped);
+
+each with the default options and with each other option of the correction, the knee, the
+standing posture and the heading alignment. Scored over samples 1120-2075 (the walk) against
+``vicon/S02-Trial-Walk-1_vicon_ik.mot`` (and the marker-based ``_markers_ik.mot``): per
+coordinate the RMSE, the offset-removed RMSE (offset = mean difference over the standing samples
+200-1000), Pearson's r and the range of motion; the knee and ankle joint centres relative to the
+hip centres' midpoint (mm), in each system's pelvis frame and in the pelvis's heading frame
+(vertical and forward; the two systems' pelvis frames differ by their tilt at standing).
+
+Written: ``results/bench_real_gait.txt`` and ``results/bench_real_gait.png`` (each sagittal
+angle over the walk, ours against Vicon, per input path with the default options).
+
+Usage: ``python scripts/bench_real_gait.py [--data ../shared/data/gaittoolbox_s02] [--quick]``
+(``--quick``: the default options only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.analysis.landmarks import frame_trajectories
+from pipeline.io.formats import read_recording
+from pipeline.io.mot import read_mot
+from pipeline.model.measures import Measures
+from pipeline.process import mot_columns, process_recording
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT.parent / "shared" / "data" / "gaittoolbox_s02"
+SUBJECT = Measures("m", 1.72)  # the dataset's README: height from the Vicon segments
+SENSOR_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
+              "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
+              "calcn_r_imu": "00B40C48"}  # fmt: skip
+WALK, STANDING = slice(1120, 2075), slice(200, 1000)
+SAGITTAL = ("hip_flexion_r", "hip_flexion_l", "knee_angle_r", "knee_angle_l", "ankle_angle_r",
+            "ankle_angle_l")  # fmt: skip
+FRONTAL = ("hip_adduction_r", "hip_adduction_l", "hip_rotation_r", "hip_rotation_l")
+INPUTS = {"vendor": "the vendor's orientations", "vqf9": "VQF with magnetometers",
+          "vqf6": "VQF without magnetometers", "pi6": "PI filter without magnetometers"}
+#: Option sets besides the defaults: (label, changes).
+VARIANTS = (("defaults", {}), ("correction aor", {"correction": "aor"}),
+            ("correction functional", {"correction": "functional"}),
+            ("correction none", {"correction": "none"}), ("knee hinge", {"knee": "hinge"}),
+            ("posture neutral", {"posture": "neutral"}), ("drift joints", {"drift": "joints"}),
+            ("drift none", {"drift": "none"}))  # fmt: skip
+
+
+def recording(data: Path, path: str):
+    rec = read_recording(data / "imu", SENSOR_MAP)
+    if path == "vendor":
+        return rec, {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)}
+    keep_mag = path == "vqf9"
+    sensors = {n: s.replace(quat=None, mag=s.mag if keep_mag else None)
+               for n, s in rec.sensors.items()}  # fmt: skip
+    return rec.with_sensors(sensors), {"filter": "pi" if path == "pi6" else "vqf"}
+
+
+def angle_scores(ours: np.ndarray, truth: np.ndarray) -> dict[str, float]:
+    e = np.degrees(ours[WALK] - truth[WALK])
+    offset = np.degrees(np.mean(ours[STANDING] - truth[STANDING]))
+    return {"rmse": float(np.sqrt(np.mean(e**2))),
+            "rmse_offset": float(np.sqrt(np.mean((e - offset) ** 2))),
+            "r": float(np.corrcoef(ours[WALK], truth[WALK])[0, 1]),
+            "rom": float(np.degrees(np.ptp(ours[WALK]))),
+            "rom_truth": float(np.degrees(np.ptp(truth[WALK])))}  # fmt: skip
+
+
+def vicon_centres(data: Path) -> dict[str, np.ndarray]:
+    """Knee and ankle centres relative to the hip centres' midpoint, (N, 3) m, in the Vicon
+    pelvis frame (OpenSim axes) and in its heading frame (forward, up, right)."""
+    import scipy.io as sio
+    from scipy.spatial.transform import Rotation
+
+    rows = np.genfromtxt(data / "vicon" / "S02-Trial-Walk-1_joint_centres_pelvis.csv",
+                         delimiter=",", names=True)  # fmt: skip
+    out = {}
+    mid = 0.5 * np.stack([np.stack([rows[f"hjc_{s}_os_{a}"] for a in "xyz"], 1) for s in "rl"]
+                         ).sum(0)  # fmt: skip
+    for s in "rl":
+        for j in ("kjc", "ajc"):
+            out[f"pelvis {j}_{s}"] = np.stack([rows[f"{j}_{s}_os_{a}"] for a in "xyz"], 1) - mid
+    m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
+                    struct_as_record=False)  # fmt: skip
+    root = Rotation.from_rotvec(np.radians(np.asarray(m["Root"], float)[:, :3])).as_matrix()
+    fwd = root[:, :, 2].copy()
+    fwd[:, 2] = 0.0
+    fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(fwd, up)
+    hjc = 0.5 * (np.asarray(m["RHJC"], float) + np.asarray(m["LHJC"], float)) / 1000.0
+    for s, S in (("r", "R"), ("l", "L")):
+        for j, J in (("kjc", "KJC"), ("ajc", "AJC")):
+            v = np.asarray(m[f"{S}{J}"], float) / 1000.0 - hjc
+            out[f"heading {j}_{s}"] = np.stack([np.sum(v * fwd, 1), v @ up, np.sum(v * right, 1)],
+                                               1)  # fmt: skip
+    return out
+
+
+def our_centres(run) -> dict[str, np.ndarray]:
+    """As :func:`vicon_centres`, ours: the model's KJC and AJC landmarks."""
+    (R, p), = frame_trajectories(run.skeleton, run.q, ["pelvis"]).values()
+    lm = run.landmarks
+    mid = 0.5 * (lm["right_HJC"] + lm["left_HJC"]) if "right_HJC" in lm else None
+    if mid is None:
+        from pipeline.analysis.landmarks import landmark_trajectories
+
+        h = landmark_trajectories(run.skeleton, run.q, ["right_HJC", "left_HJC"])
+        mid = 0.5 * (h["right_HJC"] + h["left_HJC"])
+    fwd = R[:, :, 0].copy()
+    fwd[:, 1] = 0.0
+    fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
+    up = np.array([0.0, 1.0, 0.0])
+    right = np.cross(fwd, up)
+    out = {}
+    for s, side in (("r", "right"), ("l", "left")):
+        for j, J in (("kjc", "KJC"), ("ajc", "AJC")):
+            v = lm[f"{side}_{J}"] - mid
+            out[f"pelvis {j}_{s}"] = np.einsum("nji,nj->ni", R, v)
+            out[f"heading {j}_{s}"] = np.stack([np.sum(v * fwd, 1), v @ up, np.sum(v * right, 1)],
+                                               1)  # fmt: skip
+    return out
+
+
+def centre_errors(ours: dict, truth: dict) -> dict[str, float]:
+    return {k: float(1000 * np.sqrt(np.mean(np.sum((ours[k][WALK] - truth[k][WALK]) ** 2, 1))))
+            for k in truth}  # fmt: skip
+
+
+def run_one(data: Path, path: str, changes: dict, refs: dict):
+    rec, base = recording(data, path)
+    t0 = time.perf_counter()
+    run = process_recording(rec, SUBJECT, **base, **changes)
+    seconds = time.perf_counter() - t0
+    cols = mot_columns(run)
+    scores = {ref: {c: angle_scores(cols[c], table.columns[c]) for c in SAGITTAL + FRONTAL}
+              for ref, table in refs["angles"].items()}  # fmt: skip
+    return run, cols, scores, centre_errors(our_centres(run), refs["centres"]), seconds
+
+
+def figure(curves: dict, truth, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(SAGITTAL), 1, figsize=(12, 15), sharex=True)
+    t = truth.time
+    for ax, c in zip(axes, SAGITTAL, strict=True):
+        ax.plot(t, np.degrees(truth.columns[c]), color="k", lw=2, label="Vicon")
+        for label, cols in curves.items():
+            ax.plot(t, np.degrees(cols[c]), lw=1, label=label)
+        ax.set_ylabel(f"{c} (deg)")
+        ax.axvspan(t[WALK.start], t[WALK.stop - 1], color="0.93", zorder=0)
+        ax.grid(alpha=0.3)
+    axes[0].legend(ncol=5, fontsize=8, loc="upper left")
+    axes[-1].set_xlabel("time (s); shaded: the scored walk")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data", type=Path, default=DATA)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", type=Path, default=ROOT / "results")
+    args = ap.parse_args()
+    vicon = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_vicon_ik.mot")
+    markers = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_markers_ik.mot")
+    refs = {"angles": {"vicon": vicon, "markers": markers}, "centres": vicon_centres(args.data)}
+    variants = VARIANTS[:1] if args.quick else VARIANTS
+    rows, curves = [], {}
+    for path in INPUTS:
+        for label, changes in variants:
+            run, cols, scores, centres, seconds = run_one(args.data, path, changes, refs)
+            rows.append((path, label, scores, centres, seconds, run))
+            if label == "defaults":
+                curves[path] = cols
+            med = np.median([scores["vicon"][c]["rmse"] for c in SAGITTAL])
+            print(f"{path:7s} {label:22s} median sagittal RMSE {med:.1f} deg ({seconds:.1f} s)",
+                  flush=True)  # fmt: skip
+    text = report(rows)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench_real_gait.txt").write_text(text)
+    figure(curves, vicon, args.out / "bench_real_gait.png")
+    print(text)
+
+
+def _short(c: str) -> str:
+    return c.replace("_angle", "").replace("_flexion", "").replace("_adduction", " add").replace(
+        "_rotation", " rot").replace("_r", " r").replace("_l", " l")  # fmt: skip
+
+
+def report(rows) -> str:
+    lines = ["# S02 real walk against Vicon (gaittoolbox_s02): `python scripts/bench_real_gait.py`",
+             "", "Joint angles over samples 1120-2075 (the walk). Per coordinate: RMSE / RMSE with "
+             "the standing offset removed / Pearson r (deg). Sagittal against "
+             "`_vicon_ik.mot`; `median` is the median of the six sagittal RMSEs.", "",
+             "| input | options | " + " | ".join(_short(c) for c in SAGITTAL) + " | median |",
+             "|---|---|" + "---|" * (len(SAGITTAL) + 1)]  # fmt: skip
+    for path, label, scores, _, _, _ in rows:
+        s = scores["vicon"]
+        cells = [f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
+                 for c in SAGITTAL]  # fmt: skip
+        med = np.median([s[c]["rmse"] for c in SAGITTAL])
+        lines.append(f"| {path} | {label} | " + " | ".join(cells) + f" | **{med:.1f}** |")
+    lines += ["", "Range of motion over the walk (deg), defaults, ours / Vicon:", "",
+              "| input | " + " | ".join(_short(c) for c in SAGITTAL) + " |",
+              "|---|" + "---|" * len(SAGITTAL)]  # fmt: skip
+    for path, label, scores, _, _, _ in rows:
+        if label == "defaults":
+            s = scores["vicon"]
+            lines.append(f"| {path} | " + " | ".join(
+                f"{s[c]['rom']:.0f} / {s[c]['rom_truth']:.0f}" for c in SAGITTAL) + " |")
+    lines += ["", "Hip ab/adduction and rotation, defaults: RMSE / offset-removed / r against each "
+              "optical reference (the two optical methods disagree most here: the marker-based "
+              "fit and the Vicon segments' rotation about the femur):", "",
+              "| input | reference | " + " | ".join(_short(c) for c in FRONTAL) + " |",
+              "|---|---|" + "---|" * len(FRONTAL)]  # fmt: skip
+    for path, label, scores, _, _, _ in rows:
+        if label != "defaults":
+            continue
+        for ref in ("vicon", "markers"):
+            s = scores[ref]
+            lines.append(f"| {path} | {ref} | " + " | ".join(
+                f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
+                for c in FRONTAL) + " |")  # fmt: skip
+    lines += ["", "Sagittal against the marker-based reference (`_markers_ik.mot`), defaults:", "",
+              "| input | " + " | ".join(_short(c) for c in SAGITTAL) + " | median |",
+              "|---|" + "---|" * (len(SAGITTAL) + 1)]  # fmt: skip
+    for path, label, scores, _, _, _ in rows:
+        if label == "defaults":
+            s = scores["markers"]
+            med = np.median([s[c]["rmse"] for c in SAGITTAL])
+            lines.append(f"| {path} | " + " | ".join(
+                f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
+                for c in SAGITTAL) + f" | {med:.1f} |")  # fmt: skip
+    keys = ["pelvis kjc_r", "pelvis kjc_l", "pelvis ajc_r", "pelvis ajc_l", "heading kjc_r",
+            "heading kjc_l", "heading ajc_r", "heading ajc_l"]  # fmt: skip
+    lines += ["", "Knee and ankle centres relative to the hip centres' midpoint, RMS 3-D error "
+              "(mm) over the walk: in each system's pelvis frame, and in the pelvis's heading "
+              "frame (the vertical and the pelvis's forward direction: free of the two pelvis "
+              "frames' different tilt):", "",
+              "| input | options | " + " | ".join(keys) + " | seconds |",
+              "|---|---|" + "---|" * (len(keys) + 1)]  # fmt: skip
+    for path, label, _, centres, seconds, _ in rows:
+        lines.append(f"| {path} | {label} | " + " | ".join(f"{centres[k]:.0f}" for k in keys)
+                     + f" | {seconds:.1f} |")  # fmt: skip
+    lines += ["", "What each default run did (its notes on headings, magnetometers, posture):", ""]
+    for path, label, _, _, _, run in rows:
+        if label != "defaults":
+            continue
+        lines.append(f"- **{path}**:")
+        for n in run.notes:
+            if any(w in n for w in ("magnetometer", "heading", "standing", "orientations est")):
+                lines.append(f"  - {n}")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    main()

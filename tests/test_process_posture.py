@@ -1,0 +1,67 @@
+"""pipeline.process.posture: the standing lean of each leg from the joint centres, against the
+simulator's truth (a subject standing with each leg leaning 2-6 deg)."""
+
+import numpy as np
+import pytest
+
+from pipeline.analysis.joint_angles import joint_angles
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
+from pipeline.process import process_recording
+from pipeline.process.posture import Posture, lean_pose
+from pipeline.rotations import rot_z
+from pipeline.simulate.model import simulate_trial
+
+M = Measures("m", 1.75)
+NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
+
+
+@pytest.fixture(scope="module")
+def trial():
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+
+    geometry, _ = geometry_from_measures(M)  # the estimator's own geometry
+    model = Skeleton.build(geometry, knee="hinge", root="freeflyer")
+    return simulate_trial(model, "gait", duration_s=17.0, seed=0, standing_s=2.0)
+
+
+def test_each_legs_lean_is_measured_and_the_standing_angles_follow(trial):
+    raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
+                                                                acc=i.recording.acc)
+                                        for f, i in trial.imus.items()})  # fmt: skip
+    truth = joint_angles(trial.skeleton, trial.q)
+    measured = process_recording(raw, M, filter="vqf")
+    upright = process_recording(raw, M, filter="vqf", posture="neutral")
+    for side in ("right", "left"):
+        true_lean = np.degrees(truth[f"{side}_ankle_flexion"][100])  # the foot flat
+        lean = np.degrees(measured.posture.lean[f"{side}_tibia"])
+        assert 2.0 < true_lean < 6.0 and abs(lean - true_lean) < 1.0, (side, lean, true_lean)
+        assert measured.posture.lean[f"{side}_femur"] == measured.posture.lean[f"{side}_tibia"]
+        for joint in ("hip", "ankle"):  # the lean's angles: 3-5 deg off upright, ~0.5 measured
+            key = f"{side}_{joint}_flexion"
+            rms = {r: np.sqrt(np.mean(np.degrees(run.joint_angles[key] - truth[key])[200:] ** 2))
+                   for r, run in (("measured", measured), ("upright", upright))}  # fmt: skip
+            assert rms["measured"] < 1.0 and rms["measured"] < 0.5 * rms["upright"], (key, rms)
+    assert any("standing posture from the knee and ankle centres" in n for n in measured.notes)
+    assert upright.posture is None
+
+
+def test_the_lean_turns_femur_and_tibia_about_their_medio_lateral_axis():
+    pose = {"right_femur": np.eye(3), "right_tibia": np.eye(3), "right_foot": np.eye(3)}
+    p = Posture({"right_femur": 0.1, "right_tibia": 0.1}, {"right": 0.4}, {"right": 0.5})
+    out = lean_pose(pose, p)
+    np.testing.assert_allclose(out["right_tibia"], rot_z(-0.1))
+    np.testing.assert_allclose(out["right_foot"], np.eye(3))  # the foot stays flat
+    assert out["right_tibia"][:, 1] @ np.array([1.0, 0, 0]) > 0  # its top turned forward
+    assert p.joint_angles("right") == {"hip_flexion": -0.1, "knee_flexion": 0.0,
+                                       "ankle_flexion": 0.1}  # fmt: skip
+
+
+def test_a_leg_without_foot_or_raw_signals_stands_upright(trial):
+    quats = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(quat=i.recording.quat)
+                                          for f, i in trial.imus.items()})  # fmt: skip
+    run = process_recording(quats, M, sensor_to_model=(-np.pi / 2, 0, 0))
+    assert run.posture.lean == {}
+    assert any("standing lean not measured" in n for n in run.notes)
