@@ -18,7 +18,7 @@ A_F = np.array([-0.148, -0.182, 0.972]) / np.linalg.norm([-0.148, -0.182, 0.972]
 A_T = np.array([0.004, -0.036, 0.999]) / np.linalg.norm([0.004, -0.036, 0.999])
 
 
-def _knee(n=600, tibia_turn=np.zeros(3), **kw) -> KneeInputs:
+def _knee(n=600, tibia_turn=(0.0, 0.0, 0.0), **kw) -> KneeInputs:
     """A knee flexing 0-60 deg about the reference axis; the tibia's frame as its sensor sees
     it, turned in itself by ``tibia_turn`` (a misplaced sensor: ``e_T M``)."""
     from pipeline.rotations import rotation_aligning
@@ -26,7 +26,7 @@ def _knee(n=600, tibia_turn=np.zeros(3), **kw) -> KneeInputs:
     flex = np.radians(30.0) * (1 - np.cos(np.linspace(0, 6 * np.pi, n)))
     F = np.tile(np.eye(3), (n, 1, 1))
     T = np.stack([exp3(-a * A_F) for a in flex]) @ rotation_aligning(A_T, A_F)
-    T = T @ exp3(tibia_turn)
+    T = T @ exp3(np.asarray(tibia_turn))
     return KneeInputs("right", F, T, A_F, A_T, rotation_aligning(A_T, A_F), np.eye(3), np.eye(3),
                       100.0, **kw)  # fmt: skip
 
