@@ -107,7 +107,8 @@ def test_free_knee_correction_carries_the_foot_with_the_tibia():
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
                                         for f, imu in trial.imus.items()})  # fmt: skip
-    run = process_recording(rec, Measures("m", 1.75), sensor_to_model=(-np.pi / 2, 0.0, 0.0))
+    run = process_recording(rec, Measures("m", 1.75), sensor_to_model=(-np.pi / 2, 0.0, 0.0),
+                            correction="aor")  # fmt: skip
     assert all(c.applied for c in run.corrections.values())
     truth = joint_angles(trial.skeleton, trial.q)
     n0 = 200
@@ -457,7 +458,8 @@ def test_a_still_knee_of_a_seated_subject_is_corrected_from_the_seated_pose():
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
                                         for f, imu in trial.imus.items()})  # fmt: skip
-    run = process_recording(rec, m, calibration_pose="seated", sensor_to_model=(-np.pi / 2, 0, 0))
+    run = process_recording(rec, m, calibration_pose="seated", sensor_to_model=(-np.pi / 2, 0, 0),
+                            correction="aor")  # fmt: skip
     c = run.corrections["left"]
     assert c.method == "population"
     pose = pose_rotations(run.skeleton, "seated", np.eye(3))

@@ -79,7 +79,7 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
     run = process_recording(raw, measures, filter="vqf", correction="functional")
     fallback = process_recording(raw, measures, filter="vqf", correction="functional",
                                  calibration_method="none", drift="none")  # fmt: skip
-    aligned = process_recording(raw, measures, filter="vqf")
+    aligned = process_recording(raw, measures, filter="vqf", correction="aor")
     assert "right knee: no functional calibration" in " ".join(fallback.notes)
     for side in ("right", "left"):
         assert run.corrections[side].method == "functional" and run.corrections[side].applied

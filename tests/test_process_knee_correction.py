@@ -74,3 +74,33 @@ def test_the_correction_becomes_part_of_the_placements_and_the_foot_follows():
     assert not np.allclose(out["right_foot_imu"][:3, :3], np.eye(3))
     with pytest.raises(KeyError):
         CORRECTIONS["wang"]
+
+
+def _half_turned(turn_deg: float) -> KneeInputs:
+    """The misplaced tibia sensor of ``_knee``, whose error changes by ``turn_deg`` about the
+    tibia's long axis half-way through the walk (a sensor slipping on the shank)."""
+    k = _knee(tibia_turn=(0.0, np.radians(8.0), 0.0))
+    T = k.tibia_R.copy()
+    T[len(T) // 2:] = T[len(T) // 2:] @ exp3(np.array([0.0, np.radians(turn_deg), 0.0]))
+    return KneeInputs(k.side, k.femur_R, T, *[getattr(k, f) for f in (
+        "axis_femur", "axis_tibia", "pose_tibia_in_femur", "placement_thigh", "placement_shank",
+        "rate_hz")])  # fmt: skip
+
+
+def test_a_correction_the_two_halves_agree_on_is_applied():
+    c = choose_correction(_half_turned(0.0), "aor", notes := [])
+    assert c.applied and not notes
+    assert np.degrees(np.linalg.norm(c.tibia_axis_angle)) > 5.0  # the 8 deg turn is corrected
+
+
+def test_a_correction_the_data_do_not_determine_is_not_applied():
+    from pipeline.calibration.correction import correction_spread
+    from pipeline.process.knee_correction import MAX_SPREAD_DEG
+
+    k = _half_turned(12.0)
+    spread = np.degrees(correction_spread(k.femur_R, k.tibia_R, A_F, A_T))
+    assert spread > MAX_SPREAD_DEG
+    c = choose_correction(k, "aor", notes := [])
+    assert not c.applied and np.allclose(c.tibia_rotation, np.eye(3))
+    assert len(notes) == 1 and "do not determine" in notes[0] and f"{spread:.1f} deg" in notes[0]
+    assert c.method == "aor"  # not replaced by the population's knee

@@ -66,8 +66,10 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     assert main(["simulate", "--out", str(sim), "--duration-s", "17", "--standing-s",
                  str(STANDING_S), "--seed", "1"]) == 0  # fmt: skip
     _strip_quaternions(sim / "imu", raw)
+    # the simulated knee is a hinge about the population AoR: the case Wang eq 9-13 corrects
+    # exactly (without it the standing knee's ISB offset stays, see tests/test_commands_demo.py)
     assert main(["ik", "--orientations", str(raw), "--sex", "m", "--height-m", "1.75",
-                 "--no-rerun",
+                 "--no-rerun", "--correction", "aor",
                  "--out", str(out)]) == 0  # fmt: skip
     summary = (out / "raw_summary.md").read_text()
     assert "input: raw signals, orientations by VQF (9-D)" in summary

@@ -28,10 +28,12 @@ JOINTS = ("hinge", "spherical")
 #: and the closed form towards the knee's joint-constraint hinge axis (Hu 2021 eq 4-6, from the
 #: gyroscopes; only where that calibration is trusted, else eq 1-8 as ``aor``).
 CORRECTIONS = ("none", "aor", "aor-ipopt", "functional")
-#: The correction used when none is asked for: the closed form. On the Wang dataset's
-#: ``uncorrected`` IMC input it halves the malleolus errors (mean MM/LM 105/109 mm without it,
-#: 67/72 mm with it; the IPOPT version 64/68 mm costs CasADi), see ``results/wang2023``.
-DEFAULT_CORRECTION = "aor"
+#: The correction used when none is asked for: none. Across the real S02 walk, OpenSense's walking
+#: file and the simulator (``results/bench_defaults.txt``) no correction measures best: eq 1-8
+#: read a knee that is not a hinge as a turned sensor. The closed form is for recordings whose
+#: sensors are turned on the shank: on the Wang dataset's ``uncorrected`` IMC input it halves the
+#: malleolus errors (mean MM/LM 105/109 mm without it, 67/72 mm with it; ``results/wang2023``).
+DEFAULT_CORRECTION = "none"
 #: Poses the first sample (or a static trial) may show: the model's neutral standing pose,
 #: lying on the back with the same joint angles, or sitting (hips and knees flexed 90 deg).
 CALIBRATION_POSES = ("standing", "supine", "seated")

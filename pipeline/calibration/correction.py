@@ -21,6 +21,10 @@ axis before and after: per sample the angle between the reference axis carried t
 the femur and by the tibia, ``∠(e_F a_F, e_T a_T)`` (0 for a knee that turns exactly about the
 reference axis), RMS over the samples. A motion too small to define an axis is not corrected: the
 result says so (``applied = False`` and ``reason``) instead of raising.
+
+What the data support (:func:`correction_spread`): eq 9-12 computed on each half of the span the
+knee moves in; the angle between the halves' rotations is how well the recording determines the
+correction (``scripts/bench_defaults.py`` lists it for the simulator, S02 and OpenSense's walk).
 """
 
 from __future__ import annotations
@@ -33,9 +37,9 @@ from pipeline.calibration.aor import MIN_AXIS_Z, correction_rotations, knee_aor
 from pipeline.errors import InputError
 from pipeline.rotations import angle_between, axis_angle, rotation_aligning
 
-__all__ = ["MIN_EXCURSION", "KneeCorrection", "carried_correction", "correct_knee",
-           "correct_knee_to_axes", "corrected_placement", "knee_excursion", "knee_hinge_residual",
-           "population_correction"]
+__all__ = ["MIN_EXCURSION", "MOVING_DEG_S", "KneeCorrection", "carried_correction",
+           "correct_knee", "correct_knee_to_axes", "corrected_placement", "correction_spread",
+           "knee_excursion", "knee_hinge_residual", "population_correction"]
 
 #: The corrections :func:`correct_knee` computes from the orientations themselves (eq 1-8 first).
 _FROM_ORIENTATIONS = ("aor", "aor-ipopt")
@@ -44,6 +48,8 @@ _FROM_ORIENTATIONS = ("aor", "aor-ipopt")
 #: divided by the excursion (a knee held still by a leg at rest moved 5 deg in a simulated
 #: supine trial, and its axis came out 18 deg off). Gait and the Wang 2023 trials move 60-90 deg.
 MIN_EXCURSION = np.radians(10.0)
+#: A knee turning faster than this (deg/s, the shank relative to the thigh) is moving.
+MOVING_DEG_S = 20.0
 
 
 def knee_excursion(femur_R: np.ndarray, tibia_R: np.ndarray) -> float:
@@ -71,7 +77,9 @@ class KneeCorrection:
     applied); ``femur_axis_angle``/``tibia_axis_angle``: their rotation vectors (axis times angle,
     segment frame); ``measured_*_axis``: the AoR of the recording (None when it could not be
     estimated); ``reference_*_axis``: the axis corrected towards; ``hinge_residual_before`` /
-    ``_after``: RMS hinge residual about the reference axis (rad).
+    ``_after``: RMS hinge residual about the reference axis (rad); ``halves_apart``: the angle
+    between the corrections of the two halves of the knee's moving span (rad,
+    :func:`correction_spread`; None where not computed).
     """
 
     side: str
@@ -87,6 +95,7 @@ class KneeCorrection:
     n_pairs: int
     hinge_residual_before: float
     hinge_residual_after: float
+    halves_apart: float | None = None
 
     @property
     def femur_axis_angle(self) -> np.ndarray:
@@ -118,6 +127,8 @@ class KneeCorrection:
             "n_pairs": self.n_pairs,
             "hinge_residual_before_deg": float(np.degrees(self.hinge_residual_before)),
             "hinge_residual_after_deg": float(np.degrees(self.hinge_residual_after)),
+            "halves_apart_deg": None if self.halves_apart is None
+            else float(np.degrees(self.halves_apart)),
         }
 
 
@@ -213,6 +224,39 @@ def correct_knee_to_axes(
                               before)  # fmt: skip
     C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)  # as eq 10-12
     return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0, before)
+
+
+def moving_span(femur_R: np.ndarray, tibia_R: np.ndarray, rate_hz: float) -> slice:
+    """The samples from the knee's first to its last turn faster than :data:`MOVING_DEG_S`
+    (empty when it never does)."""
+    rel = np.einsum("nji,njk->nik", femur_R, tibia_R)
+    cos = 0.5 * (np.einsum("nij,nij->n", rel[1:], rel[:-1]) - 1.0)
+    speed = np.degrees(np.arccos(np.clip(np.nan_to_num(cos, nan=1.0), -1.0, 1.0))) * rate_hz
+    moving = np.flatnonzero(speed > MOVING_DEG_S)
+    return slice(int(moving[0]), int(moving[-1]) + 2) if len(moving) else slice(0, 0)
+
+
+def correction_spread(
+    femur_R: np.ndarray, tibia_R: np.ndarray, reference_femur_axis: np.ndarray,
+    reference_tibia_axis: np.ndarray, *, rate_hz: float = 100.0,
+) -> float | None:
+    """How far apart (rad) eq 9-12's corrections of the two halves of the knee's moving span are:
+    the larger of the femur's and the tibia's ``∠(R_co,1ᵀ R_co,2)``. None when a half moves too
+    little to define an axis."""
+    span = moving_span(femur_R, tibia_R, rate_hz)
+    mid = (span.start + span.stop) // 2
+    halves = [correct_knee(femur_R[s], tibia_R[s], reference_femur_axis, reference_tibia_axis,
+                           rate_hz=rate_hz)
+              for s in (slice(span.start, mid), slice(mid, span.stop))]
+    if not all(h.applied for h in halves):
+        return None
+    a, b = halves
+    return max(_angle(a.femur_rotation.T @ b.femur_rotation),
+               _angle(a.tibia_rotation.T @ b.tibia_rotation))
+
+
+def _angle(R: np.ndarray) -> float:
+    return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
 def population_correction(

@@ -43,7 +43,8 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 
-__all__ = ["CUTOFF_HZ", "MIN_SPEED", "FlexionAxis", "flexion_axis", "leg_flexion_axes"]
+__all__ = ["CUTOFF_HZ", "MIN_SPEED", "FlexionAxis", "flexion_axis", "knee_signs",
+           "leg_flexion_axes"]
 
 #: Low-pass cut-off of the angular velocity (Hz): gait's rotations, not the soft tissue's.
 CUTOFF_HZ = 3.0
@@ -99,6 +100,22 @@ def _pitch(up: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return np.arctan2(np.cross(u[0], u) @ axis, u @ u[0])
 
 
+def knee_signs(
+    up_thigh: np.ndarray, up_shank: np.ndarray, axis_thigh: np.ndarray, axis_shank: np.ndarray
+) -> tuple[float, float]:
+    """The signs ``(s_thigh, s_shank)`` that point a knee's two axes (each in its sensor's
+    frame) alike and to the subject's right: the pair that makes the knee's flexion from the
+    segments' pitches, ``s_shank p_shank - s_thigh p_thigh``, most positive (``P98 + P2``; module
+    docstring). ``up_*``: the world's vertical in each sensor's frame per sample."""
+    p_f, p_t = _pitch(up_thigh, axis_thigh), _pitch(up_shank, axis_shank)
+
+    def positive(s_f: float, s_t: float) -> float:
+        k = s_t * p_t - s_f * p_f
+        return float(np.percentile(k, 98) + np.percentile(k, 2))
+
+    return max(((a, b) for a in (1.0, -1.0) for b in (1.0, -1.0)), key=lambda s: positive(*s))
+
+
 def _flip(a: FlexionAxis, sign: float) -> FlexionAxis:
     return a if sign > 0 else FlexionAxis(-a.axis, a.share, a.moving)
 
@@ -112,15 +129,8 @@ def leg_flexion_axes(
     (module docstring)."""
     axes = {seg: flexion_axis(g, u, rate_hz) for seg, (g, u) in segments.items()}
     if "femur" in axes and "tibia" in axes:
-        p_f = _pitch(segments["femur"][1], axes["femur"].axis)
-        p_t = _pitch(segments["tibia"][1], axes["tibia"].axis)
-
-        def positive(s_f: float, s_t: float) -> float:
-            k = s_t * p_t - s_f * p_f
-            return float(np.percentile(k, 98) + np.percentile(k, 2))
-
-        s_f, s_t = max(((a, b) for a in (1.0, -1.0) for b in (1.0, -1.0)),
-                       key=lambda s: positive(*s))  # fmt: skip
+        s_f, s_t = knee_signs(segments["femur"][1], segments["tibia"][1], axes["femur"].axis,
+                              axes["tibia"].axis)  # fmt: skip
         axes["femur"], axes["tibia"] = _flip(axes["femur"], s_f), _flip(axes["tibia"], s_t)
     if "foot" in axes and "tibia" in axes:
         rates = [lowpass(segments[seg][0], rate_hz, CUTOFF_HZ) @ axes[seg].axis

@@ -8,7 +8,8 @@
 3. calibrate: the knee hinge axis in the thigh and shank sensor frames from gyro + acc alone
    (Hu 2021 eq 4-6, IPOPT), compared with the truth;
 4. IK from the raw signals, as a lab's data: VQF orientations, then the ``pipeline ik`` path
-   (calibration pose, anatomical heading, AoR correction, orientation IK on a free-knee model),
+   (calibration pose, anatomical heading, standing posture, orientation IK on a free-knee model,
+   the defaults: no AoR correction),
    compared with the simulated joint angles and landmark trajectories, beside the same path on
    the simulated orientations;
 5. outputs: ``demo_report.md``, ``demo_ik.mot``, ``demo_landmarks.csv``, ``subject.urdf``,
@@ -111,7 +112,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         ]
 
         # 4. IK from the raw signals, as a lab's raw data: gyroscope, accelerometer and
-        #    magnetometer -> VQF orientations -> calibration pose, heading, AoR correction -> IK;
+        #    magnetometer -> VQF orientations -> calibration pose, heading, posture -> IK;
         #    the simulated (perfect-fusion) orientations through the same path for comparison
         t0 = time.perf_counter()
         names = {f"{seg}_imu": s for s, seg in SENSOR_TO_SEGMENT.items()}
@@ -210,7 +211,7 @@ def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
         "independent verification start "
         "(the paper reports 10-25 minutes per calibration).",
         "",
-        "## 4. IK from the raw signals (VQF, calibration pose, anatomical heading, AoR correction)",
+        "## 4. IK from the raw signals (VQF, calibration pose, anatomical heading, posture)",
         "",
         f"Gyroscope, accelerometer and magnetometer: VQF orientations (9-D), then the "
         f"`pipeline ik` path; "
@@ -230,11 +231,14 @@ def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
         "the mid-hip point (IMUs observe no translation). The simulated hinge's neutral pose "
         "is not the ISB zero (knee rotation / "
         f"adduction {knee_offset[2]:.1f} / {knee_offset[1]:.1f} deg: the hinge turns the tibia "
-        "by the rotation that aligns the tibial AoR onto the femoral one); the AoR correction "
-        "finds that turn and the foot sensor, placed with the ankle at neutral, follows the "
-        "tibia. The gap between the raw and the orientation column is the filter's. Without "
-        "magnetometers (6-D) each sensor's filter has a heading of its own, which the joints "
-        "align (--drift; scripts/bench_raw_path.py --no-mag, results/bench_raw_path.txt).",
+        "by the rotation that aligns the tibial AoR onto the femoral one): a standing "
+        "calibration takes the standing knee as zero, so the knee's adduction and rotation "
+        "errors are that offset. `--correction aor` (Wang eq 9-13) would find the turn of a "
+        "hinge about the population axis, as this one is; it is not the default because real "
+        "knees are not (results/bench_defaults.txt). The gap between the raw and the "
+        "orientation column is the filter's. Without magnetometers (6-D) each sensor's filter "
+        "has a heading of its own, which the joints align "
+        "(--drift; scripts/bench_raw_path.py --no-mag, results/bench_raw_path.txt).",
         "",
         f"Total {total:.1f} s (scale {timings['scale']:.2f} s, simulate "
         f"{timings['simulate']:.2f} s, calibrate {timings['calibrate']:.2f} s, IK "

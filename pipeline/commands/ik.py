@@ -314,6 +314,8 @@ def _correction_table(run: IKRun) -> list[str]:
             seen += " (functional calibration)"
         elif c.method == "population":
             seen = f"not seen ({c.reason}): corrected as the reference population's knee"
+        if c.halves_apart is not None:
+            seen += f"; the walk's halves' corrections {np.degrees(c.halves_apart):.1f} deg apart"
         ref = f"{vec(c.reference_femur_axis)}; {vec(c.reference_tibia_axis)}"
         if c.applied:
             fem, tib = rot(c.femur_axis_angle), rot(c.tibia_axis_angle)

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.calibration.flexion_axis import FlexionAxis, leg_flexion_axes
+from pipeline.calibration.flexion_axis import FlexionAxis, knee_signs, leg_flexion_axes
 from pipeline.calibration.heading_offset import (
     MIN_ACCELERATION,
     HeadingDrift,
@@ -59,7 +59,8 @@ from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.conventions import JOINT_SEGMENTS
 from pipeline.process.functional import KneeCalibration
 
-__all__ = ["CUTOFF_HZ", "MAX_RESIDUAL_DEG", "WINDOW_S", "align_headings", "sensors_to_align"]
+__all__ = ["CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG", "WINDOW_S", "align_headings",
+           "sensors_to_align"]
 
 _UP = np.array([0.0, 1.0, 0.0])
 #: Window of eq (1) (s): several whole strides (a stride takes ~1-1.3 s).
@@ -73,6 +74,10 @@ CUTOFF_HZ = 6.0
 #: this (deg). The simulated joints leave 0.1-1 deg; the real walk gaittoolbox_s02 4.6-6.8 deg
 #: (knees and ankles) and 3-4 deg (hips); the x-IMU3 recording's knees and ankles 11-15 deg.
 MAX_RESIDUAL_DEG = 20.0
+#: The trusted hinge axes hold a hinge exactly (0.1-0.4 deg on the simulator's hinge): beyond this
+#: the knee is not one (the simulator's free knee with soft tissue: 18.7 deg, and 150 deg off) and
+#: the knee centre or the flexion axes take over.
+MAX_HINGE_RESIDUAL_DEG = 10.0
 
 
 def sensors_to_align(mode: str, segments: list[str], shared: frozenset[str]) -> set[str]:
@@ -143,10 +148,13 @@ def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[Headi
     centre's force (its windows agree and its residual is within :data:`MAX_RESIDUAL_DEG`), the
     segments' flexion axes (module docstring)."""
     c = next((k for k in knees if k.side == side and k.axes_trusted), None)
-    if c is not None:
-        drift = hinge_heading(R_1, R_2, c.axis_thigh, c.axis_shank, trial.rate_hz, up=_UP,
-                              window_s=WINDOW_S)  # fmt: skip
-        return drift, "the knee's hinge axis"
+    if c is not None:  # the fit leaves each axis's sign free: the knee's flexion signs them
+        s_1, s_2 = knee_signs(*(np.einsum("nji,j->ni", R, _UP) for R in (R_1, R_2)),
+                              c.axis_thigh, c.axis_shank)  # fmt: skip
+        drift = hinge_heading(R_1, R_2, s_1 * c.axis_thigh, s_2 * c.axis_shank, trial.rate_hz,
+                              up=_UP, window_s=WINDOW_S)  # fmt: skip
+        if drift.residual_deg <= MAX_HINGE_RESIDUAL_DEG:
+            return drift, "the knee's hinge axis"
     try:
         drift = _ball(trial, R_1, R_2, prox, dist, method)
         if drift.residual_deg <= MAX_RESIDUAL_DEG:

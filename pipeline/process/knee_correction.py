@@ -12,7 +12,11 @@ same decisions in the same order:
    is not trusted, with a note);
 3. a correction that could not be computed (a knee that moves too little to define an axis) is
    replaced by the reference population's (:func:`~pipeline.calibration.correction.
-   population_correction`), with a note.
+   population_correction`), with a note;
+4. a correction from the orientations (eq 1-8: ``aor``, ``aor-ipopt``) that the data do not
+   determine is not applied, with a note: the two halves of the knee's moving span ask for
+   corrections more than :data:`MAX_SPREAD_DEG` apart (:func:`~pipeline.calibration.correction.
+   correction_spread`; the simulator's halves agree within it, the real S02 walk's do not).
 
 The correction then becomes part of the femur's and tibia's sensor placements
 (:func:`~pipeline.calibration.correction.corrected_placement`), and the foot's sensor, placed with
@@ -23,7 +27,7 @@ carried_correction`).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,11 +37,16 @@ from pipeline.calibration.correction import (
     correct_knee,
     correct_knee_to_axes,
     corrected_placement,
+    correction_spread,
     population_correction,
 )
 from pipeline.process.functional import KneeCalibration
 
-__all__ = ["CORRECTIONS", "KneeInputs", "apply_correction", "choose_correction"]
+__all__ = ["CORRECTIONS", "MAX_SPREAD_DEG", "KneeInputs", "apply_correction", "choose_correction"]
+
+#: Largest angle (deg) between the corrections of the two halves of a knee's moving span for which
+#: a correction from the orientations is applied.
+MAX_SPREAD_DEG = 5.0
 
 
 @dataclass(frozen=True)
@@ -118,7 +127,24 @@ def choose_correction(k: KneeInputs, method: str, notes: list[str]) -> KneeCorre
                                   k.pose_tibia_in_femur, side=k.side, reason=reason)  # fmt: skip
         notes.append(f"{k.side} knee: its AoR is not seen ({c.reason}); corrected as the "
                      "reference population's knee")  # fmt: skip
+    elif c.method in ("aor", "aor-ipopt"):
+        return _if_supported(k, c, notes)
     return c
+
+
+def _if_supported(k: KneeInputs, c: KneeCorrection, notes: list[str]) -> KneeCorrection:
+    """``c``, or no correction where the data do not determine it (decision 4)."""
+    spread = correction_spread(k.femur_R, k.tibia_R, k.axis_femur, k.axis_tibia, rate_hz=k.rate_hz)
+    c = replace(c, halves_apart=spread)
+    if spread is None or np.degrees(spread) <= MAX_SPREAD_DEG:
+        return c
+    turn = np.degrees(max(np.linalg.norm(c.femur_axis_angle), np.linalg.norm(c.tibia_axis_angle)))
+    reason = (f"the data do not determine its correction ({turn:.1f} deg): the two halves of the "
+              f"walk ask for corrections {np.degrees(spread):.1f} deg apart (> {MAX_SPREAD_DEG:g})")
+    notes.append(f"{k.side} knee: not corrected: {reason}")
+    I3 = np.eye(3)
+    return replace(c, applied=False, reason=reason, femur_rotation=I3, tibia_rotation=I3,
+                   hinge_residual_after=c.hinge_residual_before)
 
 
 def apply_correction(

@@ -36,7 +36,14 @@ from pipeline.io.recording import Recording
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import exp3, normalize, quat_from_matrix
-from pipeline.simulate.motions import joint_trajectories, motion_name, standing_start
+from pipeline.simulate.artefacts import (
+    SEGMENT_SCALE,
+    Artefacts,
+    floor_field,
+    soft_tissue_motion,
+    with_soft_tissue,
+)
+from pipeline.simulate.motions import joint_trajectories, motion_name, ramp, standing_start
 
 __all__ = [
     "GRAVITY",
@@ -187,6 +194,42 @@ def _joint_truth(skeleton: Skeleton, placements: dict) -> dict[str, dict[str, np
     return out
 
 
+def _real_world(skeleton, imus, placements, q, v, a, t, standing_s, R, P, W, AW, A, art, rng):
+    """The sensors' poses and signals with soft tissue (:mod:`pipeline.simulate.artefacts`):
+    ``(R, P, W, A)`` of the sensors themselves (A: classical acceleration, sensor frame)."""
+    model = skeleton.model
+    s = ramp(t, standing_s)[:3] if standing_s > 0 else (np.ones_like(t), 0 * t, 0 * t)
+
+    def drive(names):
+        cols = []
+        for name in names:
+            j = model.joints[model.getJointId(name)]
+            cols.append((q[:, j.idx_q], v[:, j.idx_v], a[:, j.idx_v]))
+        return tuple(np.stack([c[m] for c in cols], axis=1) for m in range(3))
+
+    knee = "knee" if skeleton.knee == "hinge" else "knee_Z"
+    R, P, W, A = R.copy(), P.copy(), W.copy(), A.copy()
+    for i, imu in enumerate(imus):
+        seg = _segment_of(imu)
+        part = "pelvis" if seg == "pelvis" else seg.split("_", 1)[1]
+        side = seg.split("_", 1)[0]
+        names = {"pelvis": [f"{x}_hip_Z" for x in skeleton.legs],
+                 "femur": [f"{side}_hip_Z", f"{side}_{knee}"],
+                 "tibia": [f"{side}_{knee}", f"{side}_ankle_Z"],
+                 "foot": [f"{side}_ankle_Z", f"{side}_ankle_X"]}[part]  # fmt: skip
+        scale = SEGMENT_SCALE[part]
+        long_axis = placements[imu][0].T @ np.array([0.0, 1.0, 0.0])  # segment y, sensor frame
+        wobble = (np.deg2rad(art.wobble_deg), t, s) if part == "femur" else None
+        delta, d = soft_tissue_motion(rng, drive(names), long_axis,
+                                      np.deg2rad(art.soft_tissue_deg) * scale,
+                                      art.soft_tissue_m * scale, wobble)  # fmt: skip
+        R_i = R[i]
+        P[i] = P[i] + np.einsum("nij,nj->ni", R_i, d[0])
+        R[i], W[i], A_loc = with_soft_tissue(R_i, W[i], AW[i], A[i], delta, d)
+        A[i] = np.einsum("nji,nj->ni", exp3(delta[0]), A_loc)  # into the sensor's own frame
+    return R, P, W, A
+
+
 # ---------------------------------------------------------------------------------- simulation
 
 
@@ -202,6 +245,7 @@ def simulate_trial(
     offset_m: float = 0.02,
     standing_s: float = 0.0,
     standing_lean_deg: tuple[float, float] = STANDING_LEAN_DEG,
+    artefacts: Artefacts | None = None,
 ) -> SimulatedTrial:
     """Simulate ``motion`` on ``skeleton`` (reloaded with a free-flyer root if needed; None:
     a 1.75 m male :meth:`SubjectGeometry.default` with a hinge knee, built in memory).
@@ -215,6 +259,10 @@ def simulate_trial(
     leg leans forward as a whole
     by ``U(*standing_lean_deg)`` degrees (hip flexion ``-lean``, knee 0, ankle dorsiflexion
     ``+lean``, the foot flat), as people stand (:data:`STANDING_LEAN_DEG`); ``(0, 0)``: upright.
+    ``artefacts`` (:class:`~pipeline.simulate.artefacts.Artefacts`): soft tissue, wandering gyro
+    bias, accelerometer bias and the floor's magnetic field, as real recordings have them (None:
+    an ideal recording). The truth (``rotation``, ``position``) is then the sensor's own pose,
+    soft tissue included; ``R_segment``/``p_segment`` its nominal placement.
     """
     motion = motion_name(motion)
     if not (np.isfinite(duration_s) and duration_s > 0 and np.isfinite(rate_hz) and rate_hz > 0):
@@ -228,8 +276,8 @@ def simulate_trial(
     skeleton = skeleton.with_root("freeflyer")
     # streams by index (spawn's children do not depend on how many are spawned): the
     # magnetometer's noise has its own, so that adding it changed no other signal
-    r_motion, r_place, r_noise, r_mag, r_posture = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5)
+    r_motion, r_place, r_noise, r_mag, r_posture, r_real = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(6)
     )
     t = np.arange(n) / rate_hz
     posture: dict[str, float] = {}
@@ -258,6 +306,7 @@ def simulate_trial(
     R = np.empty((k_imu, n, 3, 3))
     P = np.empty((k_imu, n, 3))
     W = np.empty((k_imu, n, 3))
+    AW = np.empty((k_imu, n, 3))
     A = np.empty((k_imu, n, 3))
     L = np.empty((len(lm_ids), n, 3))
     local = pin.ReferenceFrame.LOCAL
@@ -267,9 +316,13 @@ def simulate_trial(
             oM = data.oMi[jid] * M
             R[i, k], P[i, k] = oM.rotation, oM.translation
             W[i, k] = pin.getFrameVelocity(model, data, jid, M, local).angular
+            AW[i, k] = pin.getFrameAcceleration(model, data, jid, M, local).angular
             A[i, k] = pin.getFrameClassicalAcceleration(model, data, jid, M, local).linear
         for i, fid in enumerate(lm_ids):
             L[i, k] = pin.updateFramePlacement(model, data, fid).translation
+    if artefacts is not None:
+        R, P, W, A = _real_world(skeleton, imus, placements, q, v, a, t, standing_s, R, P, W, AW,
+                                 A, artefacts, r_real)  # fmt: skip
     F = A - np.einsum("knji,j->kni", R, GRAVITY)  # specific force, sensor frame
 
     out_imus = {}
@@ -278,10 +331,17 @@ def simulate_trial(
         bias = r_noise.normal(0.0, noise.gyro_bias_sd, 3)
         gyr = W[i] + bias + r_noise.normal(0.0, noise.gyro_sd, (n, 3))
         acc = F[i] + r_noise.normal(0.0, noise.acc_sd, (n, 3))
+        field = np.tile(MAGNETIC_FIELD, (n, 1))
+        if artefacts is not None:
+            walk = r_real.normal(0.0, artefacts.gyro_bias_walk / np.sqrt(rate_hz), (n, 3))
+            gyr = gyr + np.cumsum(walk, axis=0)
+            acc = acc + r_real.normal(0.0, artefacts.acc_bias_sd, 3)
+            field = field + floor_field(P[i], r_real, artefacts.floor_field_ut,
+                                        artefacts.floor_decay_m)  # fmt: skip
         R_meas = R[i]
         if noise.orientation_sd_deg > 0:
             R_meas = R[i] @ exp3(r_noise.normal(0.0, np.deg2rad(noise.orientation_sd_deg), (n, 3)))
-        mag = np.einsum("nji,j->ni", R[i], MAGNETIC_FIELD) + r_mag.normal(0.0, noise.mag_sd, (n, 3))
+        mag = np.einsum("nji,nj->ni", R[i], field) + r_mag.normal(0.0, noise.mag_sd, (n, 3))
         rec = Recording.single(imu, t, gyr=gyr, acc=acc, mag=mag, quat=quat_from_matrix(R_meas),
                                rate_hz=rate_hz)  # fmt: skip
         out_imus[imu] = SimulatedImu(

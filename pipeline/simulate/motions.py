@@ -33,7 +33,7 @@ from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 from pipeline.simulate.conventions import MOTIONS
 
-__all__ = ["RAMP_S", "joint_trajectories", "motion_name", "standing_start"]
+__all__ = ["RAMP_S", "joint_trajectories", "motion_name", "ramp", "standing_start"]
 
 _X, _Y, _Z = np.eye(3)
 _STANDING = rot_x(np.pi / 2)  # pelvis (y up, z right) -> world (z up, subject faces +x)
@@ -74,7 +74,7 @@ _STILL_RIGHT: _Spec = {
 _STATIC = {"knee": 0.0}
 _STILL_LEFT = {"hip_Z": 90.0, "knee": 90.0}
 _SUPINE_LEFT = {"knee": 5.0}
-#: ``s, s', s'', tau`` of :func:`_ramp` on the trial's samples.
+#: ``s, s', s'', tau`` of :func:`ramp` on the trial's samples.
 _Clock = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 _BASE_HZ = {"gait": (0.85, 1.0), "supine_hip_flexion": (0.22, 0.28), "still_thigh": (0.45, 0.55)}
 
@@ -252,7 +252,7 @@ def _trajectories(
 RAMP_S = 1.5
 
 
-def _ramp(t: np.ndarray, start: float) -> tuple[np.ndarray, ...]:
+def ramp(t: np.ndarray, start: float) -> tuple[np.ndarray, ...]:
     """``s, s', s'', tau``: a quintic smoothstep from 0 (before ``start``) to 1 (after
     ``start + RAMP_S``), C2, and its integral ``tau = int_0^t s``."""
     x = np.clip((t - start) / RAMP_S, 0.0, 1.0)
@@ -272,7 +272,7 @@ def standing_start(
     joints at ``posture``, joint name -> angle in rad, zero where not given; the pelvis upright
     at the motion's starting place and heading), then a :data:`RAMP_S` s transition.
 
-    Exact: with the ramp ``s(t)`` and the motion clock ``tau(t) = int s`` (:func:`_ramp`), the
+    Exact: with the ramp ``s(t)`` and the motion clock ``tau(t) = int s`` (:func:`ramp`), the
     path and heading follow the motion at ``tau`` (``x' = s x_m'(tau)``,
     ``x'' = s' x_m' + s^2 x_m''``) and each joint angle and the pelvis's own rotation,
     obliquity and tilt are ``s g(tau)`` (``g' -> s' g + s^2 g'``,
@@ -281,4 +281,4 @@ def standing_start(
     gait's pelvis tilt: the posture a standing calibration asks of the subject.
     """  # fmt: skip
     t = np.asarray(time, dtype=float)
-    return _trajectories(skeleton, motion, t, seed, _ramp(t, float(standing_s)), posture)
+    return _trajectories(skeleton, motion, t, seed, ramp(t, float(standing_s)), posture)
