@@ -18,7 +18,7 @@ from pipeline.calibration.conventions import (
     METHODS,
 )
 from pipeline.cli_options import add_ik_options
-from pipeline.errors import InputError, QualityError
+from pipeline.errors import InputError, QualityError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS
 
@@ -251,11 +251,13 @@ def _cmd_orientations(args) -> int:
 
 
 def _cmd_batch(args) -> int:
+    """Exit 0 when every row is ok or skipped, 1 when any failed (the summary says which)."""
     from pipeline.commands.batch import run_batch
 
-    print(run_batch(args.manifest, args.out, workers=args.workers, scheduler=args.scheduler,
-                    force=args.force))  # fmt: skip
-    return 0
+    text, failed = run_batch(args.manifest, args.out, workers=args.workers,
+                             scheduler=args.scheduler, force=args.force)  # fmt: skip
+    print(text)
+    return 1 if failed else 0
 
 
 def _cmd_reproduce(args) -> int:
@@ -276,10 +278,6 @@ def _cmd_view(args) -> int:
     from pipeline.commands.view import run_view
 
     return run_view(args.rrd, web=args.web, port=args.port, grpc_port=args.grpc_port)
-
-
-class Terminated(Exception):
-    """SIGTERM received: unwinds like Ctrl-C so that partial outputs are removed."""
 
 
 def _terminate(signum, frame) -> None:
@@ -372,11 +370,18 @@ def _run(args) -> int:
         print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted: no output was written", file=sys.stderr)
+        print(f"interrupted: {_left(args)}", file=sys.stderr)
         return 130
     except Terminated:
-        print("terminated: no output was written", file=sys.stderr)
+        print(f"terminated: {_left(args)}", file=sys.stderr)
         return 143
+
+
+def _left(args) -> str:
+    """What an interrupted command leaves."""
+    if args.func is _cmd_batch:
+        return "the trials that finished are complete, batch_summary.csv lists them"
+    return "no output was written"
 
 
 if __name__ == "__main__":

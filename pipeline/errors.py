@@ -39,3 +39,8 @@ class QualityError(InputError):
     def __init__(self, flags: list[str], *, file: str | Path | None = None) -> None:
         self.flags = list(flags)
         super().__init__("implausible results (--strict): " + " | ".join(self.flags), file=file)
+
+
+class Terminated(BaseException):
+    """SIGTERM received: unwinds like Ctrl-C (a ``BaseException``, so that no ``except
+    Exception`` takes it for a failure) and partial outputs are removed; the CLI exits 143."""

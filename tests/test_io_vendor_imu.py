@@ -42,6 +42,55 @@ def test_movella_dot_export_in_si_units(tmp_path):
     assert s.mag.shape == (240, 3) and rec.rate_hz == pytest.approx(120.0, rel=1e-4)  # us ticks
 
 
+def test_movella_dot_app_export_with_its_trailing_commas(tmp_path):
+    """The DOT app's quirk, kept byte for byte: every line ends with a comma (the header
+    ``...,Status,``), a row's cells are separated by ", " (``0, 3629233986, ..., 0, ``), CRLF."""
+    t, gyr, acc, quats = _dot_file(tmp_path / "plain.csv")
+    lines = (tmp_path / "plain.csv").read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("PacketCounter"))
+    app = lines[:k] + [lines[k] + ","] + [", ".join(ln.split(",")) + ", " for ln in lines[k + 1:]]
+    path = tmp_path / "app.csv"
+    path.write_bytes(("\r\n".join(app) + "\r\n").encode())
+    assert path.read_bytes().splitlines()[k + 1].endswith(b", 0, ")
+    rec = read_movella_dot_csv(path)
+    np.testing.assert_allclose(rec.time, t, atol=1e-6)
+    np.testing.assert_allclose(rec.sensor.gyr, gyr, atol=1e-9)
+    np.testing.assert_allclose(rec.sensor.quat, quats, atol=1e-12)
+    assert rec.header["world"] == "movella-dot"  # pipeline ik turns its z-up world itself
+
+
+def test_movella_dot_sdk_export_with_euler_angles_and_extra_columns(tmp_path):
+    """The SDK's column set: Euler angles (deg; R = Rz(yaw) Ry(pitch) Rx(roll)) instead of the
+    quaternion, free acceleration and UTC columns (noted as not used)."""
+    from pipeline.rotations import matrix_from_euler_zyx
+
+    n, rate = 120, 60.0
+    t = np.arange(n) / rate
+    eul = np.stack([0.3 * np.sin(t), 0.2 * t, 0.5 + 0 * t], axis=1)  # roll, pitch, yaw (rad)
+    lines = ["PacketCounter,SampleTimeFine,UTC_Nano,Euler_X,Euler_Y,Euler_Z,FreeAcc_X,FreeAcc_Y,"
+             "FreeAcc_Z,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z,Status"]  # fmt: skip
+    for k in range(n):
+        cells = [k, int(1000 + t[k] * 1e6), 5, *np.degrees(eul[k]), 0, 0, 0, 0.1, 0.2, 9.8, 1.0,
+                 2.0, 3.0, 0]  # fmt: skip
+        lines.append(",".join(str(c) for c in cells))
+    path = tmp_path / "sdk.csv"
+    path.write_text("\n".join(lines) + "\n")
+    rec = read_movella_dot_csv(path)
+    R = matrix_from_euler_zyx(eul[:, ::-1])
+    np.testing.assert_allclose(np.abs(np.sum(rec.sensor.quat * quat_from_matrix(R), axis=1)), 1.0,
+                               atol=1e-9)  # fmt: skip
+    assert any("not used" in n and "FreeAcc_X" in n and "UTC_Nano" in n for n in rec.notes)
+
+
+def test_movella_dot_refuses_a_column_it_does_not_know(tmp_path):
+    _dot_file(tmp_path / "a.csv", metadata=False)
+    text = (tmp_path / "a.csv").read_text().splitlines()
+    text[0] = text[0].replace("Status", "Temperature")
+    (tmp_path / "b.csv").write_text("\n".join(text) + "\n")
+    with pytest.raises(InputError, match=r"b.csv.*\['Temperature'\] are not Movella DOT"):
+        read_movella_dot_csv(tmp_path / "b.csv")
+
+
 def test_movella_dot_refuses_a_file_without_its_header(tmp_path):
     p = tmp_path / "x.csv"
     p.write_text("time,a\n0,1\n")

@@ -30,6 +30,10 @@ def _motion(n: int = 200, w=(0.8, -0.4, 1.2)):
     return t, R, acc, gyr
 
 
+#: The earth's field in MT Manager's z-up world (a.u.: north, dipping down).
+FIELD = np.array([0.45, 0.0, -0.89])
+
+
 def _write(
     path: Path,
     R,
@@ -61,7 +65,8 @@ def _write(
         if i in drop:
             continue
         cells = [f"{int(counter[i]) % 65536:05d}", "" if stf is None else f"{int(stf[i])}", ""]
-        cells += [f"{v:.6f}" for v in (*acc[i], *gyr[i], 0.1, -0.2, 0.9)]
+        mag = R[i].T @ FIELD  # the earth's field turning with the sensor
+        cells += [f"{v:.6f}" for v in (*acc[i], *gyr[i], *mag)]
         if orientation == "matrix":
             cells += [f"{R[i][r, c]:.6f}" for c in range(3) for r in range(3)]
         elif orientation == "quaternion":
@@ -95,7 +100,7 @@ def test_orientation_formats_agree_with_truth(tmp_path, orientation):
     assert _err(rec.quat, R).max() < 2e-5  # six printed decimals
     np.testing.assert_allclose(rec.acc, acc, atol=1e-6)
     np.testing.assert_allclose(rec.gyr, gyr, atol=1e-6)
-    np.testing.assert_allclose(rec.mag, np.tile([0.1, -0.2, 0.9], (len(t), 1)))
+    np.testing.assert_allclose(rec.mag, np.einsum("nji,j->ni", R, FIELD), atol=1e-6)
     # gravity check: the accelerometer at rest is R^T g
     np.testing.assert_allclose(
         np.einsum("nji,j->ni", matrix_from_quat(rec.quat), G), rec.acc, atol=2e-4
@@ -251,9 +256,23 @@ def test_gyro_in_degrees_refused(tmp_path):
         xsens.read_xsens_txt(p)
 
 
-def test_comma_delimited_export(tmp_path):
+@pytest.mark.parametrize("delim", [",", ";"])
+def test_comma_and_semicolon_delimited_exports(tmp_path, delim):
+    """MT Manager's export settings offer tab, comma and semicolon; each is read, and the world
+    is the vendor's (z up: pipeline ik turns it without --sensor-to-model)."""
     t, R, acc, gyr = _motion(30)
-    rec = xsens.read_xsens_txt(_write(tmp_path / "c.txt", R, acc, gyr, delim=","))
+    rec = xsens.read_xsens_txt(_write(tmp_path / "c.txt", R, acc, gyr, delim=delim))
+    assert _err(rec.quat, R).max() < 2e-5
+    assert rec.header["world"] == "xsens"
+
+
+def test_trailing_delimiters_as_mt_manager_writes_them(tmp_path):
+    """Some MT Manager versions end the header and every row with the delimiter."""
+    t, R, acc, gyr = _motion(30)
+    path = _write(tmp_path / "t.txt", R, acc, gyr, delim=";")
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(ln if ln.startswith("//") else ln + ";" for ln in lines) + "\n")
+    rec = xsens.read_xsens_txt(path)
     assert _err(rec.quat, R).max() < 2e-5
 
 

@@ -13,12 +13,22 @@ nothing, as ``pipeline ik``).
   of them, default one per core, 1 = in this process), or on a running Dask cluster with
   ``scheduler='tcp://HOST:PORT'`` (the workers need this package installed and the files at the
   same paths).
-* One failing trial never stops the others: its row says ``failed`` and why.
-* A rerun skips rows whose outputs are complete (``skipped``); ``force`` redoes them.
+* Nothing escapes ``DIR``: a subject and a recording name are one path component each (no
+  ``..``, no separator, not absolute: refused with the row's line), and two rows that would write
+  the same folder are refused before anything runs.
+* One failing trial never stops the others: its row says ``failed`` and why; the batch then
+  exits 1 (``pipeline batch``), 0 when every row is ``ok`` or ``skipped``.
+* A rerun skips a row (``skipped``) only when its folder holds the outputs of the same resolved
+  configuration (its written ``_config.toml``) and every output the row asks for (``.rrd``,
+  ``.osim`` included); ``force`` redoes them.
 * ``DIR/batch_summary.csv`` lists every row: ``row,subject,orientations,status,message,frames,
   residual_median_deg,flags,seconds,out_dir``, the figures read from each run's
-  ``<name>_figures.json``; written when every row has ended (an interrupted batch leaves the
-  trials it finished, each complete, and no summary; rerun it to continue).
+  ``<name>_figures.json``. It is replaced (atomically) when the batch starts, every row
+  ``pending``, and when it ends; SIGTERM or Ctrl-C stops the batch, in one process as on Dask:
+  the summary then says which rows finished and which did not run (``not run``), every finished
+  trial complete (exit 143 or 130; rerun to continue).
+* ``scheduler``: ``tcp://HOST:PORT`` (or ``tls://``), checked before connecting; a service that
+  does not answer as a Dask scheduler within :data:`CONNECT_TIMEOUT_S` is refused.
 """
 
 from __future__ import annotations
@@ -29,7 +39,7 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
-from pipeline.errors import InputError
+from pipeline.errors import InputError, Terminated
 
 __all__ = ["REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "option_columns", "read_manifest", "run_batch",
            "run_row"]  # fmt: skip
@@ -38,6 +48,8 @@ REQUIRED_COLUMNS = ("subject", "sex", "height_m", "orientations")
 SUMMARY_COLUMNS = ("row", "subject", "orientations", "status", "message", "frames",
                    "residual_median_deg", "flags", "seconds", "out_dir")  # fmt: skip
 _OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml", "_figures.json")
+#: Seconds to wait for a Dask scheduler's answer.
+CONNECT_TIMEOUT_S = 10
 
 
 def option_columns() -> dict[str, object]:
@@ -65,6 +77,16 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
             raw_rows = list(reader)
     except FileNotFoundError:
         raise InputError("no such manifest", file=path) from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (byte {exc.start}): expected a CSV manifest in UTF-8",
+                         file=path) from None  # fmt: skip
+    except csv.Error as exc:
+        raise InputError(f"not a CSV manifest: {exc}", file=path) from None
+    if any("\0" in h for h in header):
+        raise InputError("not a CSV manifest (NUL bytes)", file=path)
+    twice = sorted({h for h in header if header.count(h) > 1})
+    if twice:
+        raise InputError(f"column(s) {twice} given twice", file=path, field="header")
     columns = option_columns()
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
@@ -81,6 +103,9 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
     for k, raw in enumerate(raw_rows, start=1):
         line = k + 1
         row: dict[str, object] = {"row": k, "line": line}
+        if raw.get(None):
+            raise InputError(f"{len(header) + len(raw[None])} cells, the header has "
+                             f"{len(header)}", file=path, field=f"line {line}")  # fmt: skip
         for key, value in raw.items():
             key = (key or "").strip()
             value = (value or "").strip()
@@ -89,18 +114,45 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
             if key in ("subject", "sex") and not value:
                 raise InputError("expected a value", file=path, field=f"{key} (line {line})")
             if key == "subject":
-                row[key] = value
+                row[key] = path_component(value, path, f"subject (line {line})")
             else:
                 row[key] = from_cell(columns[key], value, path.parent, path, line) if value \
                     else None
+        if row.get("orientations") is not None:
+            from pipeline.commands.ik import recording_name
+
+            path_component(recording_name(str(row["orientations"])), path,
+                           f"orientations (line {line})")  # fmt: skip
         rows.append(row)
     return rows
+
+
+def path_component(name: str, file: Path, field: str) -> str:
+    """``name`` if it is one path component (a folder name inside ``--out``), else refused."""
+    bad = (not name or name in (".", "..") or "/" in name or "\\" in name or "\0" in name
+           or Path(name).is_absolute() or (len(name) > 1 and name[1] == ":"))  # fmt: skip
+    if bad:
+        raise InputError(f"expected a name for a folder inside --out (no '..', separator or "
+                         f"absolute path), got {name!r}", file=file, field=field)  # fmt: skip
+    return name
 
 
 def _out_dir(out: Path, row: Mapping[str, object]) -> Path:
     from pipeline.commands.ik import recording_name
 
     return out / str(row["subject"]) / recording_name(str(row["orientations"]))
+
+
+def _check_distinct_folders(rows: list[dict], out: Path, manifest: Path) -> None:
+    """Two rows writing one folder are refused before anything runs."""
+    seen: dict[Path, int] = {}
+    for row in rows:
+        folder = _out_dir(out, row)
+        if folder in seen:
+            raise InputError(f"rows {seen[folder]} and {row['row']} would both write "
+                             f"{folder}: give them different subjects or recording names",
+                             file=manifest)  # fmt: skip
+        seen[folder] = int(row["row"])
 
 
 def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[str, object]:
@@ -114,15 +166,16 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
     result: dict[str, object] = {c: "" for c in SUMMARY_COLUMNS}
     result.update(row=row["row"], subject=row["subject"], orientations=row["orientations"],
                   out_dir=str(folder))  # fmt: skip
-    if not force and all((folder / f"{name}{s}").is_file() for s in _OUTPUTS):
-        result.update(status="skipped", message="outputs complete (--force redoes them)",
-                      **_figures(folder / f"{name}_figures.json"))  # fmt: skip
-        return result
     t0 = time.perf_counter()
     values = {k: v for k, v in row.items() if k not in ("row", "line", "subject", "config")}
     values["out"] = str(folder)
     try:
-        run_settings(resolve_settings(row.get("config"), values))
+        settings = resolve_settings(row.get("config"), values)
+        if not force and _done(folder, name, settings):
+            result.update(status="skipped", message="outputs of the same configuration complete "
+                          "(--force redoes them)", **_figures(folder / f"{name}_figures.json"))
+            return result
+        run_settings(settings)
     except (InputError, OSError, ValueError) as exc:
         result.update(status="failed", message=str(exc), seconds=f"{time.perf_counter() - t0:.2f}")
         return result
@@ -133,6 +186,25 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
     result.update(status="ok", seconds=f"{time.perf_counter() - t0:.2f}",
                   **_figures(folder / f"{name}_figures.json"))  # fmt: skip
     return result
+
+
+def _done(folder: Path, name: str, settings) -> bool:
+    """The folder holds every output ``settings`` ask for, written by the same resolved
+    configuration (the ``_config.toml`` without its comment lines)."""
+    from pipeline.process.options import settings_text
+
+    wanted = list(_OUTPUTS) + [".rrd"] * settings.outputs.rerun + [".osim"] * settings.outputs.osim
+    if not all((folder / f"{name}{s}").is_file() for s in wanted):
+        return False
+    try:
+        written = (folder / f"{name}_config.toml").read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+
+    def body(text: str) -> list[str]:
+        return [ln for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
+
+    return body(written) == body(settings_text(settings))
 
 
 def _figures(path: Path) -> dict[str, str]:
@@ -156,61 +228,137 @@ def run_batch(
     scheduler: str | None = None,
     force: bool = False,
     progress: bool = True,
-) -> str:
-    """Run every row of ``manifest`` (module docstring); return the summary lines to print."""
-    from tqdm import tqdm
-
-    from pipeline.io.atomic import output_dir, output_set
-    from pipeline.io.tables import csv_text
+) -> tuple[str, int]:
+    """Run every row of ``manifest`` (module docstring); return the summary lines to print and the
+    number of failed rows. Interrupted (SIGTERM, Ctrl-C), it writes the summary of the rows done
+    and re-raises."""
+    from pipeline.io.atomic import output_dir
 
     rows = read_manifest(manifest)
     out = Path(out_dir)
-    output_dir(out)
     if workers is not None and workers < 1:
         raise InputError(f"expected at least one worker, got {workers}", field="workers")
+    if scheduler is not None:
+        check_scheduler(scheduler)
+    _check_distinct_folders(rows, out, Path(manifest))
+    output_dir(out)
     t0 = time.perf_counter()
-    bar = tqdm(total=len(rows), desc="trials", unit="trial", disable=not progress)
     results: dict[int, dict] = {}
-    where = "in this process"
-    if scheduler is None and (workers or os.cpu_count() or 1) == 1:
-        for row in rows:
-            results[int(row["row"])] = run_row(row, str(out), force)
-            bar.update()
-    else:
-        from distributed import Client, LocalCluster, as_completed
-
-        cluster = None
-        if scheduler is None:
-            n = workers or min(os.cpu_count() or 1, len(rows))
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)  # fmt: skip
-            where = f"on {n} local worker processes"
-        try:
-            with Client(scheduler or cluster) as client:
-                if scheduler is not None:
-                    where = f"on the Dask cluster at {scheduler}"
-                futures = [client.submit(run_row, row, str(out.resolve()), force, pure=False)
-                           for row in rows]  # fmt: skip
-                try:
-                    for fut in as_completed(futures):
-                        res = fut.result()
-                        results[int(res["row"])] = res
-                        bar.update()
-                except BaseException:
-                    client.cancel(futures)
-                    raise
-        finally:
-            if cluster is not None:
-                cluster.close()
-    bar.close()
-    ordered = [results[int(r["row"])] for r in rows]
-    with output_set() as outs:
-        with outs.open(out / "batch_summary.csv") as fh:
-            fh.write(csv_text(ordered, SUMMARY_COLUMNS))
+    _write_summary(out, rows, results, "pending")
+    try:
+        where = _run_rows(rows, out, results, workers, scheduler, force, progress)
+    except (KeyboardInterrupt, Terminated):
+        _write_summary(out, rows, results, "not run")
+        raise
+    ordered = _write_summary(out, rows, results, "not run")
     counts = {s: sum(r["status"] == s for r in ordered) for s in ("ok", "failed", "skipped")}
     lines = [f"{len(rows)} trials {where} in {time.perf_counter() - t0:.1f} s: "
              f"{counts['ok']} ok, {counts['failed']} failed, {counts['skipped']} skipped; "
              f"summary: {out / 'batch_summary.csv'}"]  # fmt: skip
     lines += [f"row {r['row']} ({r['subject']}, {Path(str(r['orientations'])).name}): "
               f"{r['message']}" for r in ordered if r["status"] == "failed"]  # fmt: skip
-    return "\n".join(lines)
+    return "\n".join(lines), counts["failed"]
+
+
+def _run_rows(rows, out: Path, results: dict, workers, scheduler, force, progress) -> str:
+    """Every row's result into ``results`` (row number -> result); where they ran."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(rows), desc="trials", unit="trial", disable=not progress)
+    try:
+        if scheduler is None and (workers or os.cpu_count() or 1) == 1:
+            for row in rows:
+                results[int(row["row"])] = run_row(row, str(out), force)
+                bar.update()
+            return "in this process"
+        return _run_on_dask(rows, out, results, workers, scheduler, force, bar)
+    finally:
+        bar.close()
+
+
+def _run_on_dask(rows, out: Path, results: dict, workers, scheduler, force, bar) -> str:
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    where = f"on the Dask cluster at {scheduler}"
+    if scheduler is None:
+        n = workers or min(os.cpu_count() or 1, len(rows))
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None)  # fmt: skip
+        where = f"on {n} local worker processes"
+    try:
+        try:
+            client = Client(scheduler or cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"no Dask scheduler answered within {CONNECT_TIMEOUT_S} s ({exc})",
+                             field="scheduler") from None  # fmt: skip
+        with client:
+            futures = [client.submit(run_row, row, str(out.resolve()), force, pure=False)
+                       for row in rows]  # fmt: skip
+            try:
+                for fut in as_completed(futures):
+                    res = fut.result()
+                    results[int(res["row"])] = res
+                    bar.update()
+            except BaseException:
+                client.cancel(futures)
+                raise
+    finally:
+        if cluster is not None:
+            cluster.close()
+    return where
+
+
+def check_scheduler(address: str) -> None:
+    """A Dask scheduler's address: ``tcp://HOST:PORT`` or ``tls://HOST:PORT``, port 1-65535."""
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(address)
+        port = parts.port
+    except ValueError as exc:
+        raise InputError(f"expected tcp://HOST:PORT, got {address!r} ({exc})",
+                         field="scheduler") from None  # fmt: skip
+    if parts.scheme not in ("tcp", "tls") or not parts.hostname or port is None or port < 1:
+        raise InputError(f"expected tcp://HOST:PORT (or tls://), got {address!r}",
+                         field="scheduler")  # fmt: skip
+    if parts.scheme == "tcp":
+        _probe_dask(parts.hostname, port, address)
+
+
+def _probe_dask(host: str, port: int, address: str) -> None:
+    """A Dask scheduler writes its handshake as soon as a connection opens: a service that
+    writes nothing within :data:`CONNECT_TIMEOUT_S` (or refuses the connection) is not one."""
+    import socket
+
+    try:
+        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S) as conn:
+            conn.settimeout(CONNECT_TIMEOUT_S)
+            if conn.recv(8):
+                return
+            why = "it closed the connection"
+    except TimeoutError:
+        why = "it said nothing"
+    except OSError as exc:
+        why = exc.strerror or str(exc)
+    raise InputError(f"no Dask scheduler answered at {address} within {CONNECT_TIMEOUT_S} s "
+                     f"({why})", field="scheduler")  # fmt: skip
+
+
+def _write_summary(out: Path, rows, results: dict, missing: str) -> list[dict]:
+    """``batch_summary.csv`` replaced atomically: every row, ``missing`` where it has no result."""
+    from pipeline.io.atomic import output_set
+    from pipeline.io.tables import csv_text
+
+    ordered = []
+    for r in rows:
+        res = results.get(int(r["row"]))
+        if res is None:
+            res = {c: "" for c in SUMMARY_COLUMNS}
+            res.update(row=r["row"], subject=r["subject"], orientations=r["orientations"],
+                       status=missing, out_dir=str(_out_dir(out, r)))  # fmt: skip
+        ordered.append(res)
+    with output_set() as outs:
+        with outs.open(out / "batch_summary.csv") as fh:
+            fh.write(csv_text(ordered, SUMMARY_COLUMNS))
+    return ordered

@@ -24,6 +24,7 @@ from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.formats import read_recording
 from pipeline.io.mot import write_mot
 from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.io.tables import write_array_csv
 from pipeline.model.measures import Measures
 from pipeline.option import specs
@@ -252,6 +253,7 @@ def summary_text(run: IKRun) -> str:
         f"95th percentile {np.degrees(np.nanpercentile(run.residual_rms, 95)):.2f} deg",
         f"- knee AoR correction: {o.correction}",
     ]
+    lines += _sensor_table(run)
     if run.corrections:
         lines += _correction_table(run)
     if run.heading_drifts:
@@ -294,6 +296,28 @@ def summary_text(run: IKRun) -> str:
     if run.notes:
         lines += ["", "Notes:", ""] + [f"- {n}" for n in run.notes]
     return "\n".join(lines) + "\n"
+
+
+def _sensor_table(run: IKRun) -> list[str]:
+    """One row per sensor: the sensor check's findings and the magnetometer's trust."""
+    found: dict[str, list] = {}
+    for f in run.sensor_findings:
+        found.setdefault(f.sensor, []).append(f)
+    by_frame = {f"{seg}_imu": n for n, seg in SENSOR_TO_SEGMENT.items()}
+    used_names = {by_frame.get(frame, frame) for frame in run.placements}
+    names = sorted(used_names | set(found) | set(run.magnetometers))
+    lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: dead channels, saturation, "
+             "units, moving with the segment; magnetometers against the other sensors' field):",
+             "", "| sensor | checks | magnetometer | used |", "|---|---|---|---|"]  # fmt: skip
+    for n in names:
+        fs = found.get(n, [])
+        checks = "; ".join(f"{f.check}: {f.evidence} ({f.action})" for f in fs) or "ok"
+        m = run.magnetometers.get(n)
+        mag = "-" if m is None else ("trusted" if m.trusted else f"not trusted: {m.evidence}")
+        used = "no: excluded, its joints not written" if any(
+            f.action == "excluded" for f in fs) else "yes"  # fmt: skip
+        lines.append(f"| {n} | {checks} | {mag} | {used} |")
+    return lines + [""]
 
 
 def _correction_table(run: IKRun) -> list[str]:

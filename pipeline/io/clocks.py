@@ -19,7 +19,7 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.io.checks import check_same_rate
-from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.recording import WORLD, Recording, SensorSignals, world_of
 
 __all__ = ["align_clocks", "device_time"]
 
@@ -51,7 +51,7 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
     if len(recs) == 1:
         (name, r), = recs.items()
         return Recording(r.time - r.time[0], r.rate_hz, {name: r.sensor},
-                         {"DataRate": f"{r.rate_hz:.6f}"}, r.notes, source)  # fmt: skip
+                         _header(r.rate_hz, recs.values()), r.notes, source)  # fmt: skip
     rate = check_same_rate({n: r.rate_hz for n, r in recs.items()}, file=source)
     first = next(iter(recs.values()))
     reference = float(device_time(first)[0])
@@ -84,5 +84,11 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
         spread = 1e3 * (max(starts.values()) - min(starts.values()))
         notes.append(f"clocks aligned by time stamp: devices started up to {spread:.1f} ms apart; "
                      f"kept the {t1 - t0:.2f} s all cover, resampled to {rate:.4g} Hz")  # fmt: skip
-    return Recording(t - t0, float(rate), sensors, {"DataRate": f"{rate:.6f}"}, tuple(notes),
+    return Recording(t - t0, float(rate), sensors, _header(rate, recs.values()), tuple(notes),
                      source)  # fmt: skip
+
+
+def _header(rate: float, recs) -> dict[str, str]:
+    """The merged recording's header: its rate, and the devices' world where they share one."""
+    world = world_of(recs)
+    return {"DataRate": f"{rate:.6f}", **({WORLD: world} if world else {})}

@@ -8,6 +8,11 @@ specific force ``acc`` (N, 3) m/s^2 and the magnetic field ``mag`` (N, 3) (arbit
 in the sensor frame and in SI units (readers convert). ``header`` keeps the file's metadata,
 ``notes`` what the reader repaired or noticed, ``source`` the file or folder it came from.
 
+``header[WORLD]`` names the world frame of the orientations when the reader knows it from the
+vendor (:data:`Z_UP_WORLDS`: a vendor's earth frame with z up, which ``pipeline ik`` turns to its
+y-up world itself); a recording without it (OpenSim ``.sto``, our IMU CSV) needs the user's
+``--sensor-to-model`` unless its world is y up.
+
 A one-sensor recording (one IMU CSV, one Xsens ``.txt``, a simulated sensor) gives its signals
 directly: ``rec.gyr`` is ``rec.sensors[name].gyr`` when there is exactly one sensor.
 """
@@ -23,7 +28,23 @@ import numpy as np
 
 from pipeline.errors import InputError
 
-__all__ = ["Recording", "SensorSignals"]
+__all__ = ["WORLD", "Z_UP_WORLDS", "Recording", "SensorSignals", "world_of"]
+
+#: The header key naming the orientations' world frame (module docstring).
+WORLD = "world"
+#: The vendors' worlds with z up: the value of ``header[WORLD]`` -> what it is.
+Z_UP_WORLDS = {
+    "movella-dot": "Movella DOT: east-north-up, z up",
+    "xsens": "Xsens MT: the local earth frame (x north or east), z up",
+    "ximu3": "x-IMU3: the earth frame, z up",
+}
+
+
+def world_of(recordings) -> str | None:
+    """The world the recordings share (``header[WORLD]``), None when one has none or they
+    differ."""
+    worlds = {r.header.get(WORLD) for r in recordings}
+    return worlds.pop() if len(worlds) == 1 else None
 
 
 @dataclass(frozen=True)

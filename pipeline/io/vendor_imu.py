@@ -2,7 +2,11 @@
 
 * **Movella DOT** ``.csv`` export (Movella DOT app / SDK): optional metadata lines, then the header
   ``PacketCounter,SampleTimeFine,Quat_W,Quat_X,Quat_Y,Quat_Z,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z,
-  Mag_X,Mag_Y,Mag_Z,Status`` (column order free; orientation columns optional). Units (Movella
+  Mag_X,Mag_Y,Mag_Z,Status`` (column order free; orientation columns optional; the app ends every
+  line, the header included, with a comma, and separates a row's cells by ``", "``; the SDK
+  writes ``Euler_X/Y/Z`` (roll, pitch, yaw in degrees, ``R = Rz Ry Rx``) where the app writes
+  ``Quat``, and may add ``FreeAcc_*``, ``dq_*``, ``dv_*`` and ``UTC_*`` columns, noted as not
+  used; any other column is refused). Units (Movella
   DOT user manual): ``SampleTimeFine`` µs (32-bit, wraps at 2^32), ``Acc`` m/s², ``Gyr`` deg/s,
   ``Mag`` arbitrary units (normalised to the calibration field); ``Quat`` scalar first, sensor ->
   local earth frame, ENU (z up). Typically 120 Hz (also 60, 30, ...).
@@ -33,8 +37,9 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
-from pipeline.io.recording import Recording
+from pipeline.io.recording import WORLD, Recording
 from pipeline.io.text import parse_table, read_text_lines
+from pipeline.rotations import matrix_from_euler_zyx, quat_from_matrix
 
 __all__ = ["DOT_COLUMNS", "G", "read_movella_dot_csv", "read_ximu3_folder"]
 
@@ -61,6 +66,30 @@ def _unwrap_ticks(ticks: np.ndarray, modulus: float) -> np.ndarray:
     return ticks + wraps
 
 
+#: Columns of DOT exports (app and SDK) that are read when present, and those known and not used.
+DOT_READ = {"SampleTimeFine", *(f"{k}_{a}" for k in ("Acc", "Gyr", "Mag", "Euler") for a in "XYZ"),
+            *(f"Quat_{a}" for a in "WXYZ")}  # fmt: skip
+DOT_NOT_USED = ("PacketCounter", "Status", "FreeAcc_", "dq_", "dv_", "UTC_", "Timestamp")
+
+
+def _check_dot_columns(labels: list[str], path: Path, notes: Notes) -> None:
+    """Every column a DOT column: known but not used ones noted, any other refused."""
+    unknown = [c for c in labels if c not in DOT_READ and not c.startswith(DOT_NOT_USED)]
+    if unknown:
+        raise InputError(f"column(s) {unknown} are not Movella DOT export columns (expected "
+                         f"{sorted(DOT_READ)} and the app's {list(DOT_NOT_USED)})", file=path,
+                         field="header")  # fmt: skip
+    unused = [c for c in labels if c not in DOT_READ and c not in ("PacketCounter", "Status")]
+    if unused:
+        notes.add(f"DOT columns not used: {unused}", file=path)
+
+
+def _dot_line(line: str) -> str:
+    """One line of a DOT export without the comma the DOT app ends every line with (the header
+    ``...,Status,``; rows ``0, 3629233986, ..., 0, ``: comma and space)."""
+    return line.rstrip().rstrip(",")
+
+
 def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_S) -> Recording:
     """Read one Movella DOT ``.csv`` export (module docstring) into SI units."""
     path = Path(path)
@@ -69,15 +98,17 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     if start is None:
         raise InputError("no header line starting with 'PacketCounter' (a Movella DOT export)",
                          file=path)  # fmt: skip
-    labels = [s.strip() for s in lines[start].rstrip("\r\n").rstrip(",").split(",")]
-    rows = [ln.rstrip("\r\n").rstrip(",") for ln in lines[start + 1 :] if ln.strip()]
+    labels = [s.strip() for s in _dot_line(lines[start]).split(",")]
+    rows = [_dot_line(ln) for ln in lines[start + 1 :] if ln.strip()]
     if not rows:
         raise InputError("no data rows after the header", file=path)
     required = ("SampleTimeFine", "Acc_X", "Acc_Y", "Acc_Z", "Gyr_X", "Gyr_Y", "Gyr_Z")
     data, idx = _columns(rows, labels, path, start + 2, required, "header")
     notes = Notes()
+    _check_dot_columns(labels, path, notes)
     time = _unwrap_ticks(data[:, idx["SampleTimeFine"]], 2.0**32) * 1e-6
-    clock = {"clock_start_s": repr(float(time[0])), "clock_wrap_s": repr(2.0**32 * 1e-6)}
+    clock = {"clock_start_s": repr(float(time[0])), "clock_wrap_s": repr(2.0**32 * 1e-6),
+             WORLD: "movella-dot"}
     time = check_time(time - time[0], file=path, field="SampleTimeFine", first_line=start + 2)
     check_rate(time, notes=notes, file=path, field="SampleTimeFine")
 
@@ -95,6 +126,9 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
         quat = check_quaternions(cols(("Quat_W", "Quat_X", "Quat_Y", "Quat_Z"), "Quat",
                                       "quaternion"), notes=notes, file=path,
                                  field="Quat")  # fmt: skip
+    elif "Euler_X" in idx:  # roll, pitch, yaw in degrees; R = Rz(yaw) Ry(pitch) Rx(roll)
+        eul = np.radians(cols(("Euler_Z", "Euler_Y", "Euler_X"), "Euler"))
+        quat = quat_from_matrix(matrix_from_euler_zyx(eul))
     return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, mag=mag, source=path,
                             header=clock, notes=notes.as_tuple())  # fmt: skip
 
@@ -143,4 +177,4 @@ def read_ximu3_folder(folder: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_
         notes.add(f"magnetometer at {1 / np.median(np.diff(tm)):.0f} Hz interpolated onto the "
                   f"inertial time stamps", file=mpath)  # fmt: skip
     return Recording.single(folder.name, t, quat=quat, gyr=gyr, acc=acc, mag=mag, source=folder,
-                            notes=notes.as_tuple())  # fmt: skip
+                            header={WORLD: "ximu3"}, notes=notes.as_tuple())  # fmt: skip

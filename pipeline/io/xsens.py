@@ -45,7 +45,7 @@ from pipeline.io.checks import (
 )
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, fill_gaps
 from pipeline.io.notes import Notes
-from pipeline.io.recording import Recording
+from pipeline.io.recording import WORLD, Recording
 from pipeline.io.text import parse_table, read_text_lines
 from pipeline.rotations import matrix_from_euler_zyx, project_to_so3, quat_from_matrix
 
@@ -241,7 +241,7 @@ def read_xsens_txt(
         if acc is None or gyr is None:
             raise InputError("the Acc and Gyr columns are empty and there are no orientation "
                              "columns", file=path, field="header")  # fmt: skip
-        header = {**comments, **clock, "orientation_from": "none"}
+        header = {**comments, **clock, "orientation_from": "none", WORLD: "xsens"}
         return Recording.single(_sensor_id(path), time, gyr=gyr, acc=acc, mag=mag,
                                 rate_hz=float(rate), header=header, notes=notes.as_tuple(),
                                 source=path)  # fmt: skip
@@ -276,7 +276,7 @@ def read_xsens_txt(
         field="orientation",
     )
     quat = check_quaternions(quat, notes=notes, file=path, field="orientation")
-    header = {**comments, **clock, "orientation_from": kind}
+    header = {**comments, **clock, "orientation_from": kind, WORLD: "xsens"}
     return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
                             rate_hz=float(rate), header=header, notes=notes.as_tuple(),
                             source=path)  # fmt: skip

@@ -4,12 +4,14 @@
 Wang reproduction share; it writes nothing (outputs are the commands' job). On our scaled Pinocchio
 model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang et al. 2023:
 
-1. **Sensors** (:mod:`pipeline.process.sensors`): the joints the sensors observe (hip, knee,
-   ankle of each leg; the recording carries our sensor names, :mod:`pipeline.io.formats`); any
-   set observing one joint works.
+1. **Sensors** (:mod:`pipeline.process.sensors`): each sensor's raw signals checked first
+   (:mod:`pipeline.process.sensor_checks`: a faulty sensor excluded and named); the joints the
+   sensors observe (hip, knee, ankle of each leg; the recording carries our sensor names,
+   :mod:`pipeline.io.formats`); any set observing one joint works.
 2. **World.** Orientations ``R_s(t)`` are pre-multiplied by a fixed ``sensor_to_model`` rotation
    (OpenSense's ``sensor_to_opensim_rotations``, space-fixed XYZ angles; ``-pi/2 0 0`` for Xsens'
-   z-up world) so that the world's y axis points up.
+   z-up world) so that the world's y axis points up; a vendor's file whose world the reader knows
+   (``header['world']``, Movella DOT, Xsens MT, x-IMU3: z up) is turned without being asked.
 3. **Heading** (:mod:`pipeline.calibration.heading`): the subject's right at the calibration pose,
    from hip and knee flexion by default or from an axis of the pelvis sensor (OpenSense's way).
    Orientations from a 6-D filter (each sensor's heading its own, drifting) are first put in one
@@ -55,7 +57,7 @@ from pipeline.errors import InputError
 from pipeline.ik.bounds import remove_limits
 from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
-from pipeline.io.recording import Recording
+from pipeline.io.recording import WORLD, Z_UP_WORLDS, Recording
 from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
@@ -71,6 +73,7 @@ from pipeline.process.pose import (
     still_gravity,
 )
 from pipeline.process.posture import Posture, lean_pose, standing_posture
+from pipeline.process.sensor_checks import Finding, check_sensors
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
 from pipeline.rotations import (
@@ -115,7 +118,9 @@ class IKRun:
     (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`); ``options``: the
     options used; ``filtered``: ``'6-D'``/``'9-D'`` when the orientations were estimated from raw
     signals here, else None; ``measures``: the subject; ``source``: the recording's file or
-    folder; ``inputs``: what ``pipeline ik`` read (None from the Python API).
+    folder; ``inputs``: what ``pipeline ik`` read (None from the Python API);
+    ``sensor_findings``: the sensor check's :class:`~pipeline.process.sensor_checks.Finding` s
+    (each also a flag).
     """
 
     time: np.ndarray
@@ -141,6 +146,7 @@ class IKRun:
     measures: Measures | None = None
     source: Path | None = None
     inputs: InputOptions | None = None
+    sensor_findings: list[Finding] = field(default_factory=list)
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -166,6 +172,7 @@ def process_recording(
     """
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
     notes = list(trial.notes)
+    trial, findings = check_sensors(trial)
     trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
     filtered = oriented.filtered
     rotations, sensors = _segment_rotations(trial, notes)
@@ -222,12 +229,13 @@ def process_recording(
         notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
     angles = _angles(sk, Q, sensors, rotations, placements, cal.H)
     landmarks = _landmarks(sk, Q, sensors)
-    flags = quality_flags(sk, Q, result.residual_rms, notes,
-                          joints=[j for j in sk.joint_names if _observed(j, sensors)])  # fmt: skip
+    flags = [f.line() for f in findings] + quality_flags(
+        sk, Q, result.residual_rms, notes, joints=[j for j in sk.joint_names
+                                                   if _observed(j, sensors)])  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
                  drifts, filtered, oriented.magnetometers, posture, measures,
-                 trial.source)  # fmt: skip
+                 trial.source, sensor_findings=findings)  # fmt: skip
 
 
 def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:
@@ -254,6 +262,10 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
                              "filter's world is z up and is turned to y up already",
                              file=trial.source, field="sensor_to_model")  # fmt: skip
         to_model = Z_UP_TO_Y_UP
+    elif to_model is None and trial.header.get(WORLD) in Z_UP_WORLDS:
+        to_model = Z_UP_TO_Y_UP
+        notes.append(f"the orientations' world: {Z_UP_WORLDS[trial.header[WORLD]]} (the vendor's "
+                     "format), turned to y up (no --sensor-to-model needed)")  # fmt: skip
     world = np.eye(3)
     if to_model is not None:
         world = sensor_to_opensim_matrix(to_model)

@@ -1,0 +1,257 @@
+"""The sensor check of :func:`pipeline.process.process_recording`: each sensor's raw signals
+checked before anything is estimated, every fault named and handled.
+
+The checks are a registry (:data:`CHECKS`: name -> a function of one sensor's signals returning a
+:class:`Finding` or None); adding one is one function and one entry. What each finds and what is
+done about it:
+
+* ``dead``: a gyroscope or accelerometer axis that never changes (all zero, or frozen at one
+  value) cannot give an orientation: the sensor is **excluded** (its joints are not written). A
+  magnetometer that never changes is **not used** (the sensor is filtered 6-D, its heading from
+  the joints).
+* ``saturation``: samples held at the range's limit (plateaus: runs of at least
+  :data:`PLATEAU_SAMPLES` samples and :data:`PLATEAU_S` within :data:`PLATEAU_TOL` of the
+  largest magnitude) or an angular speed no human segment reaches
+  (:data:`MAX_HUMAN_GYRO_DPS`): the integrated orientation is wrong from the first such sample
+  on. Gyroscope: **excluded** when more than :data:`MAX_SATURATED` of the samples are, else
+  **noted**; accelerometer (heel strikes clip a +-8 g range for a sample or two): **noted**
+  unless more than :data:`MAX_SATURATED`, then excluded.
+* ``units`` (:func:`check_units`, the whole recording): the gyroscopes against the
+  accelerometers, which show each sensor's inclination whatever the unit: the rate at which
+  gravity's direction turns in the sensor frame, ``|du/dt| = |w x u|`` (``u = a/|a|``
+  low-passed), is compared with the gyroscope's own ``|w x u|``. The ratio is 1 for rad/s and
+  57.3 for deg/s given as rad/s, whatever the speed (slow trials too, where the magnitude test of
+  :func:`pipeline.io.checks.check_gyro_units` passes deg/s). Linear accelerations turn ``a`` too:
+  a sensor's ratio ranges 0.01-1.7 (measured: a still leg's, a foot's in gait), the median over
+  a recording's sensors 0.33 (x-IMU3 walk), 0.65 (S02) and 0.75-1.0 (simulated gait, supine,
+  seated), 57 times that with the wrong unit: a median outside :data:`UNIT_RATIO` is
+  **refused**.
+* ``moves with its segment``: a sensor whose median angular speed stays below
+  :data:`MIN_SPEED_RATIO` of the slowest of its neighbours' while all of them move (a sensor that
+  fell off): **excluded** when two or more neighbours move around it, **noted** with one (a foot
+  stays on the floor while its shank turns). A still neighbour means a still segment is
+  plausible (a thigh on a chair while the shank swings; a pelvis while one hip flexes).
+
+Magnetometer trust (field strength and dip against the other sensors and over time) is
+:mod:`pipeline.calibration.magnetometer`'s; the summary's sensor table shows both.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.errors import InputError
+from pipeline.filtering import lowpass
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+
+__all__ = ["CHECKS", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO", "PLATEAU_SAMPLES",
+           "Finding", "check_sensors", "check_units", "gyro_unit_ratio"]
+
+#: A plateau: at least this many consecutive samples, lasting at least PLATEAU_S, within
+#: PLATEAU_TOL (relative) of a channel's largest magnitude. A smooth peak of human motion stays
+#: within 0.5 % of its top for ~3 % of its period (~10 ms of a 0.3 s swing).
+PLATEAU_SAMPLES = 3
+PLATEAU_S = 0.03
+PLATEAU_TOL = 0.005
+#: Angular speed (deg/s) beyond any human segment's in walking or running (feet peak at ~800-1000).
+MAX_HUMAN_GYRO_DPS = 1500.0
+#: Share of saturated samples beyond which a sensor is excluded.
+MAX_SATURATED = 0.01
+#: A sensor turning slower than this share of its neighbours' median speed does not follow a
+#: segment.
+MIN_SPEED_RATIO = 0.15
+#: Neighbours' median angular speed (rad/s) from which they are moving.
+MOVING_SPEED = 0.3
+#: The accepted range of the gyroscope's to the accelerometer's turn of gravity.
+UNIT_RATIO = (0.1, 10.0)
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One fault of one sensor: ``check`` (a :data:`CHECKS` name), ``action`` (``'excluded'``,
+    ``'magnetometer not used'`` or ``'noted'``) and the ``evidence`` a summary prints."""
+
+    sensor: str
+    check: str
+    action: str
+    evidence: str
+
+    def line(self) -> str:
+        return f"sensor {self.sensor}: {self.check}: {self.evidence} ({self.action})"
+
+
+def _constant_axes(x: np.ndarray | None) -> list[str]:
+    if x is None:
+        return []
+    finite = x[np.all(np.isfinite(x), axis=1)]
+    if len(finite) < 2:
+        return list("xyz")
+    return [a for a, k in zip("xyz", range(3), strict=True) if np.ptp(finite[:, k]) == 0.0]
+
+
+def _dead(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
+        axes = _constant_axes(getattr(s, field))
+        if axes:
+            return Finding(name, "dead", "excluded", f"{what} axes {''.join(axes)} never change")
+    axes = _constant_axes(s.mag)
+    if axes:
+        return Finding(name, "dead", "magnetometer not used",
+                       f"magnetometer axes {''.join(axes)} never change")  # fmt: skip
+    return None
+
+
+def _plateau_share(x: np.ndarray, min_peak: float, rate_hz: float) -> tuple[float, float]:
+    """Share of samples in plateaus at a channel's largest magnitude (:data:`PLATEAU_TOL`;
+    channels peaking below ``min_peak`` are not at a range's limit), and the highest plateau's
+    level (0 without one)."""
+    least = max(PLATEAU_SAMPLES, int(np.ceil(PLATEAU_S * rate_hz)))
+    held = np.zeros(len(x), dtype=bool)
+    level = 0.0
+    for k in range(x.shape[1]):
+        v = np.abs(x[:, k])
+        peak = np.nanmax(v)
+        if not peak >= min_peak:
+            continue
+        near = np.nan_to_num(v) >= (1.0 - PLATEAU_TOL) * peak
+        edges = np.diff(np.concatenate([[0], near.astype(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            if b - a >= least:
+                held[a:b] = True
+                level = max(level, float(peak))
+    return float(np.mean(held)), level
+
+
+def _saturation(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    if s.gyr is None or s.acc is None:
+        return None
+    speed = np.linalg.norm(np.nan_to_num(s.gyr), axis=1)
+    fast = float(np.mean(speed > np.radians(MAX_HUMAN_GYRO_DPS)))
+    g_share, g_level = _plateau_share(s.gyr, np.radians(250.0), rec.rate_hz)  # smallest range
+    a_share, a_level = _plateau_share(s.acc, 2 * 9.81, rec.rate_hz)  # 2 g: the smallest range
+    found = []
+    if fast > 0:
+        found.append((fast, f"gyroscope beyond a human segment's speed ({MAX_HUMAN_GYRO_DPS:.0f} "
+                            f"deg/s, peak {np.degrees(speed.max()):.0f})"))  # fmt: skip
+    if g_share > 0:
+        found.append((g_share, f"gyroscope held at {np.degrees(g_level):.0f} deg/s (its range's "
+                               "limit?)"))  # fmt: skip
+    if a_share > 0:
+        found.append((a_share, f"accelerometer held at {a_level / 9.81:.1f} g (its range's "
+                               "limit?)"))  # fmt: skip
+    if not found:
+        return None
+    share, what = max(found)
+    action = "excluded" if share > MAX_SATURATED else "noted"
+    return Finding(name, "saturation", action, f"{what} in {100 * share:.2f}% of the samples")
+
+
+def _turn_rates(s: SensorSignals, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(|du/dt|, |w x u|)`` per sample, ``u`` gravity's direction in the sensor frame."""
+    cut = min(2.0, 0.2 * rate_hz)
+    a = lowpass(np.nan_to_num(s.acc), rate_hz, cut)
+    u = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-9)
+    du = np.linalg.norm(np.gradient(u, axis=0), axis=1) * rate_hz
+    w = lowpass(np.nan_to_num(s.gyr), rate_hz, cut)
+    return du, np.linalg.norm(np.cross(w, u), axis=1)
+
+
+def gyro_unit_ratio(rec: Recording) -> tuple[float, dict[str, float]]:
+    """The median over the sensors of ``|w x u| / |du/dt|`` (module docstring) and each sensor's,
+    over its samples near 1 g whose gravity direction turns faster than 5 deg/s (nan without
+    enough of them)."""
+    each = {}
+    for name, s in rec.sensors.items():
+        if s.gyr is None or s.acc is None or len(rec.time) < 20:
+            continue
+        du, wu = _turn_rates(s, rec.rate_hz)
+        a = np.linalg.norm(np.nan_to_num(s.acc), axis=1)
+        calm = (np.abs(a - 9.81) < 0.2 * 9.81) & (du > np.radians(5.0))
+        if np.sum(calm) >= 10:
+            each[name] = float(np.median(wu[calm]) / np.median(du[calm]))
+    return (float(np.median(list(each.values()))) if each else float("nan")), each
+
+
+def check_units(rec: Recording) -> None:
+    """Refuse gyroscopes whose unit is not rad/s (module docstring, ``units``)."""
+    ratio, each = gyro_unit_ratio(rec)
+    if not np.isfinite(ratio) or UNIT_RATIO[0] <= ratio <= UNIT_RATIO[1]:
+        return
+    hint = "deg/s read as rad/s" if ratio > UNIT_RATIO[1] else "rad/s read as deg/s"
+    per = ", ".join(f"{n} {r:.3g}" for n, r in each.items())
+    raise InputError(f"the gyroscopes turn {ratio:.3g} times as fast as gravity's direction "
+                     f"turns in the accelerometers (median; {per}; 0.3-1.7 in rad/s, 57.3 times "
+                     f"that for deg/s): they look like {hint}", file=rec.source,
+                     field="gyr")  # fmt: skip
+
+
+def _speed(s: SensorSignals) -> float:
+    """The median angular speed (rad/s): a burst of a faulty neighbour does not move it."""
+    return float(np.median(np.linalg.norm(np.nan_to_num(s.gyr), axis=1)))
+
+
+_CHAIN = ("pelvis", "femur", "tibia", "foot")
+
+
+def _neighbours(name: str, rec: Recording) -> list[str]:
+    """The sensors of the segments next to ``name``'s along its leg (the pelvis for both legs)."""
+    seg = {n: SENSOR_TO_SEGMENT.get(n) for n in rec.sensors}
+    mine = seg.get(name)
+    if mine is None or mine == "torso":
+        return []
+    side, kind = (mine.split("_", 1) if "_" in mine else ("", mine))
+    k = _CHAIN.index(kind)
+    near = [c for c in (_CHAIN[k - 1] if k > 0 else None, _CHAIN[k + 1] if k < 3 else None) if c]
+    want = {c if c == "pelvis" else f"{s}_{c}" for c in near
+            for s in ((side,) if side else ("right", "left"))}  # fmt: skip
+    return [n for n, g in seg.items() if g in want and rec.sensors[n].gyr is not None]
+
+
+def _moves_with_segment(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    if s.gyr is None:
+        return None
+    near = _neighbours(name, rec)
+    speeds = [_speed(rec.sensors[n]) for n in near]
+    if not speeds or min(speeds) < MOVING_SPEED:  # a still neighbour: a still segment is normal
+        return None
+    mine = _speed(s)
+    if mine >= MIN_SPEED_RATIO * min(speeds):
+        return None
+    return Finding(name, "moves with its segment", _action_on_stillness(near),
+                   f"it turns at {np.degrees(mine):.0f} deg/s (median) while its neighbours "
+                   f"({', '.join(near)}) turn at {np.degrees(min(speeds)):.0f} or more: it does "
+                   "not follow a segment (loose or fallen off?)")  # fmt: skip
+
+
+def _action_on_stillness(neighbours: list[str]) -> str:
+    """Excluded when two or more neighbours move around it; with one neighbour (a foot) only
+    noted: a foot rests on the floor while its shank turns (squats, sit-to-stand)."""
+    return "excluded" if len(neighbours) >= 2 else "noted"
+
+
+#: Check name -> function of (sensor name, its signals, the recording).
+CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
+    "dead": _dead,
+    "saturation": _saturation,
+    "moves with its segment": _moves_with_segment,
+}
+
+
+def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
+    """The gyroscopes' unit (refused when wrong), then every check on every sensor with raw
+    signals; the recording without the excluded sensors and with the unused magnetometers
+    removed, and the findings."""
+    check_units(rec)
+    findings = [f for name, s in rec.sensors.items() for fn in CHECKS.values()
+                if (f := fn(name, s, rec)) is not None]  # fmt: skip
+    sensors = dict(rec.sensors)
+    for f in findings:
+        if f.action == "excluded":
+            sensors.pop(f.sensor, None)
+        elif f.action == "magnetometer not used" and f.sensor in sensors:
+            sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
+    return rec.with_sensors(sensors), findings

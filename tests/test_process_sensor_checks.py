@@ -1,0 +1,170 @@
+"""pipeline.process.sensor_checks: every fault of a sensor's raw signals found, named and handled
+(on the simulator with one injected fault at a time, and on the real recordings)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.errors import InputError
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.model.measures import Measures
+from pipeline.process.sensor_checks import CHECKS, check_sensors, check_units
+
+SUBJECT = Measures("m", 1.75)
+NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+@pytest.fixture(scope="module")
+def walk() -> Recording:
+    """A simulated walk with soft tissue, wandering biases and the floor's field."""
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.simulate.artefacts import Artefacts
+    from pipeline.simulate.model import simulate_trial
+
+    geometry, _ = geometry_from_measures(SUBJECT)
+    sk = Skeleton.build(geometry, knee="free", root="freeflyer")
+    trial = simulate_trial(sk, "gait", duration_s=12.0, seed=3, standing_s=2.0,
+                           artefacts=Artefacts())  # fmt: skip
+    return Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(
+        gyr=i.recording.gyr, acc=i.recording.acc, mag=i.recording.mag)
+        for f, i in trial.imus.items()})  # fmt: skip
+
+
+def _with(rec: Recording, name: str, **signals) -> Recording:
+    return rec.with_sensors({**rec.sensors, name: rec.sensors[name].replace(**signals)})
+
+
+def test_a_clean_walk_has_no_findings(walk):
+    out, findings = check_sensors(walk)
+    assert findings == [] and set(out.sensors) == set(walk.sensors)
+
+
+def test_a_dead_gyroscope_axis_excludes_the_sensor(walk):
+    gyr = walk.sensors["tibia_r_imu"].gyr.copy()
+    gyr[:, 1] = 0.0
+    out, (f,) = check_sensors(_with(walk, "tibia_r_imu", gyr=gyr))
+    assert (f.sensor, f.check, f.action) == ("tibia_r_imu", "dead", "excluded")
+    assert "gyroscope axes y never change" in f.evidence and "tibia_r_imu" not in out.sensors
+
+
+def test_a_dead_magnetometer_is_not_used_and_the_sensor_stays(walk):
+    out, (f,) = check_sensors(_with(walk, "femur_l_imu", mag=np.zeros_like(
+        walk.sensors["femur_l_imu"].mag)))  # fmt: skip
+    assert (f.check, f.action) == ("dead", "magnetometer not used")
+    assert out.sensors["femur_l_imu"].mag is None and out.sensors["femur_l_imu"].gyr is not None
+
+
+def test_a_gyroscope_clipped_at_its_range_is_excluded(walk):
+    """A +-250 deg/s range (the smallest MEMS gyroscopes have) on a foot swinging at up to
+    ~540 deg/s (the simulated foot's rates tripled: real feet reach 500-700 deg/s, S02 and
+    x-IMU3)."""
+    gyr = 3.0 * walk.sensors["calcn_r_imu"].gyr
+    limit = np.radians(250.0)
+    out, (f,) = check_sensors(_with(walk, "calcn_r_imu", gyr=np.clip(gyr, -limit, limit)))
+    assert (f.check, f.action) == ("saturation", "excluded")
+    assert "held at 250 deg/s" in f.evidence
+    assert "calcn_r_imu" not in out.sensors
+
+
+def test_a_gyroscope_beyond_a_human_segments_speed_is_excluded(walk):
+    """The real DOT foot of issue 24: +-1,700-1,950 deg/s in a 2,000 deg/s range."""
+    gyr = walk.sensors["calcn_l_imu"].gyr.copy()
+    rng = np.random.default_rng(0)
+    burst = rng.uniform(1700, 1950, size=300) * rng.choice([-1, 1], size=300)
+    gyr[500:800, 2] = np.radians(burst)
+    _, findings = check_sensors(_with(walk, "calcn_l_imu", gyr=gyr))
+    assert [(f.sensor, f.check, f.action) for f in findings] == [
+        ("calcn_l_imu", "saturation", "excluded")]
+    assert "beyond a human segment's speed" in findings[0].evidence
+
+
+def test_a_gyroscope_in_degrees_is_refused_even_on_a_slow_trial(walk):
+    """deg/s as rad/s on a slow motion: the magnitude test (90th percentile) would pass it; the
+    accelerometer's turn of gravity does not."""
+    from pipeline.io.checks import check_gyro_units
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.simulate.model import simulate_trial
+
+    sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
+    seated = simulate_trial(sk, "still_thigh", duration_s=12.0, seed=3)
+    rec = Recording(seated.time, 100.0, {NAMES[f]: SensorSignals(
+        gyr=np.degrees(i.recording.gyr), acc=i.recording.acc) for f, i in seated.imus.items()})
+    check_gyro_units(rec.sensors["pelvis_imu"].gyr)  # 90th percentile 1.5 "rad/s": passes
+    check_units(walk)  # rad/s: passes
+    with pytest.raises(InputError, match=r"field gyr: .*look like deg/s read as rad/s"):
+        check_sensors(rec)
+    with pytest.raises(InputError, match=r"look like rad/s read as deg/s"):
+        check_units(walk.with_sensors({n: s.replace(gyr=np.radians(s.gyr))
+                                       for n, s in walk.sensors.items()}))  # fmt: skip
+
+
+def test_a_sensor_that_fell_off_is_excluded(walk):
+    n = walk.time.size
+    rng = np.random.default_rng(1)
+    lying = SensorSignals(gyr=rng.normal(0, 0.005, (n, 3)),
+                          acc=np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0, 0.02, (n, 3)),
+                          mag=walk.sensors["tibia_l_imu"].mag)  # fmt: skip
+    out, (f,) = check_sensors(walk.with_sensors({**walk.sensors, "tibia_l_imu": lying}))
+    assert (f.sensor, f.check, f.action) == ("tibia_l_imu", "moves with its segment", "excluded")
+
+
+def test_a_still_thigh_or_a_foot_on_the_floor_is_not_a_fallen_sensor(walk):
+    """Seated knee extension (the thigh still while the shank swings) gives no finding; a foot
+    still while its shank turns (a squat's foot, or a fallen one: one neighbour cannot tell) is
+    noted, not excluded."""
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.simulate.model import simulate_trial
+
+    sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
+    seated = simulate_trial(sk, "still_thigh", duration_s=12.0, seed=3)
+    rec = Recording(seated.time, 100.0, {NAMES[f]: SensorSignals(
+        gyr=i.recording.gyr, acc=i.recording.acc) for f, i in seated.imus.items()})  # fmt: skip
+    assert [f for f in check_sensors(rec)[1] if f.check == "moves with its segment"] == []
+    n = walk.time.size
+    rng = np.random.default_rng(2)
+    lying = SensorSignals(gyr=rng.normal(0, 0.005, (n, 3)),
+                          acc=np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0, 0.02, (n, 3)))
+    out, (f,) = check_sensors(walk.with_sensors({**walk.sensors, "calcn_r_imu": lying}))
+    assert (f.sensor, f.check, f.action) == ("calcn_r_imu", "moves with its segment", "noted")
+    assert "calcn_r_imu" in out.sensors
+
+
+def test_the_run_names_the_excluded_sensor_and_writes_none_of_its_joints(walk):
+    from pipeline.commands.ik import summary_text
+    from pipeline.process import process_recording
+
+    gyr = walk.sensors["tibia_r_imu"].gyr.copy()
+    gyr[:, 0] = 0.0
+    run = process_recording(_with(walk, "tibia_r_imu", gyr=gyr), SUBJECT, filter="vqf")
+    assert not any(k.startswith(("right_knee", "right_ankle")) for k in run.joint_angles)
+    assert "left_knee_flexion" in run.joint_angles
+    assert any("sensor tibia_r_imu: dead" in f for f in run.flags)
+    assert "| tibia_r_imu | dead: gyroscope axes x never change (excluded) |" in summary_text(run)
+
+
+def test_the_registry_names_every_check():
+    assert set(CHECKS) == {"dead", "saturation", "moves with its segment"}
+
+
+@pytest.mark.dataset
+def test_the_real_recordings():
+    """S02 (Xsens MTw): both shanks' gyroscopes are held at ~300 deg/s on one axis for 30 ms
+    (0.12% of the samples: noted, not excluded); x-IMU3: nothing."""
+    from pipeline.io.formats import read_recording
+
+    s02, ximu3 = DATA / "gaittoolbox_s02" / "imu", DATA / "ximu3_lower_body"
+    if not (s02.exists() and ximu3.exists()):
+        pytest.skip("../shared/data/gaittoolbox_s02 or ximu3_lower_body not present")
+    ids = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
+           "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
+           "calcn_r_imu": "00B40C48"}  # fmt: skip
+    _, findings = check_sensors(read_recording(s02, ids))
+    assert {(f.sensor, f.check, f.action) for f in findings} == {
+        ("tibia_l_imu", "saturation", "noted"), ("tibia_r_imu", "saturation", "noted")}
+    assert check_sensors(read_recording(ximu3))[1] == []
