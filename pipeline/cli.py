@@ -17,7 +17,7 @@ from pipeline.calibration.conventions import (
     JOINTS,
     METHODS,
 )
-from pipeline.cli_options import add_ik_options
+from pipeline.cli_options import PORT, add_ik_options, int_from
 from pipeline.errors import InputError, QualityError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS
@@ -113,11 +113,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "fastest, with robust losses and priors; gn (Gauss-Newton, Hu eq 7-15) is "
                    "as accurate on well-excited trials; dwpso and gwo are the paper's swarms, "
                    "kept for comparison (slower; check that they report 'determined')")  # fmt: skip
-    p.add_argument("--iterations", type=int,
+    p.add_argument("--iterations", type=int_from(1),
                    help="iteration limit (default: gn 50, ipopt 100, swarms 150 per stage)")
-    p.add_argument("--population", type=int,
+    p.add_argument("--population", type=int_from(2),
                    help="particles (dwpso) or wolves (gwo) (default 40)")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the random starts and swarms (default 0)")  # fmt: skip
     p.add_argument("--json", action="store_true",
                    help="print the result as JSON (default: a text table)")  # fmt: skip
@@ -132,7 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--standing-s", type=float, default=0.0,
                    help="seconds standing still in the neutral pose first (a calibration pose "
                    "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
 
@@ -152,8 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("manifest", type=Path, help="CSV: subject,sex,height_m,orientations and any "
                    "pipeline ik option as a column (e.g. sensor_to_model, knee, correction)")
     p.add_argument("--out", type=Path, required=True, help="output directory (required)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: one per core; "
-                   "1 runs in this process)")
+    p.add_argument("--workers", type=int_from(1),
+                   help="local worker processes (default: one per core; 1 runs in this process)")
     p.add_argument("--scheduler", help="a Dask scheduler, tcp://HOST:PORT, to run on instead "
                    "(default: local workers)")
     p.add_argument("--force", action="store_true",
@@ -174,16 +174,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--standing-s", type=float, default=0.0,
                    help="seconds standing still in the neutral pose first (a calibration pose "
                    "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the simulation (default 0)")
+    p.add_argument("--seed", type=int_from(0), default=0,
+                   help="seed of the simulation (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_demo)
 
     p = _sub(sub, "view", "open a recording in the rerun viewer")
     p.add_argument("rrd", type=Path, help=".rrd file")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 (default: the native viewer)")
-    p.add_argument("--port", type=int, default=9090,
+    p.add_argument("--port", type=PORT, default=9090,
                    help="port of the web viewer with --web (default 9090)")  # fmt: skip
-    p.add_argument("--grpc-port", type=int, default=9876,
+    p.add_argument("--grpc-port", type=PORT, default=9876,
                    help="port serving the recording's data with --web (default 9876)")  # fmt: skip
     p.set_defaults(func=_cmd_view)
     for sp in sub.choices.values():  # every option's help says whether it has a default

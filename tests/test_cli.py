@@ -279,3 +279,24 @@ def test_program_runs_blas_single_threaded_unless_told(monkeypatch):
 
     assert os.environ["OPENBLAS_NUM_THREADS"] == "1" and os.environ["MKL_NUM_THREADS"] == "1"
     assert os.environ["OMP_NUM_THREADS"] == "4"
+
+
+def test_view_refuses_what_is_not_a_whole_recording(tmp_path, capsys):
+    (tmp_path / "notes.rrd").write_text("hello")
+    assert main(["view", str(tmp_path / "notes.rrd")]) == 2
+    assert "notes.rrd: not a rerun recording" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["view", "x.rrd", "--port", "99999"], "--port: expected 1-65535, got 99999"),
+    (["simulate", "--out", "o", "--seed", "-1"], "--seed: expected 0 or more, got -1"),
+    (["calibrate", "hinge", "--imu1", "a", "--imu2", "b", "--population", "0"],
+     "--population: expected 2 or more, got 0"),
+    (["calibrate", "hinge", "--imu1", "a", "--imu2", "b", "--iterations", "-1"],
+     "--iterations: expected 1 or more, got -1"),
+    (["batch", "m.csv", "--out", "o", "--workers", "x"], "--workers: expected an integer"),
+])  # fmt: skip
+def test_counts_and_ports_out_of_range_are_one_line_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2 and message in capsys.readouterr().err

@@ -191,3 +191,25 @@ def test_the_program_writes_its_recording_through_the_early_child(tmp_path, proc
             "/plots/right_knee/flexion"} <= entities  # fmt: skip
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
     assert processes_with(str(out)) == []
+
+
+def test_a_second_run_into_the_same_folder_is_refused_or_replaces_the_first(tmp_path, capsys):
+    """Refused naming the files; with --overwrite the first run's extra files (its .osim) go."""
+    assert main(["simulate", "--out", str(tmp_path / "sim"), "--duration-s", "6",
+                 "--standing-s", "2"]) == 0  # fmt: skip
+    imu, out = tmp_path / "sim" / "imu", tmp_path / "out"
+    args = ["ik", "--orientations", str(imu), "--sex", "m", "--height-m", "1.75", "--no-rerun",
+            "--out", str(out)]  # fmt: skip
+    assert main([*args, "--osim"]) == 0
+    before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    assert "imu.osim" in before
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "a previous run's outputs are there (" in err and "imu_ik.mot" in err
+    assert "--overwrite" in err
+    assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before  # untouched
+    (out / "notes.txt").write_text("mine")
+    assert main([*args, "--overwrite"]) == 0
+    assert "imu.osim" not in {p.name for p in out.iterdir()}  # the first run's, not rewritten
+    assert (out / "notes.txt").read_text() == "mine"  # not an output of this recording
+    assert "overwrite" not in (out / "imu_config.toml").read_text()

@@ -1,6 +1,7 @@
 """pipeline.process.signals and the raw-signal path of process_recording: orientations from an
 attitude filter, on simulated trials with known truth and on the real x-IMU3 recording."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -122,3 +123,27 @@ def test_a_disturbed_magnetometer_is_not_used_and_its_heading_is_not_shared(walk
     run = process_recording(vendor, M, sensor_to_model=(-np.pi / 2, 0, 0))
     assert set(run.heading_drifts) == {"left_knee"}  # the shank aligned to its thigh
     assert run.magnetometers["tibia_l_imu"].trusted is False
+
+
+def test_the_world_of_a_recordings_own_orientations(walk):
+    """The simulator's orientations (z up, as every attitude filter's) are turned to y up from
+    the accelerometers' evidence; the same turned to y up beforehand are kept; a vendor's named
+    world is turned whatever the signals; no accelerometer, no guess."""
+    from pipeline.io.opensim import rotate_world, sensor_to_opensim_matrix
+    from pipeline.io.recording import WORLD
+    from pipeline.process.signals import Z_UP_TO_Y_UP, measured_up, world_to_model
+
+    trial, raw, quats = walk
+    rec = Recording(trial.time, 100.0, {n: raw.sensors[n].replace(quat=q)
+                                        for n, q in quats.items()})  # fmt: skip
+    np.testing.assert_allclose(measured_up(rec), [0, 0, 1], atol=0.05)
+    to_model, note = world_to_model(rec)
+    assert to_model == Z_UP_TO_Y_UP and "z up, measured by the accelerometers" in note
+    y_up = rotate_world(rec, sensor_to_opensim_matrix(Z_UP_TO_Y_UP))
+    np.testing.assert_allclose(measured_up(y_up), [0, 1, 0], atol=0.05)
+    assert world_to_model(y_up) == (None, None)
+    vendor = dataclasses.replace(y_up, header={WORLD: "xsens"})
+    assert world_to_model(vendor) == (Z_UP_TO_Y_UP, world_to_model(vendor)[1])
+    assert "Xsens MT" in world_to_model(vendor)[1]
+    no_acc = Recording(trial.time, 100.0, {n: SensorSignals(quat=q) for n, q in quats.items()})
+    assert world_to_model(no_acc) == (None, None)

@@ -208,3 +208,20 @@ def test_rerun_verifies_the_file(tmp_path):
     out = subprocess.run([exe, "rrd", "verify", str(path)], capture_output=True, text=True,
                          timeout=120)  # fmt: skip
     assert out.returncode == 0 and "verified without error" in out.stdout + out.stderr, out
+
+
+def test_rrd_problem_tells_a_whole_recording_from_others(tmp_path):
+    """A recording the writer finished, the same cut short, empty, and another file."""
+    from pipeline.viz.rrd import rrd_problem
+    from pipeline.viz.scene import log_scene
+
+    path = log_scene(tmp_path / "whole.rrd", _scene())
+    assert rrd_problem(path) is None
+    data = path.read_bytes()
+    (tmp_path / "cut.rrd").write_bytes(data[: len(data) // 2])
+    assert rrd_problem(tmp_path / "cut.rrd").startswith("cut short")
+    (tmp_path / "empty.rrd").write_bytes(b"")
+    assert rrd_problem(tmp_path / "empty.rrd") == "empty"
+    (tmp_path / "notes.rrd").write_text("hello")
+    assert rrd_problem(tmp_path / "notes.rrd").startswith("not a rerun recording")
+    assert rrd_problem(tmp_path) == "not a file"

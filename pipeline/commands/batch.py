@@ -168,7 +168,7 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
                   out_dir=str(folder))  # fmt: skip
     t0 = time.perf_counter()
     values = {k: v for k, v in row.items() if k not in ("row", "line", "subject", "config")}
-    values["out"] = str(folder)
+    values.update(out=str(folder), overwrite=True)  # a row's folder is the batch's own
     try:
         settings = resolve_settings(row.get("config"), values)
         if not force and _done(folder, name, settings):

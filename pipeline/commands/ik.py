@@ -13,13 +13,14 @@ calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md``, ``<name>_
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from pipeline.calibration.conventions import DEFAULT_FILTER
-from pipeline.errors import QualityError
+from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.formats import read_recording
 from pipeline.io.mot import write_mot
@@ -107,6 +108,11 @@ def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
         static = load_orientations(inputs.static_trial, inputs.sensor_map, inputs.ignore)
     name = recording_name(orientations)
     output_dir(out_dir, create=False)
+    previous = previous_outputs(out_dir, name)
+    if previous and not outputs.overwrite:
+        names = ", ".join(p.name for p in previous)
+        raise InputError(f"a previous run's outputs are there ({names}): give another --out, "
+                         "or --overwrite to replace them", file=out_dir, field="out")
     background = outputs.rerun and trial.n_samples <= BACKGROUND_FRAMES
     if recorder is not None and not background:
         recorder.close()  # a long recording logs here (one process bounds the memory)
@@ -128,7 +134,20 @@ def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
     finally:
         if worker is not None:
             worker.close()
+    for stale in set(previous) - set(out.destinations):  # the previous run's, not rewritten
+        stale.unlink(missing_ok=True)
     return run
+
+
+#: Every file ``pipeline ik`` may write for a recording ``<name>``.
+OUTPUT_SUFFIXES = (".rrd", ".urdf", "_ik.mot", "_landmarks.csv", ".osim", "_summary.md",
+                   "_config.toml", "_figures.json")  # fmt: skip
+
+
+def previous_outputs(out_dir: Path, name: str) -> list[Path]:
+    """The files (or links) of :data:`OUTPUT_SUFFIXES` for ``name`` already in ``out_dir``."""
+    found = [out_dir / f"{name}{s}" for s in OUTPUT_SUFFIXES]
+    return [Path(os.path.abspath(p)) for p in found if p.is_symlink() or p.exists()]
 
 
 #: Recordings up to this many frames are logged by a forked child

@@ -204,6 +204,10 @@ class OutputOptions:
                          "out)")  # fmt: skip
     osim: bool = option(False, "bool", "also write <name>.osim, an OpenSim model whose "
                         "coordinates are the .mot's columns")  # fmt: skip
+    overwrite: bool = option(False, "bool", "replace a previous run's outputs of the same "
+                             "recording in --out, removing its files of that name first (e.g. "
+                             "an old .osim or .rrd); without it such a run is refused, naming "
+                             "the files")  # fmt: skip
     strict: bool = option(False, "bool", "implausible results (e.g. a large orientation "
                           "residual) exit with code 3 and write nothing (otherwise they are "
                           "flagged in the summary and on stderr)")  # fmt: skip
@@ -275,17 +279,21 @@ def resolve_settings(config: str | Path | None, values: Mapping[str, object]) ->
         raise
 
 
+#: Options that say where and how to write, not what the run computes: not in ``_config.toml``.
+NOT_RECORDED = ("out", "overwrite")
+
+
 def settings_text(settings: IKSettings, header: str = "") -> str:
     """The resolved configuration as TOML text (every option with the value used, absolute
     paths; unset optional values left out): ``pipeline ik --config`` with it reproduces the run
-    (the output folder is not written: ``--out`` names it)."""
+    (the output folder and ``overwrite`` are not written: :data:`NOT_RECORDED`)."""
     from pipeline.io.config import config_text
     from pipeline.option import to_toml
 
     doc: dict[str, dict[str, object]] = {"subject": {}, "sensors": {}, "ik": {}}
     for group in (settings.subject, settings.inputs, settings.options, settings.outputs):
         for s in specs(type(group)):
-            if s.name == "out":
+            if s.name in NOT_RECORDED:
                 continue
             v = to_toml(s, getattr(group, s.name))
             if v is None:

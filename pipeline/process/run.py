@@ -57,7 +57,7 @@ from pipeline.errors import InputError
 from pipeline.ik.bounds import remove_limits
 from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
-from pipeline.io.recording import WORLD, Z_UP_WORLDS, Recording
+from pipeline.io.recording import Recording
 from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
@@ -75,7 +75,7 @@ from pipeline.process.pose import (
 from pipeline.process.posture import Posture, lean_pose, standing_posture
 from pipeline.process.sensor_checks import Finding, check_sensors
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
-from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals
+from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
 from pipeline.rotations import (
     euler_zxy_from_matrix,
     matrix_from_quat,
@@ -262,10 +262,9 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
                              "filter's world is z up and is turned to y up already",
                              file=trial.source, field="sensor_to_model")  # fmt: skip
         to_model = Z_UP_TO_Y_UP
-    elif to_model is None and trial.header.get(WORLD) in Z_UP_WORLDS:
-        to_model = Z_UP_TO_Y_UP
-        notes.append(f"the orientations' world: {Z_UP_WORLDS[trial.header[WORLD]]} (the vendor's "
-                     "format), turned to y up (no --sensor-to-model needed)")  # fmt: skip
+    elif to_model is None:
+        to_model, note = world_to_model(trial)
+        notes += [note] if note else []
     world = np.eye(3)
     if to_model is not None:
         world = sensor_to_opensim_matrix(to_model)

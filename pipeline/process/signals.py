@@ -33,7 +33,8 @@ from pipeline.io.recording import Recording
 from pipeline.process.sensors import known_segments
 from pipeline.rotations import matrix_from_quat
 
-__all__ = ["Z_UP_TO_Y_UP", "Orientations", "orientations_from_signals"]
+__all__ = ["Z_UP_TO_Y_UP", "Orientations", "measured_up", "orientations_from_signals",
+           "world_to_model"]
 
 #: ``sensor_to_model`` of a z-up world (space-fixed XYZ angles, rad), as OpenSense's for Xsens.
 Z_UP_TO_Y_UP = (-float(np.pi) / 2, 0.0, 0.0)
@@ -117,3 +118,52 @@ def orientations_from_signals(
                  + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
     shared = frozenset(n for n, d in dims.items() if d == "9-D")
     return Orientations(trial.with_sensors(sensors), filtered, shared, fields)
+
+
+#: A measured up axis is accepted within this angle (deg) of a world axis.
+UP_TOLERANCE_DEG = 20.0
+
+
+def measured_up(rec: Recording) -> np.ndarray | None:
+    """The world's up axis measured from the recording's own orientations and accelerometers:
+    the median over every sensor's samples near 1 g of ``R(q) a / |a|`` (at rest and on average
+    in motion the specific force points up), normalised; None without both signals."""
+    ups = []
+    for s in rec.sensors.values():
+        if s.quat is None or s.acc is None:
+            continue
+        a = np.nan_to_num(np.asarray(s.acc, float))
+        norm = np.linalg.norm(a, axis=1)
+        calm = np.abs(norm - 9.81) < 0.15 * 9.81
+        if np.sum(calm) < 10:
+            continue
+        up = np.einsum("nij,nj->ni", matrix_from_quat(s.quat[calm]), a[calm] / norm[calm, None])
+        ups.append(np.median(up, axis=0))
+    if not ups:
+        return None
+    up = np.median(ups, axis=0)
+    return up / max(float(np.linalg.norm(up)), 1e-12)
+
+
+def world_to_model(rec: Recording) -> tuple[tuple[float, float, float] | None, str | None]:
+    """How a recording's own orientations reach the model's y-up world without a
+    ``sensor_to_model`` of the user's: ``(sensor_to_model, note)``. A vendor's world the reader
+    named (``header[WORLD]``, :data:`~pipeline.io.recording.Z_UP_WORLDS`) is turned to y up; else
+    the up axis measured by the accelerometers (:func:`measured_up`) decides: z up is turned, y up
+    kept; anything else (or no accelerometer) is left as it is (``(None, None)``) for the vertical
+    check to refuse with a hint."""
+    from pipeline.io.recording import WORLD, Z_UP_WORLDS
+
+    vendor = rec.header.get(WORLD)
+    if vendor in Z_UP_WORLDS:
+        return Z_UP_TO_Y_UP, (f"the orientations' world: {Z_UP_WORLDS[vendor]} (the vendor's "
+                              "format), turned to y up (no --sensor-to-model needed)")  # fmt: skip
+    up = measured_up(rec)
+    if up is None:
+        return None, None
+    close = np.cos(np.radians(UP_TOLERANCE_DEG))
+    if up[2] > close:
+        return Z_UP_TO_Y_UP, ("the orientations' world: z up, measured by the accelerometers "
+                              f"(up {np.round(up, 2).tolist()}), turned to y up (no "
+                              "--sensor-to-model needed)")  # fmt: skip
+    return None, None

@@ -28,7 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["RERUN_VERSION", "Layout", "RrdWriter", "check_version", "pack_colors", "warm"]
+__all__ = ["RERUN_VERSION", "Layout", "RrdWriter", "check_version", "pack_colors", "rrd_problem",
+           "warm"]
 
 #: The rerun-sdk release series whose component descriptors ``_FIELDS`` holds.
 RERUN_VERSION = "0.41"
@@ -319,3 +320,34 @@ def warm() -> None:
             size = _FIXED.get(kind, ("", 1))[1]
             value = np.zeros((2, 2, 3)) if kind == "strip" else np.zeros((2, size))
             _arrow(kind, ["a", "b"] if kind == "text" else value)
+
+
+#: An ``.rrd`` stream: the magic, 4 version bytes and 4 option bytes, then messages, each a
+#: little-endian ``(kind: u64, length: u64)`` header and its payload; kind 0 ends the stream (its
+#: payload, the footer, and a trailer follow).
+RRD_MAGIC = b"RRF2"
+_STREAM_HEAD = 12
+
+
+def rrd_problem(path: str | Path) -> str | None:
+    """What makes ``path`` not a whole rerun recording (not a file, empty, not a recording, cut
+    short), or None: its messages are walked to the end-of-stream message without reading them."""
+    import struct
+
+    path = Path(path)
+    if not path.is_file():
+        return "not a file"
+    size = path.stat().st_size
+    with path.open("rb") as f:
+        if f.read(4) != RRD_MAGIC:
+            if size == 0:
+                return "empty"
+            return f"not a rerun recording (it does not start with {RRD_MAGIC!r})"
+        at = _STREAM_HEAD
+        while at + 16 <= size:
+            f.seek(at)
+            kind, length = struct.unpack("<QQ", f.read(16))
+            at += 16 + length
+            if kind == 0:
+                return None if at <= size else "cut short (its footer is incomplete)"
+    return "cut short (no end-of-stream message: a recording that was still being written?)"
