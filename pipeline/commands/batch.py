@@ -45,8 +45,12 @@ __all__ = ["REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "option_columns", "read_manife
            "run_row"]  # fmt: skip
 
 REQUIRED_COLUMNS = ("subject", "sex", "height_m", "orientations")
+#: The strides' means per trial (both sides; empty without strides).
+STRIDE_COLUMNS = ("strides", "stride_time_s", "stride_length_m", "speed_m_s", "cadence_steps_min",
+                  "stance_share")  # fmt: skip
 SUMMARY_COLUMNS = ("row", "subject", "orientations", "status", "message", "frames",
-                   "residual_median_deg", "flags", "seconds", "out_dir")  # fmt: skip
+                   "residual_median_deg", "flags", *STRIDE_COLUMNS, "seconds",
+                   "out_dir")  # fmt: skip
 _OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml", "_figures.json")
 #: Seconds to wait for a Dask scheduler's answer.
 CONNECT_TIMEOUT_S = 10
@@ -208,16 +212,20 @@ def _done(folder: Path, name: str, settings) -> bool:
 
 
 def _figures(path: Path) -> dict[str, str]:
-    """Frames, median residual and the number of flags, from a run's ``_figures.json``."""
+    """Frames, median residual, the number of flags and the strides' means, from a run's
+    ``_figures.json``."""
     import json
 
     try:
         fig = json.loads(path.read_text(encoding="utf-8"))
-        return {"frames": str(fig["frames"]),
-                "residual_median_deg": f"{fig['residual_median_deg']:.2f}",
-                "flags": str(len(fig["flags"]))}  # fmt: skip
+        out = {"frames": str(fig["frames"]),
+               "residual_median_deg": f"{fig['residual_median_deg']:.2f}",
+               "flags": str(len(fig["flags"])), "strides": str(fig.get("strides", ""))}
+        for c in STRIDE_COLUMNS[1:]:
+            out[c] = "" if fig.get(c) is None else f"{fig[c]:.4g}"
+        return out
     except (OSError, ValueError, KeyError, TypeError):
-        return {"frames": "", "residual_median_deg": "", "flags": ""}
+        return dict.fromkeys(("frames", "residual_median_deg", "flags", *STRIDE_COLUMNS), "")
 
 
 def run_batch(

@@ -6,8 +6,10 @@ folder of Xsens MT ``.txt`` exports, raw IMU files), runs
 (OpenSim coordinate names, degrees), ``<name>_landmarks.csv`` (m), ``<name>.urdf`` (with the
 calibrated IMU frames), ``<name>.rrd`` (rerun), ``<name>_summary.md``, ``<name>_config.toml``
 (the resolved configuration: ``pipeline ik --config`` with it reproduces the ``.mot``),
-``<name>_figures.json`` (the run's figures, :func:`figures_json`) and, with ``osim``,
-``<name>.osim`` (:mod:`pipeline.model.osim`).
+``<name>_figures.json`` (the run's figures, :func:`figures_json`), ``<name>_strides.csv`` when the
+recording has strides (:mod:`pipeline.analysis.strides`) and, with ``osim``, ``<name>.osim``
+(:mod:`pipeline.model.osim`). A previous run's outputs of the same name are refused unless
+``overwrite`` (:data:`OUTPUT_SUFFIXES`).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.analysis.strides import stride_table, strides_csv
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
@@ -141,7 +144,7 @@ def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
 
 #: Every file ``pipeline ik`` may write for a recording ``<name>``.
 OUTPUT_SUFFIXES = (".rrd", ".urdf", "_ik.mot", "_landmarks.csv", ".osim", "_summary.md",
-                   "_config.toml", "_figures.json")  # fmt: skip
+                   "_config.toml", "_figures.json", "_strides.csv")  # fmt: skip
 
 
 def previous_outputs(out_dir: Path, name: str) -> list[Path]:
@@ -177,6 +180,9 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
         with out.open(out_dir / f"{name}.osim") as fh:
             fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
                                name=name))  # fmt: skip
+    if run.gait.strides:
+        with out.open(out_dir / f"{name}_strides.csv") as fh:
+            fh.write(strides_csv(run.gait.strides))
     with out.open(out_dir / f"{name}_summary.md") as fh:
         fh.write(summary_text(run))
     with out.open(out_dir / f"{name}_config.toml") as fh:
@@ -205,8 +211,21 @@ def figures_json(run: IKRun) -> str:
     fig = {"frames": int(len(run.time)), "duration_s": float(run.time[-1] - run.time[0]),
            "residual_median_deg": float(np.nanmedian(res)),
            "residual_p95_deg": float(np.nanpercentile(res, 95)),
-           "flags": list(run.flags), "joints": list(run.sensors.joints)}  # fmt: skip
+           "flags": list(run.flags), "joints": list(run.sensors.joints),
+           "strides": len(run.gait.strides), **_stride_means(run)}  # fmt: skip
     return json.dumps(fig, indent=1) + "\n"
+
+
+#: The strides' means (both sides) that ``_figures.json`` and ``batch_summary.csv`` list.
+STRIDE_FIGURES = ("stride_time_s", "stride_length_m", "speed_m_s", "cadence_steps_min",
+                  "stance_share")  # fmt: skip
+
+
+def _stride_means(run: IKRun) -> dict[str, float | None]:
+    from pipeline.analysis.strides import stride_summary
+
+    both = stride_summary(run.gait.strides)["both"]
+    return {c: (float(both[c][0]) if both[c][2] else None) for c in STRIDE_FIGURES}
 
 
 def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
@@ -307,6 +326,10 @@ def summary_text(run: IKRun) -> str:
                          f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
                          f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")  # fmt: skip
         lines.append("")
+    if run.gait.strides:
+        sources = "; ".join(f"{side}: {src}" for side, src in run.gait.sources.items())
+        lines += ["", f"Strides (`<name>_strides.csv`; events and foot paths from {sources}):",
+                  "", *stride_table(run.gait.strides), ""]  # fmt: skip
     if not any(j.endswith("_ankle") for j in run.sensors.joints):
         lines.append("- no foot sensors: the ankle is held neutral and not reported")
     lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]

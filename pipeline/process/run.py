@@ -63,6 +63,7 @@ from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
+from pipeline.process.gait import Gait, gait_of
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import KneeInputs, apply_correction, choose_correction
 from pipeline.process.options import IKOptions, InputOptions
@@ -120,8 +121,7 @@ class IKRun:
     signals here, else None; ``measures``: the subject; ``source``: the recording's file or
     folder; ``inputs``: what ``pipeline ik`` read (None from the Python API);
     ``sensor_findings``: the sensor check's :class:`~pipeline.process.sensor_checks.Finding` s
-    (each also a flag).
-    """
+    (each also a flag); ``gait``: events and strides (:class:`~pipeline.process.gait.Gait`)."""
 
     time: np.ndarray
     q: np.ndarray
@@ -147,6 +147,7 @@ class IKRun:
     source: Path | None = None
     inputs: InputOptions | None = None
     sensor_findings: list[Finding] = field(default_factory=list)
+    gait: Gait = field(default_factory=Gait)
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -173,6 +174,7 @@ def process_recording(
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
     notes = list(trial.notes)
     trial, findings = check_sensors(trial)
+    gait = gait_of(trial, notes)
     trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
     filtered = oriented.filtered
     rotations, sensors = _segment_rotations(trial, notes)
@@ -235,7 +237,7 @@ def process_recording(
     return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
                  drifts, filtered, oriented.magnetometers, posture, measures,
-                 trial.source, sensor_findings=findings)  # fmt: skip
+                 trial.source, sensor_findings=findings, gait=gait)  # fmt: skip
 
 
 def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:

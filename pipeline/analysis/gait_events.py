@@ -1,0 +1,165 @@
+"""Gait events from one foot's (or shank's) gyroscope and accelerometer.
+
+**Rest** (mid-stance, the foot flat and still): samples whose angular speed stays below
+:data:`REST_GYRO` and whose specific force stays within :data:`REST_ACC` of 1 g over a
+:data:`REST_WINDOW_S` window, the stance-phase detector of zero-velocity-aided foot navigation
+(Skog et al. 2010, IEEE TBME 57(11), the "angular rate energy" and "acceleration moving variance"
+tests), kept when it lasts :data:`MIN_REST_S`.
+
+**Contacts** from the sagittal angular velocity ``w`` (the gyroscope projected on its principal
+axis over the moving samples, the foot's flexion axis). Between two rests the foot turns one way
+in push-off (the heel rising), the other way through the swing, and back at the heel strike
+(foot flat): the swing is the lobe of ``w`` (a run of one sign) that turns the foot furthest, and
+``w`` is signed so that it is positive. **Final contact** (FC, toe-off) is the fastest push-off
+rotation, the minimum of ``w`` before the swing lobe (as Rampp et al. 2015, IEEE TBME 62(4)),
+**initial contact** (IC) where the swing lobe ends (``w`` crosses zero downwards, interpolated
+between samples: the foot stops turning up as the heel lands). Measured on S02 against the
+Vicon heel and toe markers (Zeni et al. 2008's events): :file:`results/bench_gait.txt`. A
+movement between two rests counts as a swing
+only when its peak exceeds :data:`MIN_SWING_RATE`; standing still, shuffling or turning on the
+spot gives no event. A shank sensor never rests in stance: its swings are the peaks of ``w``
+and its contacts the minima within :data:`CONTACT_SEARCH_S` before and after each peak
+(Salarian et al. 2004, IEEE TBME 51(8)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.filtering import lowpass
+
+__all__ = ["SEGMENTS", "GaitEvents", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events",
+           "rest_periods", "sagittal_rate"]  # fmt: skip
+
+#: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
+#: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
+REST_GYRO = 0.5
+REST_ACC = 1.5
+REST_WINDOW_S = 0.05
+MIN_REST_S = 0.05
+#: A swing's mid-swing peak of the sagittal rate (rad/s; feet reach 5-12 in walking).
+MIN_SWING_RATE = 2.0
+G = 9.81
+
+
+@dataclass(frozen=True)
+class GaitEvents:
+    """One foot's events: ``rests`` (k, 2) ``[start, stop)`` sample ranges of each rest, the
+    swing peaks' samples ``swing``, and per swing ``fc`` before and ``ic`` after it (fractional
+    sample indices);
+    ``axis``: the sagittal axis in the sensor frame (unit, mid-swing positive)."""
+
+    rests: np.ndarray
+    swing: np.ndarray
+    ic: np.ndarray
+    fc: np.ndarray
+    axis: np.ndarray
+
+
+def _moving_max(x: np.ndarray, n: int) -> np.ndarray:
+    """The largest value within ``n`` samples centred on each sample."""
+    pad = np.pad(x, (n // 2, n - 1 - n // 2), mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, n)
+    return windows.max(axis=1)
+
+
+def rest_periods(gyr: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray:
+    """``(k, 2)`` ``[start, stop)`` sample ranges of rest (module docstring)."""
+    n = max(1, int(round(REST_WINDOW_S * rate_hz)))
+    speed = _moving_max(np.linalg.norm(np.nan_to_num(gyr), axis=1), n)
+    force = _moving_max(np.abs(np.linalg.norm(np.nan_to_num(acc), axis=1) - G), n)
+    still = (speed < REST_GYRO) & (force < REST_ACC)
+    edges = np.diff(np.concatenate([[0], still.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    keep = stops - starts >= max(2, int(round(MIN_REST_S * rate_hz)))
+    return np.column_stack([starts[keep], stops[keep]]).astype(int).reshape(-1, 2)
+
+
+def _runs(w: np.ndarray) -> list[tuple[int, int]]:
+    """``[start, stop)`` of each run of one sign of ``w``."""
+    cuts = np.flatnonzero(np.diff(np.sign(w)) != 0) + 1
+    bounds = np.concatenate([[0], cuts, [len(w)]])
+    return list(zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True))
+
+
+def _swing_lobe(w: np.ndarray, a: int, b: int) -> tuple[int, int, float]:
+    """The run of one sign within ``[a, b)`` with the largest turn: ``(start, stop, turn)``."""
+    runs = [(a + i, a + j, float(np.sum(w[a + i:a + j]))) for i, j in _runs(w[a:b])]
+    return max(runs, key=lambda r: abs(r[2]))
+
+
+def sagittal_rate(gyr: np.ndarray, rests: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(w, axis)``: the gyroscope on its principal axis over the samples out of rest, signed so
+    that the swings (the largest turn between two rests; without rests, the largest peak) are
+    positive."""
+    moving = np.ones(len(gyr), dtype=bool)
+    for a, b in rests:
+        moving[a:b] = False
+    g = np.nan_to_num(gyr)
+    sample = g[moving] if moving.sum() >= 10 else g
+    _, _, vt = np.linalg.svd(sample - sample.mean(axis=0), full_matrices=False)
+    axis = vt[0]
+    w = g @ axis
+    turns = [_swing_lobe(w, a, b)[2] for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True)
+             if b - a >= 3]  # fmt: skip
+    if turns:
+        flip = np.sum(np.sign(turns)) < 0
+    else:
+        flip = w[moving].max(initial=0.0) < -w[moving].min(initial=0.0)
+    return (-w, -axis) if flip else (w, axis)
+
+
+def _crossing(w: np.ndarray, k: int) -> float:
+    """The zero crossing of ``w`` between samples ``k - 1`` and ``k`` (interpolated)."""
+    if k <= 0 or k >= len(w) or w[k - 1] == w[k]:
+        return float(k)
+    return k - 1 + float(w[k - 1] / (w[k - 1] - w[k]))
+
+
+#: Without rests (a shank sensor: the shank turns through stance), each swing peak's contacts
+#: are searched within this many seconds of it (a swing lasts ~0.4 s).
+CONTACT_SEARCH_S = 0.35
+
+
+def _shank_events(w: np.ndarray, rate_hz: float):
+    from scipy.signal import find_peaks
+
+    peaks, _ = find_peaks(w, height=MIN_SWING_RATE, distance=max(1, int(0.6 * rate_hz)))
+    reach = int(CONTACT_SEARCH_S * rate_hz)
+    fc = [max(0, p - reach) + int(np.argmin(w[max(0, p - reach):p])) for p in peaks if p > 0]
+    ic = [p + int(np.argmin(w[p:p + reach + 1])) for p in peaks if p > 0]
+    return peaks[peaks > 0], np.asarray(ic, float), np.asarray(fc, float)
+
+
+#: The segments whose sensor gives events: a foot's rests in stance, a shank's swing peaks.
+SEGMENTS = ("foot", "shank")
+
+
+def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
+                segment: str = "foot") -> GaitEvents:  # fmt: skip
+    """Rests, swings and contacts of a ``segment`` (:data:`SEGMENTS`) sensor (module
+    docstring), event times in fractional samples."""
+    if segment not in SEGMENTS:
+        raise ValueError(f"segment {segment!r}: expected one of {SEGMENTS}")
+    rests = rest_periods(gyr, acc, rate_hz)
+    if segment == "shank":
+        w, axis = sagittal_rate(gyr, np.zeros((0, 2), int))
+        swing, ic, fc = _shank_events(lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz)), rate_hz)
+        return GaitEvents(rests, np.asarray(swing, int), ic, fc, axis)
+    w, axis = sagittal_rate(gyr, rests)
+    w = lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
+    swing, ic, fc = [], [], []
+    for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
+        if b - a < 3:
+            continue
+        start, stop, turn = _swing_lobe(w, a, b)
+        peak = start + int(np.argmax(w[start:stop]))
+        if turn <= 0 or w[peak] < MIN_SWING_RATE or start == a or stop == b:
+            continue
+        swing.append(peak)
+        fc.append(float(a + np.argmin(w[a:start])))
+        ic.append(_crossing(w, stop))
+    return GaitEvents(rests, np.asarray(swing, int), np.asarray(ic, float), np.asarray(fc, float),
+                      axis)  # fmt: skip

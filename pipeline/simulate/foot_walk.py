@@ -1,0 +1,114 @@
+"""A foot sensor walking through the room, with known events, strides and path.
+
+Each stride of period ``T`` (from an initial contact, IC) turns the foot about its lateral axis
+in three raised-cosine lobes of angular velocity: the loading response (``[0, 0.1 T]``, the foot
+turning flat from ``+20 deg``), the push-off (``[0.45 T, 0.75 T]``, ``-40 deg``, fastest at the
+final contact FC ``= 0.6 T``) and the swing (``[0.75 T, T]``, ``+60 deg``, ending at the next IC);
+the foot rests flat in ``[0.1 T, 0.45 T]``. Between FC and the next IC the foot moves forward by
+the stride length on a minimum-jerk path (Flash & Hogan 1985), lifted by the clearance on a
+``sin^2`` profile, and turns by the stride's turn about the vertical. The sensor is mounted at a
+random orientation; its gyroscope and specific force are exact with white noise added. The walk
+starts and ends standing. What :mod:`pipeline.analysis.gait_events`,
+:mod:`pipeline.analysis.foot_trajectory` and :mod:`pipeline.analysis.strides` must recover.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.rotations import exp3, rot_z
+
+__all__ = ["FootWalk", "foot_walk"]
+
+G = 9.81
+#: The lobes of the sagittal rate: (start, end, turn in deg) as shares of the stride.
+LOBES = ((0.0, 0.1, -20.0), (0.45, 0.75, -40.0), (0.75, 1.0, 60.0))
+FC_SHARE = 0.6
+
+
+@dataclass(frozen=True)
+class FootWalk:
+    """Signals (``gyr`` rad/s, ``acc`` m/s^2, sensor frame) at ``rate_hz`` and the truth: ``ic``
+    and ``fc`` times (s), the foot's ``position`` (N, 3; z up) and per stride its ``length`` (m)
+    and ``turn_deg``."""
+
+    time: np.ndarray
+    rate_hz: float
+    gyr: np.ndarray
+    acc: np.ndarray
+    ic: np.ndarray
+    fc: np.ndarray
+    position: np.ndarray
+    length: np.ndarray
+    turn_deg: np.ndarray
+
+
+def _bump(s: np.ndarray) -> np.ndarray:
+    """A raised cosine on ``[0, 1]`` with unit integral (zero outside)."""
+    inside = (s >= 0) & (s <= 1)
+    return np.where(inside, 1.0 - np.cos(2 * np.pi * np.clip(s, 0, 1)), 0.0)
+
+
+def _bump_integral(s: np.ndarray) -> np.ndarray:
+    """The integral of :func:`_bump` from 0 to ``s`` (0 before, 1 after)."""
+    c = np.clip(s, 0, 1)
+    return c - np.sin(2 * np.pi * c) / (2 * np.pi)
+
+
+def _min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum-jerk position and second derivative (per unit duration^2) on ``[0, 1]``."""
+    s = np.clip(s, 0, 1)
+    return 10 * s**3 - 15 * s**4 + 6 * s**5, 60 * s - 180 * s**2 + 120 * s**3
+
+
+def foot_walk(strides: int = 8, stride_time_s: float = 1.1, length_m: float = 1.3,
+              clearance_m: float = 0.12, turns_deg: tuple[float, ...] = (), rate_hz: float = 100.0,
+              standing_s: float = 2.0, seed: int = 0) -> FootWalk:  # fmt: skip
+    """A walk of ``strides`` strides (module docstring); ``turns_deg[k]`` turns stride ``k``."""
+    rng = np.random.default_rng(seed)
+    T, dt = stride_time_s, 1.0 / rate_hz
+    t0 = standing_s - 0.1 * T  # the first lobe: the loading response of an IC at t0
+    n = int(round((t0 + strides * T + 0.1 * T + standing_s) * rate_hz))
+    time = np.arange(n) * dt
+    pitch_rate, pitch = np.zeros(n), np.zeros(n)
+    yaw_rate, yaw_angle = np.zeros(n), np.zeros(n)
+    pos, acc_w = np.zeros((n, 3)), np.zeros((n, 3))
+    ic = t0 + T * np.arange(strides + 1)
+    turns = np.zeros(strides)
+    turns[: len(turns_deg)] = turns_deg[:strides]
+    heading, base = 0.0, np.zeros(2)
+    for k in range(strides + 1):
+        for a, b, turn in LOBES:
+            if k == strides and a > 0:  # the last IC: its loading response only
+                break
+            s = (time - ic[k] - a * T) / ((b - a) * T)
+            pitch_rate += np.radians(turn) * _bump(s) / ((b - a) * T)
+            pitch += np.radians(turn) * _bump_integral(s)
+        if k == strides:
+            break
+        d = (1 - FC_SHARE) * T
+        s = (time - ic[k] - FC_SHARE * T) / d
+        x, xdd = _min_jerk(s)
+        swing = (s >= 0) & (s <= 1)
+        yaw = np.radians(turns[k])
+        step = length_m * np.array([np.cos(heading + yaw / 2), np.sin(heading + yaw / 2)])
+        pos[:, :2] += np.where(s[:, None] > 1, step, x[:, None] * step * (s[:, None] >= 0))
+        acc_w[:, :2] += np.where(swing[:, None], xdd[:, None] * step / d**2, 0.0)
+        pos[:, 2] += np.where(swing, clearance_m * np.sin(np.pi * s) ** 2, 0.0)
+        acc_w[:, 2] += np.where(swing, clearance_m * 2 * (np.pi / d) ** 2 * np.cos(2 * np.pi * s),
+                                0.0)  # fmt: skip
+        yaw_rate += yaw * _bump(s) / d
+        yaw_angle += yaw * _bump_integral(s)
+        heading += yaw
+        base += step
+    mount = exp3(rng.normal(size=3) * 0.6)
+    R_foot = rot_z(yaw_angle) @ np.stack([exp3(np.array([0.0, p, 0.0])) for p in pitch])
+    R = R_foot @ mount
+    w_world = yaw_rate[:, None] * np.array([0.0, 0.0, 1.0]) + np.einsum(
+        "nij,j->ni", rot_z(yaw_angle), np.array([0.0, 1.0, 0.0])) * pitch_rate[:, None]
+    gyr = np.einsum("nji,nj->ni", R, w_world) + rng.normal(0, 0.01, (n, 3))
+    acc = np.einsum("nji,nj->ni", R, acc_w + [0.0, 0.0, G]) + rng.normal(0, 0.05, (n, 3))
+    return FootWalk(time, rate_hz, gyr, acc, ic, ic[:-1] + FC_SHARE * T, pos,
+                    np.full(strides, length_m), turns)  # fmt: skip

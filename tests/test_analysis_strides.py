@@ -1,0 +1,69 @@
+"""pipeline.analysis.strides: stride parameters of the simulated foot (known truth), the CSV's
+exact columns and the summary."""
+
+import csv
+import io
+
+import numpy as np
+
+from pipeline.analysis.foot_trajectory import foot_trajectory
+from pipeline.analysis.gait_events import GaitEvents, gait_events
+from pipeline.analysis.strides import (
+    STRIDE_COLUMNS,
+    foot_strides,
+    stride_summary,
+    stride_table,
+    strides_csv,
+)
+from pipeline.simulate.foot_walk import foot_walk
+
+
+def _strides(**kw):
+    w = foot_walk(**kw)
+    ev = gait_events(w.gyr, w.acc, w.rate_hz)
+    return w, foot_strides("left", w.time, ev, foot_trajectory(w.gyr, w.acc, w.rate_hz,
+                                                                ev.rests))  # fmt: skip
+
+
+def test_the_simulated_strides():
+    w, strides = _strides(strides=7, stride_time_s=1.2, length_m=1.4, clearance_m=0.1,
+                          turns_deg=(0, 0, 70), seed=4)  # fmt: skip
+    assert len(strides) == 6  # 7 swings: 7 detected ICs, 6 strides between them
+    for s in strides:
+        assert abs(s.stride_time_s - 1.2) < 0.005 and abs(s.cadence_steps_min - 100.0) < 0.5
+        assert abs(s.stance_share - 0.6) < 0.01 and abs(s.stride_length_m - 1.4) < 0.02
+        assert abs(s.speed_m_s - 1.4 / 1.2) < 0.02 and abs(s.clearance_m - 0.1) < 0.03
+    turns = [round(s.turn_deg) for s in strides]
+    assert turns[1] == 70 and all(abs(t) <= 1 for i, t in enumerate(turns) if i != 1)
+    assert [s.straight for s in strides] == [True, False, True, True, True, True]
+
+
+def test_a_pause_is_no_stride_and_a_shank_has_no_length():
+    t = np.arange(1000) / 100.0
+    ev = GaitEvents(np.zeros((0, 2), int), np.array([150, 260, 800]),
+                    np.array([200.0, 310.0, 900.0]), np.array([140.0, 250.0, 790.0]),
+                    np.array([0.0, 1.0, 0.0]))  # fmt: skip
+    (s,) = foot_strides("right", t, ev, None)  # 3.1 -> 9.0 s is a pause, not a stride
+    assert (s.start_s, s.end_s) == (2.0, 3.1) and abs(s.stance_share - 0.5 / 1.1) < 1e-9
+    assert np.isnan(s.stride_length_m) and np.isnan(s.turn_deg) and s.straight is False
+
+
+def test_the_csv_has_exactly_the_issues_columns():
+    _, strides = _strides(strides=4, seed=1)
+    rows = list(csv.reader(io.StringIO(strides_csv(strides))))
+    assert tuple(rows[0]) == STRIDE_COLUMNS == (
+        "side", "start_s", "end_s", "stride_time_s", "stance_share", "stride_length_m",
+        "speed_m_s", "cadence_steps_min", "clearance_m", "turn_deg", "straight")  # fmt: skip
+    assert len(rows) == 1 + len(strides) and {r[0] for r in rows[1:]} == {"left"}
+    assert {r[-1] for r in rows[1:]} == {"true"}
+    assert abs(float(rows[1][5]) - 1.3) < 0.02
+
+
+def test_the_summary_by_side():
+    _, left = _strides(strides=4, seed=1)
+    summary = stride_summary(left)
+    mean, sd, n = summary["left"]["stride_length_m"]
+    assert n == 3 and abs(mean - 1.3) < 0.02 and sd < 0.01
+    assert summary["right"]["stride_length_m"][2] == 0
+    text = "\n".join(stride_table(left))
+    assert "| stride length (m) |  | 1.30 ± 0.00 | 1.30 ± 0.00 |" in text

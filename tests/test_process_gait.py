@@ -1,0 +1,74 @@
+"""pipeline.process.gait: which sensor gives each leg's strides, and what is said when none does
+(the simulated foot walk placed on both feet and shanks; the S02 walk through pipeline ik)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.process.gait import gait_of
+from pipeline.simulate.foot_walk import foot_walk
+
+S02 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "gaittoolbox_s02"
+
+
+def _rec(names):
+    w = foot_walk(strides=5, seed=0)
+    return Recording(w.time, w.rate_hz, {n: SensorSignals(gyr=w.gyr, acc=w.acc) for n in names})
+
+
+def test_feet_give_strides_with_lengths():
+    notes = []
+    gait = gait_of(_rec(["calcn_r_imu", "calcn_l_imu"]), notes)
+    assert gait.sources == {"right": "foot sensor calcn_r_imu", "left": "foot sensor calcn_l_imu"}
+    assert len(gait.strides) == 8 and notes == []
+    assert [s.start_s for s in gait.strides] == sorted(s.start_s for s in gait.strides)
+    assert all(abs(s.stride_length_m - 1.3) < 0.02 for s in gait.strides)
+
+
+def test_without_a_foot_sensor_the_shank_gives_times_only():
+    """The foot walk's signal on a shank: times without a path, and the note says so."""
+    notes = []
+    gait = gait_of(_rec(["tibia_r_imu"]), notes)
+    assert gait.sources == {"right": "shank sensor tibia_r_imu"} and "right" not in gait.paths
+    assert any("right strides from the shank sensor tibia_r_imu" in n for n in notes)
+    assert all(np.isnan(s.stride_length_m) for s in gait.strides)
+
+
+def test_no_walking_and_no_raw_signals_are_said():
+    rng = np.random.default_rng(0)
+    still = SensorSignals(gyr=rng.normal(0, 0.01, (800, 3)),
+                          acc=[0, 0, 9.81] + rng.normal(0, 0.05, (800, 3)))  # fmt: skip
+    notes = []
+    assert gait_of(Recording(np.arange(800) / 100.0, 100.0, {"calcn_r_imu": still}),
+                   notes).strides == []  # fmt: skip
+    assert notes == ["no strides: no walking found (no swing of a foot or shank)"]
+    notes = []
+    quats = SensorSignals(quat=np.tile([1.0, 0, 0, 0], (800, 1)))
+    gait_of(Recording(np.arange(800) / 100.0, 100.0, {"calcn_r_imu": quats}), notes)
+    assert notes == ["no strides: no foot or shank sensor with raw signals"]
+
+
+@pytest.mark.dataset
+def test_pipeline_ik_writes_the_s02_strides(tmp_path):
+    if not S02.exists():
+        pytest.skip("../shared/data/gaittoolbox_s02 not present")
+    import csv
+    import json
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from bench_gait import S02_MAP
+
+    from pipeline.cli import main
+
+    pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
+    assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
+                 "--height-m", "1.72", "--no-rerun", "--out", str(tmp_path)]) == 0  # fmt: skip
+    rows = list(csv.DictReader((tmp_path / "imu_strides.csv").open()))
+    straight = [float(r["stride_length_m"]) for r in rows if r["straight"] == "true"]
+    assert len(rows) >= 8 and 1.3 < np.median(straight) < 1.6  # Vicon: 1.17-1.56 m
+    fig = json.loads((tmp_path / "imu_figures.json").read_text())
+    assert fig["strides"] == len(rows) and 1.2 < fig["stride_time_s"] < 1.6
+    assert "Strides (`<name>_strides.csv`" in (tmp_path / "imu_summary.md").read_text()
