@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.process.gait import gait_of
+from pipeline.process.gait import BLEND_S, gait_of, with_pelvis_path
 from pipeline.simulate.foot_walk import foot_walk
 
 S02 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "gaittoolbox_s02"
@@ -72,3 +72,52 @@ def test_pipeline_ik_writes_the_s02_strides(tmp_path):
     fig = json.loads((tmp_path / "imu_figures.json").read_text())
     assert fig["strides"] == len(rows) and 1.2 < fig["stride_time_s"] < 1.6
     assert "Strides (`<name>_strides.csv`" in (tmp_path / "imu_summary.md").read_text()
+
+
+def test_the_stance_weight_and_a_path_needs_both_feet():
+    from pipeline.process.gait import _stance_weight
+
+    w = foot_walk(strides=3, seed=0)
+    rec = Recording(w.time, w.rate_hz, {"calcn_r_imu": SensorSignals(gyr=w.gyr, acc=w.acc)})
+    notes = []
+    gait = gait_of(rec, notes)
+    weight = _stance_weight(gait.events["right"], len(w.time), w.rate_hz)
+    assert weight[: int(w.fc[0] * 100) - 10].min() > 1 - 1e-9  # standing until the first toe-off
+    swing = (w.time > w.fc[1] + BLEND_S) & (w.time < w.ic[2] - BLEND_S)
+    assert weight[swing].max() < 1e-9
+    assert with_pelvis_path(gait, rec, None, None, notes).pelvis_path is None
+    assert notes[-1] == "the pelvis's path needs a foot sensor on each foot: not written"
+
+
+@pytest.mark.dataset
+def test_s02_the_body_walks_the_room(tmp_path):
+    """pipeline ik --landmarks world: pelvis_tx/ty/tz in the .mot, within 2.5 % of the distance
+    walked from the Vicon pelvis (1.9 % measured, bench_gait), the landmarks in the room."""
+    if not S02.exists():
+        pytest.skip("../shared/data/gaittoolbox_s02 not present")
+    import sys
+
+    import scipy.io as sio
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from bench_gait import S02_MAP, path_error
+
+    from pipeline.cli import main
+    from pipeline.io.mot import read_mot
+
+    pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
+    assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
+                 "--height-m", "1.72", "--no-rerun", "--landmarks", "world", "--out",
+                 str(tmp_path)]) == 0  # fmt: skip
+    mot = read_mot(tmp_path / "imu_ik.mot").columns
+    path = np.column_stack([mot[f"pelvis_t{a}"] for a in "xyz"])
+    assert 0.8 < np.median(path[:, 1]) < 1.05  # the pelvis's height above the floor (m)
+    m = sio.loadmat(S02 / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
+                    struct_as_record=False)  # fmt: skip
+    err, walked = path_error(path[1000:2200], m["Root"][1000:2200, 3:] / 1000.0)
+    assert walked > 7.0 and err.mean() < 0.025 * walked
+    import csv
+
+    rows = list(csv.DictReader((tmp_path / "imu_landmarks.csv").open()))
+    hjc = np.array([[float(r[f"right_HJC_{a}"]) for a in "xz"] for r in rows])
+    assert np.ptp(hjc, axis=0).max() > 2.0  # in the room, not relative to the pelvis

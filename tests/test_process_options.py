@@ -31,7 +31,8 @@ def test_defaults_are_the_documented_ones():
 
 
 def test_output_switches_are_apart_from_the_processing_options():
-    assert {s.name for s in specs(OutputOptions)} == {"out", "rerun", "osim", "overwrite", "strict"}
+    assert {s.name for s in specs(OutputOptions)} == {"out", "rerun", "osim", "landmarks",
+                                                      "overwrite", "strict"}
     assert not {"rerun", "osim", "strict", "sensor_map", "orientations"} & {
         s.name for s in specs(IKOptions)}
 

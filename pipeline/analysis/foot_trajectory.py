@@ -56,26 +56,30 @@ def _orientations(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.nd
     return R
 
 
-def _level(p: np.ndarray, rests: np.ndarray) -> None:
-    """Each swing's height drift removed linearly, so that every rest is at the first one's
-    height (in place)."""
+def _level(p: np.ndarray, rests: np.ndarray, up: int) -> None:
+    """Each swing's height (coordinate ``up``) drift removed linearly, so that every rest is at
+    the first one's height (in place)."""
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
         if b <= a:
             continue
-        rise = p[b, 2] - p[a - 1, 2]
-        p[a:b, 2] -= rise * np.arange(1, b - a + 1) / (b - a + 1)
-        p[b:, 2] -= rise
+        rise = p[b, up] - p[a - 1, up]
+        p[a:b, up] -= rise * np.arange(1, b - a + 1) / (b - a + 1)
+        p[b:, up] -= rise
 
 
 def foot_trajectory(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.ndarray,
-                    level_floor: bool = True) -> FootTrajectory:  # fmt: skip
+                    level_floor: bool = True, rotation: np.ndarray | None = None,
+                    up: int = 2) -> FootTrajectory:  # fmt: skip
     """The sensor's path and orientation from its first rest to its last (module docstring);
-    ``level_floor``: every rest at the same height (a level floor; off for stairs or slopes)."""
+    ``level_floor``: every rest at the same height (a level floor; off for stairs or slopes).
+    ``rotation`` (N, 3, 3) sensor -> world: orientations known already (e.g. the IK's, in the
+    model's world, whose vertical is axis ``up``: 1 for y up) instead of the integration here."""
     n = len(gyr)
     if len(rests) == 0:
         return FootTrajectory(np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan))
-    R = _orientations(gyr, acc, rate_hz, rests)
-    free = np.einsum("nij,nj->ni", R, np.nan_to_num(acc)) - G * UP
+    vertical = np.eye(3)[up]
+    R = _orientations(gyr, acc, rate_hz, rests) if rotation is None else np.array(rotation)
+    free = np.einsum("nij,nj->ni", R, np.nan_to_num(acc)) - G * vertical
     dt = 1.0 / rate_hz
     v = np.zeros((n, 3))
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
@@ -88,7 +92,7 @@ def foot_trajectory(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.
     p = np.full((n, 3), np.nan)
     p[first:last] = np.cumsum(v[first:last] * dt, axis=0)
     if level_floor:
-        _level(p, rests)
+        _level(p, rests, up)
     R[:first] = np.nan
     R[last:] = np.nan
     return FootTrajectory(p, R)

@@ -21,14 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.strides import stride_table, strides_csv
-from pipeline.calibration.conventions import DEFAULT_FILTER
+from pipeline.analysis.strides import strides_csv
+from pipeline.commands.ik_summary import summary_text
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
-from pipeline.io.formats import read_recording
+from pipeline.io.formats import read_recording, recording_name
 from pipeline.io.mot import write_mot
 from pipeline.io.recording import Recording
-from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.io.tables import write_array_csv
 from pipeline.model.measures import Measures
 from pipeline.option import specs
@@ -50,12 +49,6 @@ def load_orientations(path: str | Path, sensor_map: dict[str, str] | None = None
     """The recording at ``path`` with our sensor names (:func:`pipeline.io.formats.read_recording`:
     every format, the sensor map applied)."""
     return read_recording(path, sensor_map, ignore=ignore)
-
-
-def recording_name(path: str | Path) -> str:
-    """The name a recording's outputs take: the file's stem, or the folder's name."""
-    path = Path(path)
-    return path.stem if path.suffix and not path.is_dir() else path.name
 
 
 def run_ik(
@@ -168,12 +161,15 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
         raise QualityError(run.flags, file=settings.inputs.orientations)
     for flag in run.flags:
         print(f"warning: {flag}", file=sys.stderr)
+    if outputs.landmarks == "world" and run.gait.pelvis_path is None:
+        run.notes.append("--landmarks world: no pelvis path (a foot sensor on each foot walking "
+                         "is needed): the landmarks are relative to the pelvis")  # fmt: skip
     if outputs.rerun:  # first: the child writes it while the other files are written
         _record(run, out.path(out_dir / f"{name}.rrd"), name, worker)
     run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
     write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
     with out.open(out_dir / f"{name}_landmarks.csv") as fh:
-        write_landmarks_csv(fh, run)
+        write_landmarks_csv(fh, run, world=outputs.landmarks == "world")
     if outputs.osim:
         from pipeline.model.osim import osim_text
 
@@ -228,20 +224,40 @@ def _stride_means(run: IKRun) -> dict[str, float | None]:
     return {c: (float(both[c][0]) if both[c][2] else None) for c in STRIDE_FIGURES}
 
 
-def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000) -> None:
+def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000, world: bool = False) -> None:
     """``time`` and ``<landmark>_x,y,z`` (m, 6 significant digits) to the open file ``fh``, in
-    chunks of rows (memory stays bounded on long recordings)."""
+    chunks of rows (memory stays bounded on long recordings); ``world``: in the room (the
+    pelvis's path added), where the run has that path."""
     columns = ["time"] + [f"{lm}_{a}" for lm in run.landmarks for a in "xyz"]
+    shift = run.gait.pelvis_path if world and run.gait.pelvis_path is not None else 0.0
+    shift = np.broadcast_to(shift, (len(run.time), 3))
     for start in range(0, max(len(run.time), 1), chunk):
         rows = slice(start, start + chunk)
-        data = np.column_stack([run.time[rows], *(xyz[rows] for xyz in run.landmarks.values())])
+        data = np.column_stack([run.time[rows], *(xyz[rows] + shift[rows]
+                                                  for xyz in run.landmarks.values())])
         write_array_csv(fh, columns, data, digits=6, header=start == 0)
 
 
 def _recording_args(run: IKRun, name: str) -> tuple:
     angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
+    path, prints = run.gait.pelvis_path, {}
+    if path is not None:  # walking through the room, each foot's last rest marked
+        prints = {f"{side}_footprint": _footprints(run, side) for side in run.gait.paths}
     return (run.time - run.time[0], run.skeleton, run.q), dict(
-        recording_name=name, landmarks=list(run.landmarks) or False, joint_angles=angles)
+        recording_name=name, landmarks=list(run.landmarks) or False, joint_angles=angles,
+        root_path=path, reference_landmarks=prints or None)
+
+
+def _footprints(run: IKRun, side: str) -> np.ndarray:
+    """Where the ``side`` foot's sensor last rested (in the room), at every sample."""
+    from pipeline.analysis.landmarks import frame_trajectories
+
+    _, p = frame_trajectories(run.skeleton, run.q, [f"{side}_foot_imu"])[f"{side}_foot_imu"]
+    world = p + run.gait.pelvis_path
+    out = np.full_like(world, np.nan)
+    for a, b in run.gait.events[side].rests:
+        out[a:] = np.nanmean(world[a:b], axis=0)
+    return out
 
 
 def _record(run: IKRun, path: Path, name: str, worker) -> None:
@@ -258,136 +274,3 @@ def _record(run: IKRun, path: Path, name: str, worker) -> None:
     from pipeline.viz.scene import log_scene
 
     worker.submit(log_scene, str(path), motion_scene(*args, **kwargs))
-
-
-def summary_text(run: IKRun) -> str:
-    """The run's ``_summary.md``: inputs, quality flags, corrections, calibrations, ranges."""
-    source = Path(run.inputs.orientations) if run.inputs else Path(run.source or "recording")
-    measures = run.measures
-    name = recording_name(source)
-    fps = len(run.time) / max(run.seconds_ik, 1e-9)
-    o = run.options
-    what = "segment orientations" if o.segment_orientations else "sensor orientations"
-    if run.filtered:
-        by = (o.filter or DEFAULT_FILTER).upper()
-        what = f"raw signals, orientations by {by} ({run.filtered})"
-    static = run.inputs.static_trial if run.inputs else None
-    pose = f"{o.calibration_pose} pose " + (f"from {Path(static).name}" if static
-                                             else "at the first sample")  # fmt: skip
-    lines = [
-        f"# IK of {source.name}",
-        "",
-        *(f"**WARNING: {flag}**\n" for flag in run.flags),
-        f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf "
-        f"(knee {o.knee})",
-        f"- sensors observe: {', '.join(run.sensors.joints)}; input: {what}; calibration: {pose}",
-        f"- {len(run.time)} frames, {run.time[-1] - run.time[0]:.2f} s; IK {run.seconds_ik:.2f} s "
-        f"({fps:.0f} frames/s)",
-        f"- heading: {run.heading_method}; subject's right at the calibration pose (world): "
-        + "("
-        + ", ".join(f"{v:.3f}" for v in run.heading_right)
-        + ")",
-        f"- orientation residual RMS: median {np.degrees(np.nanmedian(run.residual_rms)):.2f} deg, "
-        f"95th percentile {np.degrees(np.nanpercentile(run.residual_rms, 95)):.2f} deg",
-        f"- knee AoR correction: {o.correction}",
-    ]
-    lines += _sensor_table(run)
-    if run.corrections:
-        lines += _correction_table(run)
-    if run.heading_drifts:
-        lines += ["", f"Sensor headings aligned by the joints (`--drift {o.drift}`; the distal "
-                  "sensor turned into the proximal one's heading, deg):", "",
-                  "| joint | from | to | drift | constraint residual | with a constant heading |",
-                  "|---|---|---|---|---|---|"]  # fmt: skip
-        for key, d in run.heading_drifts.items():
-            lines.append(f"| {key.replace('_', ' ')} | {np.degrees(d.psi.min()):.1f} | "
-                         f"{np.degrees(d.psi.max()):.1f} | {d.drift_deg:.1f} | "
-                         f"{d.residual_deg:.2f} | {d.before_deg:.2f} |")  # fmt: skip
-        lines.append("")
-    if run.knee_calibrations:
-        lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
-                  f"{o.calibration_method}; with `--correction functional` a trusted knee is "
-                  "corrected towards its hinge axis):", "",
-                  "| knee | axis in thigh sensor | axis in shank sensor | halves apart (deg) | "
-                  "hinge residual (rad/s) | vs model axis (deg) | trusted | used |",
-                  "|---|---|---|---|---|---|---|---|"]  # fmt: skip
-        for c in run.knee_calibrations:
-            def v(a):
-                return "(" + ", ".join(f"{x:.3f}" for x in a) + ")"
-
-            corr = run.corrections.get(c.side)
-            if corr is not None and corr.method == "functional":
-                used = "yes"
-            elif o.correction == "functional":  # not trusted
-                used = "no: corrected by the AoR its orientations show (eq 1-8)"
-            else:
-                used = f"no: correction {o.correction}"
-            lines.append(f"| {c.side} | {v(c.axis_thigh)} | {v(c.axis_shank)} | "
-                         f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
-                         f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")  # fmt: skip
-        lines.append("")
-    if run.gait.strides:
-        sources = "; ".join(f"{side}: {src}" for side, src in run.gait.sources.items())
-        lines += ["", f"Strides (`<name>_strides.csv`; events and foot paths from {sources}):",
-                  "", *stride_table(run.gait.strides), ""]  # fmt: skip
-    if not any(j.endswith("_ankle") for j in run.sensors.joints):
-        lines.append("- no foot sensors: the ankle is held neutral and not reported")
-    lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]
-    for k, v in run.joint_angles.items():
-        lines.append(f"| {k} | {np.degrees(np.nanmin(v)):.1f} | {np.degrees(np.nanmax(v)):.1f} |")
-    if run.notes:
-        lines += ["", "Notes:", ""] + [f"- {n}" for n in run.notes]
-    return "\n".join(lines) + "\n"
-
-
-def _sensor_table(run: IKRun) -> list[str]:
-    """One row per sensor: the sensor check's findings and the magnetometer's trust."""
-    found: dict[str, list] = {}
-    for f in run.sensor_findings:
-        found.setdefault(f.sensor, []).append(f)
-    by_frame = {f"{seg}_imu": n for n, seg in SENSOR_TO_SEGMENT.items()}
-    used_names = {by_frame.get(frame, frame) for frame in run.placements}
-    names = sorted(used_names | set(found) | set(run.magnetometers))
-    lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: dead channels, saturation, "
-             "units, moving with the segment; magnetometers against the other sensors' field):",
-             "", "| sensor | checks | magnetometer | used |", "|---|---|---|---|"]  # fmt: skip
-    for n in names:
-        fs = found.get(n, [])
-        checks = "; ".join(f"{f.check}: {f.evidence} ({f.action})" for f in fs) or "ok"
-        m = run.magnetometers.get(n)
-        mag = "-" if m is None else ("trusted" if m.trusted else f"not trusted: {m.evidence}")
-        used = "no: excluded, its joints not written" if any(
-            f.action == "excluded" for f in fs) else "yes"  # fmt: skip
-        lines.append(f"| {n} | {checks} | {mag} | {used} |")
-    return lines + [""]
-
-
-def _correction_table(run: IKRun) -> list[str]:
-    def vec(v) -> str:
-        return "-" if v is None else "(" + ", ".join(f"{x:.3f}" for x in v) + ")"
-
-    def rot(rv) -> str:
-        angle = float(np.degrees(np.linalg.norm(rv)))
-        axis = rv / np.linalg.norm(rv) if angle > 0 else np.zeros(3)
-        return f"{angle:.1f} deg about {vec(axis)}"
-
-    lines = ["", "| knee | AoR seen (femur; tibia frame) | reference AoR | femur correction | "
-             "tibia correction | hinge residual before -> after (deg) |",
-             "|---|---|---|---|---|---|"]  # fmt: skip
-    for side, c in run.corrections.items():
-        seen = f"{vec(c.measured_femur_axis)}; {vec(c.measured_tibia_axis)}"
-        if c.method == "functional":
-            seen += " (functional calibration)"
-        elif c.method == "population":
-            seen = f"not seen ({c.reason}): corrected as the reference population's knee"
-        if c.halves_apart is not None:
-            seen += f"; the walk's halves' corrections {np.degrees(c.halves_apart):.1f} deg apart"
-        ref = f"{vec(c.reference_femur_axis)}; {vec(c.reference_tibia_axis)}"
-        if c.applied:
-            fem, tib = rot(c.femur_axis_angle), rot(c.tibia_axis_angle)
-        else:
-            fem = tib = f"not applied: {c.reason}"
-        lines.append(f"| {side} | {seen} | {ref} | {fem} | {tib} | "
-                     f"{np.degrees(c.hinge_residual_before):.1f} -> "
-                     f"{np.degrees(c.hinge_residual_after):.1f} |")  # fmt: skip
-    return lines + [""]

@@ -40,7 +40,8 @@ from pipeline.io.sensor_names import SENSOR_NAMES, our_name
 from pipeline.io.vendor_imu import read_movella_dot_csv, read_ximu3_folder
 from pipeline.io.xsens import read_xsens_txt
 
-__all__ = ["DOCUMENTS", "FORMATS", "Format", "apply_sensor_map", "recognise", "read_recording"]
+__all__ = ["DOCUMENTS", "FORMATS", "Format", "apply_sensor_map", "read_recording", "recognise",
+           "recording_name"]
 
 _HEAD_LINES = 40
 #: Entries of a folder that are documents, never recordings: left out with a note.
@@ -262,3 +263,9 @@ def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False
     if all(renamed[n] == n for n in names):
         return rec
     return rec.with_sensors({renamed[n]: rec.sensors[n] for n in names})
+
+
+def recording_name(path: str | Path) -> str:
+    """The name a recording's outputs take: the file's stem, or the folder's name."""
+    path = Path(path)
+    return path.stem if path.suffix and not path.is_dir() else path.name

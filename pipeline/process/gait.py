@@ -7,11 +7,25 @@ excluded) give the events (:mod:`pipeline.analysis.gait_events`), its path
 Without a usable foot sensor the shank's give the events only (stride time, stance share,
 cadence; no length, speed, clearance or turn), with a note. A recording without raw signals, or
 with no walking (no swing: supine, seated, standing), has no strides, and the notes say so.
+
+**The pelvis's path** (:func:`with_pelvis_path`, after the IK): each foot sensor's path is
+integrated again with the IK's orientation of its frame (the model's y-up world, so both feet
+share one world), anchored where the model puts the foot at the foot's first rest; each foot
+then carries the pelvis, ``pelvis = foot's world position - foot's position relative to the
+pelvis`` (the IK's chain), and the two estimates' velocities are blended by each foot's stance
+weight (1 from IC to FC and at rest, 0 in swing, smoothed over :data:`BLEND_S`) and integrated:
+the stance foot where it rests carries the body, and the hand-over from one foot to the other
+moves it by no more than the feet move (the two estimates differ by the model's error). The
+floor (``y = 0``) is the lowest foot landmark at the first rest; before the feet's first rest
+and after their last the body stands where it was. Both feet, each with strides, are needed;
+without them the path is not written and a note says why.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+
+import numpy as np
 
 from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.analysis.gait_events import GaitEvents, gait_events
@@ -19,7 +33,10 @@ from pipeline.analysis.strides import Stride, foot_strides
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 
-__all__ = ["Gait", "gait_of"]
+__all__ = ["BLEND_S", "Gait", "gait_of", "with_pelvis_path"]
+
+#: The stance weights' smoothing window (s): the blend from one foot to the other.
+BLEND_S = 0.1
 
 
 @dataclass(frozen=True)
@@ -31,6 +48,7 @@ class Gait:
     events: dict[str, GaitEvents] = field(default_factory=dict)
     paths: dict[str, FootTrajectory] = field(default_factory=dict)
     sources: dict[str, str] = field(default_factory=dict)
+    pelvis_path: np.ndarray | None = None
 
 
 def _sensor_of(rec: Recording, segment: str) -> str | None:
@@ -67,3 +85,78 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
         notes.append("no strides: no walking found (no swing of a foot or shank)")
     return Gait(sorted(strides, key=lambda s: s.start_s), events, paths, sources)
 
+
+
+def _stance_weight(ev: GaitEvents, n: int, rate_hz: float) -> np.ndarray:
+    """1 at rest and from each IC to the next FC, 0 in swing; smoothed over :data:`BLEND_S`."""
+    w = np.zeros(n)
+    for a, b in ev.rests:
+        w[a:b] = 1.0
+    for ic in ev.ic:
+        later = ev.fc[ev.fc > ic]
+        stop = int(np.ceil(later[0])) if len(later) else n
+        w[int(np.floor(ic)):stop] = 1.0
+    before = ev.fc[0] if len(ev.fc) else n  # standing until the first toe-off
+    w[: int(np.floor(before))] = 1.0
+    k = max(1, int(round(BLEND_S * rate_hz)))
+    return np.convolve(np.pad(w, k // 2, mode="edge"), np.ones(k) / k, mode="valid")[:n]
+
+
+def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
+                     notes: list[str]) -> Gait:  # fmt: skip
+    """``gait`` with its ``pelvis_path`` (module docstring); ``rec``: the recording in the
+    model's world, ``Q`` the IK's configurations of ``skeleton`` (pelvis at the origin)."""
+    from pipeline.analysis.landmarks import frame_trajectories
+    from pipeline.model.conventions import LANDMARK_SEGMENT
+
+    if set(gait.paths) != {"right", "left"}:
+        if gait.strides:
+            notes.append("the pelvis's path needs a foot sensor on each foot: not written")
+        return gait
+    if {s.side for s in gait.strides if np.isfinite(s.stride_length_m)} != {"right", "left"}:
+        if gait.strides:
+            notes.append("the pelvis's path needs strides of both feet: not written")
+        return gait
+    n, sides = len(rec.time), ("right", "left")
+    feet = [f"{side}_foot_imu" for side in sides]
+    soles = [f for f in skeleton.landmark_frames
+             if LANDMARK_SEGMENT.get(f.split("_", 1)[1]) == "foot"]  # fmt: skip
+    traj = frame_trajectories(skeleton, Q, feet + soles)
+    first = {side: int(gait.events[side].rests[0][0]) for side in sides}
+    order = sorted(sides, key=first.get)
+    estimate, weight = {}, {}
+    for side in order:
+        s = rec.sensors[gait.sources[side].split()[-1]]
+        R, p = traj[f"{side}_foot_imu"]
+        path = foot_trajectory(s.gyr, s.acc, rec.rate_hz, gait.events[side].rests, rotation=R,
+                               up=1).position  # fmt: skip
+        k = first[side]
+        pelvis_then = np.zeros(3) if not estimate else estimate[order[0]][k]
+        estimate[side] = pelvis_then + p[k] + path - path[k] - p
+        weight[side] = _stance_weight(gait.events[side], n, rec.rate_hz)
+    w = np.stack([weight[s] for s in sides])[:, :, None]
+    est = np.stack([estimate[s] for s in sides])
+    velocity = np.gradient(est, axis=1)  # per sample: each estimate's motion, without the jump
+    w = np.where(np.isfinite(velocity), w + 1e-6, 0.0)  # between two feet's estimates
+    step = np.sum(np.nan_to_num(velocity) * w, axis=0) / np.maximum(np.sum(w, axis=0), 1e-12)
+    k = min(first.values())
+    pelvis = np.cumsum(step, axis=0)
+    pelvis += estimate[order[0]][k] - pelvis[k]
+    pelvis = _held(pelvis, np.any(w > 0, axis=(0, 2)))
+    if soles:
+        pelvis[:, 1] -= min(traj[f][1][k, 1] for f in soles) + pelvis[k, 1]
+    notes.append("the pelvis's path: the stance foot carries the body (both foot sensors' paths "
+                 "with the IK's orientations; pelvis_tx/ty/tz in the .mot)")  # fmt: skip
+    return replace(gait, pelvis_path=pelvis)
+
+
+def _held(path: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """``path`` where ``known``; before the first known sample the first value, after the last
+    the last (the feet rest there: the body stands)."""
+    idx = np.flatnonzero(known)
+    if len(idx) == 0:
+        return np.full_like(path, np.nan)
+    nearest = np.clip(np.searchsorted(idx, np.arange(len(path)), side="right") - 1, 0, None)
+    out = path[idx[nearest]]
+    out[: idx[0]] = path[idx[0]]
+    return out

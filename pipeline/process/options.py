@@ -195,6 +195,10 @@ class InputOptions:
         return _replace(self, changes)
 
 
+#: Where ``<name>_landmarks.csv``'s positions are: relative to the pelvis, or in the room.
+LANDMARK_FRAMES = ("pelvis", "world")
+
+
 @dataclass(frozen=True)
 class OutputOptions:
     """What ``pipeline ik`` writes, and where."""
@@ -204,6 +208,10 @@ class OutputOptions:
                          "out)")  # fmt: skip
     osim: bool = option(False, "bool", "also write <name>.osim, an OpenSim model whose "
                         "coordinates are the .mot's columns")  # fmt: skip
+    landmarks: str = option("pelvis", "choice", "landmark positions in <name>_landmarks.csv "
+                            "relative to the pelvis (pelvis) or in the room (world: carried by "
+                            "the feet, with a foot sensor on each foot; else relative to the "
+                            "pelvis, with a note)", choices=LANDMARK_FRAMES)  # fmt: skip
     overwrite: bool = option(False, "bool", "replace a previous run's outputs of the same "
                              "recording in --out, removing its files of that name first (e.g. "
                              "an old .osim or .rrd); without it such a run is refused, naming "
@@ -220,6 +228,8 @@ class OutputOptions:
         for s in specs(OutputOptions):
             if s.kind == "bool":
                 _bool(s.name, getattr(self, s.name))
+            elif s.kind == "choice":
+                _choice(s.name, getattr(self, s.name), s.choices)
 
     def replace(self, **changes: object) -> OutputOptions:
         return _replace(self, changes)

@@ -63,7 +63,7 @@ from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.gait import Gait, gait_of
+from pipeline.process.gait import Gait, gait_of, with_pelvis_path
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import KneeInputs, apply_correction, choose_correction
 from pipeline.process.options import IKOptions, InputOptions
@@ -230,6 +230,7 @@ def process_recording(
     if not np.all(result.converged):
         notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
     angles = _angles(sk, Q, sensors, rotations, placements, cal.H)
+    gait = with_pelvis_path(gait, trial, sk, Q, notes)
     landmarks = _landmarks(sk, Q, sensors)
     flags = [f.line() for f in findings] + quality_flags(
         sk, Q, result.residual_rms, notes, joints=[j for j in sk.joint_names
@@ -393,4 +394,6 @@ def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
             key = f"{side}_{ours}"
             if key in run.joint_angles:
                 cols[f"{theirs}_{suffix}"] = run.joint_angles[key]
+    if run.gait.pelvis_path is not None:  # metres: write_mot leaves *_t[xyz] as they are
+        cols.update({f"pelvis_t{a}": run.gait.pelvis_path[:, i] for i, a in enumerate("xyz")})
     return cols

@@ -99,6 +99,7 @@ def log_motion(
     app_id: str = "imu_skeleton_pipeline",
     imu_axis_length: float = 0.06,
     point_radius: float = 0.008,
+    root_path: np.ndarray | None = None,
 ) -> Path:
     """Write the motion ``Q`` (N, nq) of ``skeleton`` at ``time`` (N,) s to ``path`` (.rrd).
 
@@ -109,13 +110,16 @@ def log_motion(
     (N,) rad (keyed like :func:`pipeline.analysis.landmarks.joint_angles`, e.g.
     ``right_knee_flexion``; NaN where unknown), drawn as thin lighter curves ``<angle> (truth)``
     in the same plot as the estimate. ``extra_scalars``: entity name under
-    ``plots/`` -> (N,) series, logged unchanged. Rows whose configuration is not finite are not
-    logged. Returns ``path``; layout in the module docstring.
+    ``plots/`` -> (N,) series, logged unchanged. ``root_path`` (N, 3) m: the model's root moved
+    through the room (every frame drawn shifted by it; e.g. the pelvis's path from the feet).
+    Rows whose configuration is not finite are not logged. Returns ``path``; layout in the
+    module docstring.
     """
     return log_scene(path, *_scene(time, skeleton, Q, False, landmarks, imu_frames,
                                    joint_angles, bones, meshes, reference_landmarks,
                                    reference_angles, error_arrows, extra_scalars, up_axis,
-                                   recording_name, app_id, imu_axis_length, point_radius))
+                                   recording_name, app_id, imu_axis_length, point_radius,
+                                   root_path))
 
 
 def motion_scene(
@@ -137,18 +141,20 @@ def motion_scene(
     app_id: str = "imu_skeleton_pipeline",
     imu_axis_length: float = 0.06,
     point_radius: float = 0.008,
+    root_path: np.ndarray | None = None,
 ) -> MotionScene:
     """What :func:`log_motion` writes, as arrays: the forward kinematics of every shown sample
     done here, so that :func:`pipeline.viz.scene.log_scene` (e.g. in a forked child, without
     Pinocchio) writes the same recording. Arguments as :func:`log_motion`'s."""
     return _scene(time, skeleton, Q, True, landmarks, imu_frames, joint_angles, bones, meshes,
                   reference_landmarks, reference_angles, error_arrows, extra_scalars, up_axis,
-                  recording_name, app_id, imu_axis_length, point_radius)[0]
+                  recording_name, app_id, imu_axis_length, point_radius, root_path)[0]
 
 
 def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames, joint_angles,
            bones, meshes, reference_landmarks, reference_angles, error_arrows, extra_scalars,
-           up_axis, recording_name, app_id, imu_axis_length, point_radius):  # fmt: skip
+           up_axis, recording_name, app_id, imu_axis_length, point_radius,
+           root_path=None):  # fmt: skip
     """``(scene, poses)``: the scene (its poses over every shown sample if ``precompute``) and
     ``poses(start, stop)``, the forward kinematics of ``shown[start:stop]``."""
     t = check_time(time, min_samples=1)
@@ -166,6 +172,9 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
 
     ok = np.all(np.isfinite(Q), axis=1)
     Q_fk = np.where(ok[:, None], Q, skeleton.neutral())  # FK on finite rows only
+    offset = np.zeros((n, 3))
+    if root_path is not None:  # the body carried through the room
+        offset = np.nan_to_num(check_series(root_path, n, (3,), "root_path"))
     names = list(dict.fromkeys([*segments.values(), *lm_names, *imu_names, *bone_names]))
     # the 3D content at most MAX_3D_SAMPLES samples (a stride over long recordings), logged in
     # chunks; the joint angles at the full rate
@@ -179,6 +188,7 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
         traj = frame_trajectories(skeleton, Q_fk[rows], names)
         out = {}
         for name, (R, p) in traj.items():
+            p += offset[rows]
             p[~ok[rows]] = np.nan
             if name in oriented:
                 R[~ok[rows]] = np.nan
