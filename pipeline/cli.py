@@ -129,9 +129,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="simulated motion (default gait)")  # fmt: skip
     p.add_argument("--duration-s", type=float, default=15.0,
                    help="duration in seconds (default 15; at most 600)")  # fmt: skip
-    p.add_argument("--standing-s", type=float, default=0.0,
+    p.add_argument("--standing-s", type=float,
                    help="seconds standing still in the neutral pose first (a calibration pose "
-                   "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
+                   "for pipeline ik), then a 1.5 s transition into the motion (default 2 for "
+                   "gait and static, whose rest pose is standing; 0 for the others)")
     p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
@@ -171,9 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
     p.add_argument("--out", type=Path, default=Path("out/demo"),
                    help="output directory (default out/demo)")  # fmt: skip
-    p.add_argument("--standing-s", type=float, default=0.0,
-                   help="seconds standing still in the neutral pose first (a calibration pose "
-                   "for pipeline ik), then a 1.5 s transition into the motion (default 0)")
+    p.add_argument("--standing-s", type=float, default=2.0,
+                   help="seconds standing still in the neutral pose first (the calibration "
+                   "pose; 0.5-10), then a 1.5 s transition into gait (default 2)")
     p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the simulation (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_demo)
@@ -237,8 +238,12 @@ def _cmd_calibrate(args) -> int:
 
 def _cmd_simulate(args) -> int:
     from pipeline.commands.simulate import run_simulation
+    from pipeline.simulate.model import STANDING_MOTIONS
 
-    print(run_simulation(args.out, args.motion, args.duration_s, args.seed, args.standing_s))
+    standing = args.standing_s
+    if standing is None:  # a calibration pose where the motion's rest pose is standing
+        standing = 2.0 if args.motion in STANDING_MOTIONS and args.duration_s > 2.0 else 0.0
+    print(run_simulation(args.out, args.motion, args.duration_s, args.seed, standing))
     return 0
 
 
@@ -271,7 +276,7 @@ def _cmd_reproduce(args) -> int:
 def _cmd_demo(args) -> int:
     from pipeline.commands.demo import run_demo
 
-    print(run_demo(args.out, seed=args.seed))
+    print(run_demo(args.out, seed=args.seed, standing_s=args.standing_s))
     return 0
 
 

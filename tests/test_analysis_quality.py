@@ -37,6 +37,25 @@ def test_flags_by_hand(leg):
     assert quality_flags(leg, mid[None], small[:1], notes) == notes  # disagreeing heading cues
 
 
+
+def test_a_leg_swinging_between_its_limits_and_a_walk_calibrated_lying(leg):
+    """Knee ab/adduction at a limit 20 % of the frames, the ankle at one in another 20 %: each
+    joint below AT_LIMIT_SHARE, the leg at its limits 40 % of the time (AT_LIMIT_LEG_SHARE)."""
+    n = 100
+    q = np.tile(0.5 * (leg.lower_limits + leg.upper_limits), (n, 1))
+    knee, ankle = leg.q_index("right_knee_X"), leg.q_index("right_ankle_Z")
+    q[:20, knee] = leg.upper_limits[knee]
+    q[50:70, ankle] = leg.lower_limits[ankle]
+    small = np.full(n, np.radians(1.0))
+    (flag,) = quality_flags(leg, q, small)
+    assert flag.startswith("the right leg has a joint at its limit in 40% of the frames")
+    assert "right_knee_X" in flag and "right_ankle_Z" in flag
+    q[:, :] = 0.5 * (leg.lower_limits + leg.upper_limits)
+    assert quality_flags(leg, q, small, calibration_pose="supine", strides=6) == [
+        "--calibration-pose supine, but the subject walks (6 strides): a walk starts standing; "
+        "give --calibration-pose standing (or a static trial of that pose)"]
+    assert quality_flags(leg, q, small, calibration_pose="supine", strides=0) == []
+
 def _reordered(tmp_path: Path) -> Path:
     """The walking file with every quaternion written x, y, z, w (a common export mistake)."""
     lines = WALK.read_text().split("\n")

@@ -300,3 +300,24 @@ def test_counts_and_ports_out_of_range_are_one_line_errors(argv, message, capsys
     with pytest.raises(SystemExit) as exc:
         main(argv)
     assert exc.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_simulate_then_ik_the_helps_own_chain(tmp_path, capsys):
+    """`pipeline simulate` (gait: a standing start by default) then `pipeline ik` on its output
+    with no other flag: the knee of the simulation, no hint about the knee model."""
+    assert main(["simulate", "--out", str(tmp_path / "sim"), "--duration-s", "8"]) == 0
+    assert main(["ik", "--orientations", str(tmp_path / "sim" / "imu"), "--sex", "m",
+                 "--height-m", "1.75", "--no-rerun", "--out", str(tmp_path / "ik")]) == 0
+    from pipeline.io.mot import read_mot
+
+    knee = read_mot(tmp_path / "ik" / "imu_ik.mot").columns["knee_angle_r"]
+    assert np.nanmax(knee) - np.nanmin(knee) > np.radians(40)  # gait's knee swings ~60 deg
+    assert "try --knee" not in capsys.readouterr().err
+
+
+def test_demo_standing_time_is_used_and_checked(capsys):
+    from pipeline.commands.demo import demo
+    from pipeline.errors import InputError
+
+    with pytest.raises(InputError, match="field standing_s: expected 0.5-10 s"):
+        demo("unused", standing_s=0.0)

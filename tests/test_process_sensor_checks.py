@@ -148,6 +148,26 @@ def test_the_run_names_the_excluded_sensor_and_writes_none_of_its_joints(walk):
     assert "| tibia_r_imu | dead: gyroscope axes x never change (excluded) |" in summary_text(run)
 
 
+
+def test_quaternions_in_x_y_z_w_order_are_refused(walk):
+    """The simulator's orientations written x, y, z, w and read as w, x, y, z: refused, named;
+    the same in the right order pass."""
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.process.sensor_checks import check_quaternion_order
+    from pipeline.simulate.model import simulate_trial
+
+    sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
+    trial = simulate_trial(sk, "gait", duration_s=8.0, seed=2, standing_s=2.0)
+    right = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(
+        gyr=i.recording.gyr, acc=i.recording.acc, quat=i.recording.quat)
+        for f, i in trial.imus.items()})  # fmt: skip
+    check_quaternion_order(right)
+    wrong = right.with_sensors({n: s.replace(quat=s.quat[:, [1, 2, 3, 0]])
+                                for n, s in right.sensors.items()})  # fmt: skip
+    with pytest.raises(InputError, match=r"field quat: .*read as x, y, z, w"):
+        check_sensors(wrong)
+
 def test_the_registry_names_every_check():
     assert set(CHECKS) == {"dead", "saturation", "moves with its segment"}
 

@@ -55,8 +55,10 @@ def test_busy_port_refused_before_anything_is_printed(rrd, capsys):
         s.bind(("127.0.0.1", 0))
         s.listen()
         busy = s.getsockname()[1]
-        with pytest.raises(InputError, match=f"port {busy}.*--port"):
+        with pytest.raises(InputError, match=f"port {busy}.*another with --port$"):
             view(rrd, web=True, web_port=busy, grpc_port=_free_port())
+        with pytest.raises(InputError, match=f"port {busy} \\(data.*another with --grpc-port"):
+            view(rrd, web=True, web_port=_free_port(), grpc_port=busy)
     assert capsys.readouterr().out == ""
 
 

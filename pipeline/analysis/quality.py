@@ -8,6 +8,12 @@
 * **Joint limits:** a joint at one of its limits for more than :data:`AT_LIMIT_SHARE` of the
   frames: the IK pushes against the model (a mis-mounted sensor, a wrong heading, or a knee
   model that cannot follow the data).
+* **A leg at its limits:** on one leg, some joint at a limit in more than
+  :data:`AT_LIMIT_LEG_SHARE` of the frames (a knee's ab/adduction swinging between its limits
+  while the ankle sits at one, each joint alone below :data:`AT_LIMIT_SHARE`): that leg's sensors
+  are likely faulty, mis-mounted or mis-mapped.
+* **Calibration pose:** a lying or seated calibration pose given for a recording in which the
+  subject walks (``strides`` found), whose first seconds are then standing.
 * **Heading:** the hip and knee flexion axes disagree (see
   :func:`pipeline.calibration.heading.anatomical_right`).
 """
@@ -19,11 +25,13 @@ import numpy as np
 from pipeline.model.skeleton import Skeleton
 from pipeline.quantiles import nanmedian
 
-__all__ = ["AT_LIMIT_SHARE", "AT_LIMIT_TOL", "RESIDUAL_BOUND_DEG", "quality_flags"]
+__all__ = ["AT_LIMIT_LEG_SHARE", "AT_LIMIT_SHARE", "AT_LIMIT_TOL", "RESIDUAL_BOUND_DEG",
+           "quality_flags"]
 
 RESIDUAL_BOUND_DEG = 5.0
 AT_LIMIT_SHARE = 0.5
 AT_LIMIT_TOL = 1e-3  # rad from the limit counts as at the limit
+AT_LIMIT_LEG_SHARE = 0.3
 
 
 def quality_flags(
@@ -32,11 +40,14 @@ def quality_flags(
     residual_rms: np.ndarray,
     notes: list[str] = (),
     joints: list[str] | None = None,
+    calibration_pose: str = "standing",
+    strides: int = 0,
 ) -> list[str]:
     """The flags of the module docstring, one line each (empty when the run looks plausible).
 
     ``joints``: the joints whose limits are checked (default all; unobserved joints held at a
-    fixed value are better left out)."""
+    fixed value are better left out); ``calibration_pose`` and the number of ``strides`` found
+    (:mod:`pipeline.process.gait`) for the pose check."""
     flags = []
     res = np.degrees(nanmedian(residual_rms))
     if not res <= RESIDUAL_BOUND_DEG:
@@ -47,16 +58,30 @@ def quality_flags(
             "--sensor-to-model"
         )
     ok = np.isfinite(q).all(axis=1)
-    at_limit = []
+    at_limit, legs = [], {}
     for joint in skeleton.joint_names if joints is None else joints:
         jm = skeleton.model.joints[skeleton.model.getJointId(joint)]
         if jm.nq != 1 or not ok.any():
             continue
         i = jm.idx_q
         lo, hi = skeleton.lower_limits[i], skeleton.upper_limits[i]
-        share = float(np.mean((q[ok, i] <= lo + AT_LIMIT_TOL) | (q[ok, i] >= hi - AT_LIMIT_TOL)))
+        held = (q[ok, i] <= lo + AT_LIMIT_TOL) | (q[ok, i] >= hi - AT_LIMIT_TOL)
+        share = float(np.mean(held))
         if share > AT_LIMIT_SHARE:
             at_limit.append(f"{joint} ({100 * share:.0f}% of frames)")
+        side = joint.split("_", 1)[0]
+        if share > 0 and side in ("right", "left"):
+            legs.setdefault(side, []).append((joint, held))
+    for side, held in legs.items():
+        share = float(np.mean(np.any([h for _, h in held], axis=0)))
+        if share > AT_LIMIT_LEG_SHARE and not any(a.startswith(side) for a in at_limit):
+            names = ", ".join(j for j, h in held if h.any())
+            flags.append(f"the {side} leg has a joint at its limit in {100 * share:.0f}% of the "
+                         f"frames ({names}): its sensors may be faulty, mis-mounted or mis-mapped")
+    if calibration_pose in ("supine", "seated") and strides >= 2:
+        flags.append(f"--calibration-pose {calibration_pose}, but the subject walks ({strides} "
+                     "strides): a walk starts standing; give --calibration-pose standing (or a "
+                     "static trial of that pose)")  # fmt: skip
     if at_limit:
         flags.append(
             "joints at their limits for a long share of the trial: " + ", ".join(at_limit)

@@ -28,6 +28,7 @@ from pipeline.analysis.joint_angles import jcs_angles, joint_angles
 from pipeline.calibration.calibrate import calibrate
 from pipeline.calibration.joint_constraints import joint_data
 from pipeline.commands.ik import write_landmarks_csv
+from pipeline.errors import InputError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.mot import write_mot
 from pipeline.io.opensim import sensor_to_opensim_matrix
@@ -45,7 +46,9 @@ from pipeline.viz.model import log_motion
 __all__ = ["SUBJECT", "DemoResult", "demo", "run_demo"]
 
 SUBJECT = Measures("f", 1.62, knee_width_m=0.095, ankle_width_m=0.066)
-STANDING_S = 2.0  # the calibration pose at the start of the recording
+STANDING_S = 2.0  # the calibration pose at the start of the recording (default)
+#: The standing time the demo accepts (s): the calibration pose needs half a second of rest.
+MIN_STANDING_S, MAX_STANDING_S = 0.5, 10.0
 #: The simulator's world is z-up (like Xsens); OpenSense's rotation to a y-up world.
 Z_UP_TO_Y_UP = (-np.pi / 2, 0.0, 0.0)
 
@@ -63,9 +66,10 @@ class DemoResult:
     seconds: float
 
 
-def run_demo(out_dir: str | Path = "out/demo", seed: int = 0) -> str:
+def run_demo(out_dir: str | Path = "out/demo", seed: int = 0,
+             standing_s: float = STANDING_S) -> str:  # fmt: skip
     """``pipeline demo``: run and return the text to print (the report and where files went)."""
-    res = demo(out_dir, seed)
+    res = demo(out_dir, seed, standing_s=standing_s)
     names = ", ".join(p.name for p in res.files)
     return (
         f"{res.report}\nwrote {names} to {Path(out_dir)}\nview it with: pipeline view "
@@ -73,8 +77,14 @@ def run_demo(out_dir: str | Path = "out/demo", seed: int = 0) -> str:
     )
 
 
-def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
-    """Run the demo; every output is written all-or-nothing into ``out_dir``."""
+def demo(out_dir: str | Path = "out/demo", seed: int = 0,
+         standing_s: float = STANDING_S) -> DemoResult:  # fmt: skip
+    """Run the demo (``standing_s`` of standing still first: the calibration pose, at least
+    :data:`MIN_STANDING_S`); every output is written all-or-nothing into ``out_dir``."""
+    standing_s = float(standing_s)
+    if not MIN_STANDING_S <= standing_s <= MAX_STANDING_S:
+        raise InputError(f"expected {MIN_STANDING_S:g}-{MAX_STANDING_S:g} s of standing still (the "
+                         f"calibration pose), got {standing_s:g}", field="standing_s")
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
     output_dir(out_dir, create=False)
@@ -90,9 +100,9 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         # 2. simulate one continuous recording: 2 s standing still (the calibration pose), a
         #    1.5 s transition, then gait; the simulator's world is z-up like an Xsens recording
         t0 = time.perf_counter()
-        trial = simulate_trial(truth_model, "gait", duration_s=17.0, seed=seed,
-                               standing_s=STANDING_S)  # fmt: skip
-        n0 = int(round(STANDING_S * 100))
+        trial = simulate_trial(truth_model, "gait", duration_s=15.0 + standing_s, seed=seed,
+                               standing_s=standing_s)  # fmt: skip
+        n0 = int(round(standing_s * 100))
         timings["simulate"] = time.perf_counter() - t0
 
         # 3. calibrate the right knee hinge from raw gyro + acc
@@ -168,7 +178,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0) -> DemoResult:
         total = time.perf_counter() - t_start
         offset = _knee_neutral_offset(trial.skeleton)
         report = _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
-                         timings, total, offset)  # fmt: skip
+                         timings, total, offset, standing_s)  # fmt: skip
         with out.open(out_dir / "demo_report.md") as fh:
             fh.write(report)
         names = ("demo_report.md", "demo_ik.mot", "demo_landmarks.csv", "subject.urdf",
@@ -187,14 +197,15 @@ def _knee_neutral_offset(sk) -> np.ndarray:
 
 
 def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows, timings, total,
-            knee_offset) -> str:  # fmt: skip
+            knee_offset, standing_s) -> str:  # fmt: skip
     fps = len(run.time) / max(timings["ik"], 1e-9)
     lines = [
         "# pipeline demo",
         "",
         f"Simulated subject: sex {SUBJECT.sex}, height {SUBJECT.height_m} m, knee width "
         f"{SUBJECT.knee_width_m} m, ankle width {SUBJECT.ankle_width_m} m; one recording at 100 "
-        f"Hz: {STANDING_S:g} s standing still, then a 1.5 s transition into gait (17 s in all); "
+        f"Hz: {standing_s:g} s standing still, then a 1.5 s transition into gait "
+        f"({15 + standing_s:g} s in all); "
         f"IMUs misaligned up to 15 deg and offset up to 2 cm on their segments; gyro noise "
         f"{trial.noise.gyro_sd} rad/s, accelerometer noise {trial.noise.acc_sd} m/s².",
         "",

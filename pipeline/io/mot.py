@@ -88,7 +88,9 @@ def write_mot(
         "endheader",
         "\t".join(["time", *names]),
     ]
-    row_fmt = "\t".join(["%.17g"] * data.shape[1]) + "\n"  # one format per row: ~2x faster
+    # one format per row (~2x faster); numbers as Python prints them (0.03, not
+    # 0.029999999999999999: the shortest text that reads back to the same number)
+    row_fmt = "\t".join(["%r"] * data.shape[1]) + "\n"
     with atomic_write(path, newline="\n") as f:
         f.write("\n".join(head) + "\n")
         for start in range(0, len(data), 10_000):  # bounded memory on long tables

@@ -233,8 +233,8 @@ def process_recording(
     gait = with_pelvis_path(gait, trial, sk, Q, notes)
     landmarks = _landmarks(sk, Q, sensors)
     flags = [f.line() for f in findings] + quality_flags(
-        sk, Q, result.residual_rms, notes, joints=[j for j in sk.joint_names
-                                                   if _observed(j, sensors)])  # fmt: skip
+        sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if _observed(j, sensors)],
+        opts.calibration_pose, len(gait.strides))  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
                  sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
                  drifts, filtered, oriented.magnetometers, posture, measures,

@@ -32,6 +32,11 @@ done about it:
   stays on the floor while its shank turns). A still neighbour means a still segment is
   plausible (a thigh on a chair while the shank swings; a pelvis while one hip flexes).
 
+* ``quaternion order`` (:func:`check_quaternion_order`, the whole recording, where it has
+  orientations and accelerometers): orientations that keep gravity along a world axis far better
+  read as x, y, z, w than as w, x, y, z are **refused** (median tilt: S02's vendor quaternions
+  0.2-1.0 deg, 3.4-40 deg read the other way; the simulator's 0.3-8 deg, 7-88 deg).
+
 Magnetometer trust (field strength and dip against the other sensors and over time) is
 :mod:`pipeline.calibration.magnetometer`'s; the summary's sensor table shows both.
 """
@@ -48,8 +53,9 @@ from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 
-__all__ = ["CHECKS", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO", "PLATEAU_SAMPLES",
-           "Finding", "check_sensors", "check_units", "gyro_unit_ratio"]
+__all__ = ["CHECKS", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO", "ORDER_RATIO",
+           "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors", "check_units",
+           "gyro_unit_ratio"]
 
 #: A plateau: at least this many consecutive samples, lasting at least PLATEAU_S, within
 #: PLATEAU_TOL (relative) of a channel's largest magnitude. A smooth peak of human motion stays
@@ -189,6 +195,48 @@ def check_units(rec: Recording) -> None:
                      field="gyr")  # fmt: skip
 
 
+#: Quaternion order: refused as x, y, z, w when, read that way, the orientations keep gravity
+#: along a world axis this much better (the median over the sensors of the ratio of the tilts,
+#: :func:`_gravity_tilt`) than read as w, x, y, z.
+ORDER_RATIO = 0.5
+
+
+def _gravity_tilt(quat: np.ndarray, acc: np.ndarray) -> float:
+    """The median angle (deg) between ``R(q) a`` over the samples near 1 g and the vertical
+    world axis (y or z, the one nearest its median direction: every world the readers know):
+    small when the orientations agree with the accelerometer."""
+    from pipeline.rotations import matrix_from_quat
+
+    a = np.nan_to_num(np.asarray(acc, float))
+    n = np.linalg.norm(a, axis=1)
+    calm = np.abs(n - 9.81) < 0.15 * 9.81
+    if np.sum(calm) < 10:
+        return float("nan")
+    up = np.einsum("nij,nj->ni", matrix_from_quat(quat[calm]), a[calm] / n[calm, None])
+    mid = np.median(up, axis=0)
+    k = 1 + int(np.argmax(np.abs(mid[1:])))
+    return float(np.median(np.degrees(np.arccos(np.clip(np.sign(mid[k]) * up[:, k], -1, 1)))))
+
+
+def check_quaternion_order(rec: Recording) -> None:
+    """Refuse orientations that are x, y, z, w read as w, x, y, z (:data:`ORDER_RATIO`), where
+    the recording has both orientations and accelerometers."""
+    ratios, each = [], []
+    for name, s in rec.sensors.items():
+        if s.quat is None or s.acc is None:
+            continue
+        given = _gravity_tilt(s.quat, s.acc)
+        other = _gravity_tilt(s.quat[:, [3, 0, 1, 2]], s.acc)
+        if np.isfinite(given) and np.isfinite(other) and given > 0:
+            ratios.append(other / given)
+            each.append(f"{name} {given:.0f} vs {other:.0f}")
+    if ratios and np.median(ratios) < ORDER_RATIO:
+        raise InputError("the orientations keep gravity vertical far better read as x, y, z, w "
+                         f"than as w, x, y, z (median tilt, deg: {', '.join(each)}): "
+                         "give the quaternions scalar first (w, x, y, z)", file=rec.source,
+                         field="quat")  # fmt: skip
+
+
 def _speed(s: SensorSignals) -> float:
     """The median angular speed (rad/s): a burst of a faulty neighbour does not move it."""
     return float(np.median(np.linalg.norm(np.nan_to_num(s.gyr), axis=1)))
@@ -246,6 +294,7 @@ def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
     signals; the recording without the excluded sensors and with the unused magnetometers
     removed, and the findings."""
     check_units(rec)
+    check_quaternion_order(rec)
     findings = [f for name, s in rec.sensors.items() for fn in CHECKS.values()
                 if (f := fn(name, s, rec)) is not None]  # fmt: skip
     sensors = dict(rec.sensors)

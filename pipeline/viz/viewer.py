@@ -67,9 +67,9 @@ def view(path: str | Path, web: bool = False, web_port: int = 9090, grpc_port: i
     """Open a recording in the rerun viewer (blocks until it closes); returns its exit code.
 
     Refused before anything starts or is printed: a missing file, a native viewer without a
-    display (hint: ``--web``), a web or gRPC port already in use (hint: ``--port``). The viewer
-    runs in its own process group, which is stopped with this command (Ctrl-C, SIGTERM, or an
-    error), so no ``rerun --serve-web`` child outlives it.
+    display (hint: ``--web``), a web or gRPC port already in use (hint: ``--port`` or
+    ``--grpc-port``). The viewer runs in its own process group, which is stopped with this
+    command (Ctrl-C, SIGTERM, or an error), so no ``rerun --serve-web`` child outlives it.
     """
     path = Path(path)
     if not path.is_file():
@@ -78,10 +78,11 @@ def view(path: str | Path, web: bool = False, web_port: int = 9090, grpc_port: i
         raise InputError("no display for the native viewer here; use --web to serve the web "
                          "viewer on 127.0.0.1", file=path)  # fmt: skip
     if web:
-        for port, what in ((web_port, "web viewer"), (grpc_port, "data (gRPC)")):
+        for port, what, flag in ((web_port, "web viewer", "--port"),
+                                 (grpc_port, "data (gRPC)", "--grpc-port")):  # fmt: skip
             if port_in_use(port):
                 raise InputError(f"port {port} ({what}) is already in use on 127.0.0.1; choose "
-                                 "another with --port", field="port")  # fmt: skip
+                                 f"another with {flag}", field=flag[2:].replace("-", "_"))
     cmd = viewer_command(path, web=web, web_port=web_port, grpc_port=grpc_port)
     child = subprocess.Popen(cmd, start_new_session=True)
     # on SIGTERM only signal the group: the wait below then returns and `finally` reaps it
