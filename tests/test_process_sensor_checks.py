@@ -168,8 +168,21 @@ def test_quaternions_in_x_y_z_w_order_are_refused(walk):
     with pytest.raises(InputError, match=r"field quat: .*read as x, y, z, w"):
         check_sensors(wrong)
 
+def test_a_dropout_excludes_the_sensor(walk):
+    """5 s of missing samples (a radio dropout): excluded, named with its time."""
+    gyr, acc = walk.sensors["femur_l_imu"].gyr.copy(), walk.sensors["femur_l_imu"].acc.copy()
+    gyr[500:1000], acc[500:1000] = np.nan, np.nan
+    out, (f,) = check_sensors(_with(walk, "femur_l_imu", gyr=gyr, acc=acc))
+    assert (f.sensor, f.check, f.action) == ("femur_l_imu", "dropout", "excluded")
+    assert "gyroscope missing for 5.0 s (t = 5.00-9.99 s" in f.evidence
+    gyr[500:1000] = walk.sensors["femur_l_imu"].gyr[500:1000]
+    gyr[600:605] = np.nan  # 0.05 s: a gap the readers would fill, not a dropout
+    acc[500:1000] = walk.sensors["femur_l_imu"].acc[500:1000]
+    assert [x.check for x in check_sensors(_with(walk, "femur_l_imu", gyr=gyr, acc=acc))[1]] == []
+
+
 def test_the_registry_names_every_check():
-    assert set(CHECKS) == {"dead", "saturation", "moves with its segment"}
+    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment"}
 
 
 @pytest.mark.dataset

@@ -215,8 +215,9 @@ def filter_orientations(
     acc = np.ascontiguousarray(acc, dtype=float)
     for name, a in (("gyr", gyr), ("acc", acc)):
         if a.shape != (t.size, 3) or not np.all(np.isfinite(a)):
-            raise InputError(f"expected {t.size} finite samples of 3 values, got {a.shape}",
-                             field=name)  # fmt: skip
+            bad = int(np.sum(~np.all(np.isfinite(a), axis=1))) if a.ndim == 2 else a.size
+            raise InputError(f"expected {t.size} finite samples of 3 values, got shape "
+                             f"{a.shape} with {bad} missing", field=name)  # fmt: skip
     return _FILTERS[method](t, gyr, acc, mag)
 
 

@@ -9,6 +9,8 @@ done about it:
   value) cannot give an orientation: the sensor is **excluded** (its joints are not written). A
   magnetometer that never changes is **not used** (the sensor is filtered 6-D, its heading from
   the joints).
+* ``dropout``: a gyroscope or accelerometer with missing samples (NaN) for longer than
+  :data:`MAX_GAP_S` (a radio dropout; shorter gaps the readers fill): **excluded**.
 * ``saturation``: samples held at the range's limit (plateaus: runs of at least
   :data:`PLATEAU_SAMPLES` samples and :data:`PLATEAU_S` within :data:`PLATEAU_TOL` of the
   largest magnitude) or an angular speed no human segment reaches
@@ -239,7 +241,8 @@ def check_quaternion_order(rec: Recording) -> None:
 
 def _speed(s: SensorSignals) -> float:
     """The median angular speed (rad/s): a burst of a faulty neighbour does not move it."""
-    return float(np.median(np.linalg.norm(np.nan_to_num(s.gyr), axis=1)))
+    speed = np.linalg.norm(s.gyr, axis=1)
+    return float(np.median(speed[np.isfinite(speed)])) if np.isfinite(speed).any() else 0.0
 
 
 _CHAIN = ("pelvis", "femur", "tibia", "foot")
@@ -281,9 +284,32 @@ def _action_on_stillness(neighbours: list[str]) -> str:
     return "excluded" if len(neighbours) >= 2 else "noted"
 
 
+#: Missing samples (NaN) longer than this (s) are a dropout (shorter gaps the readers fill).
+MAX_GAP_S = 0.1
+
+
+def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
+        x = getattr(s, field)
+        if x is None:
+            continue
+        missing = ~np.all(np.isfinite(x), axis=1)
+        edges = np.diff(np.concatenate([[0], missing.astype(np.int8), [0]]))
+        runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True))
+        long = [(a, b) for a, b in runs if (b - a) / rec.rate_hz > MAX_GAP_S]
+        if long:
+            a, b = max(long, key=lambda r: r[1] - r[0])
+            return Finding(name, "dropout", "excluded",
+                           f"{what} missing for {(b - a) / rec.rate_hz:.1f} s (t = "
+                           f"{rec.time[a]:.2f}-{rec.time[b - 1]:.2f} s; {len(long)} gap(s) "
+                           f"longer than {MAX_GAP_S:g} s)")  # fmt: skip
+    return None
+
+
 #: Check name -> function of (sensor name, its signals, the recording).
 CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
     "dead": _dead,
+    "dropout": _dropout,
     "saturation": _saturation,
     "moves with its segment": _moves_with_segment,
 }
@@ -295,8 +321,14 @@ def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
     removed, and the findings."""
     check_units(rec)
     check_quaternion_order(rec)
-    findings = [f for name, s in rec.sensors.items() for fn in CHECKS.values()
-                if (f := fn(name, s, rec)) is not None]  # fmt: skip
+    findings = []
+    for name, s in rec.sensors.items():
+        for fn in CHECKS.values():
+            f = fn(name, s, rec)
+            if f is not None:
+                findings.append(f)
+                if f.action == "excluded":  # one reason is enough
+                    break
     sensors = dict(rec.sensors)
     for f in findings:
         if f.action == "excluded":
