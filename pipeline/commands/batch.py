@@ -285,7 +285,11 @@ def _run_rows(rows, out: Path, results: dict, workers, scheduler, force, progres
 
 
 def _run_on_dask(rows, out: Path, results: dict, workers, scheduler, force, bar) -> str:
-    from distributed import Client, LocalCluster, as_completed
+    from pipeline.optional import need
+
+    distributed = need("distributed", "pipeline batch")
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
+    as_completed = distributed.as_completed
 
     cluster = None
     where = f"on the Dask cluster at {scheduler}"

@@ -83,7 +83,9 @@ def read_c3d(path: str | Path, *, max_extent_m: float = 20.0) -> C3dMarkers:
     ``POINT:UNITS``, a non-positive rate, and positions whose extent exceeds ``max_extent_m``
     after conversion. A missing ``POINT:UNITS`` is taken as ``mm`` (the C3D default) and noted.
     """
-    import ezc3d
+    from pipeline.optional import need
+
+    ezc3d = need("ezc3d", "reading C3D files")
 
     path = Path(path)
     if not path.is_file():

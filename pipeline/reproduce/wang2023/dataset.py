@@ -318,7 +318,9 @@ def load_subject(path: str | Path, require_imc: bool = False) -> Subject:
     if not p.is_file():
         raise InputError("file not found (expected a Wang 2023 rawDataNN.mat)", file=p)
     try:
-        from matio import load_from_mat
+        from pipeline.optional import need
+
+        load_from_mat = need("matio", "reading MATLAB files").load_from_mat
 
         data = load_from_mat(str(p))
     except Exception as exc:  # noqa: BLE001 - any decoder failure means "not this format"

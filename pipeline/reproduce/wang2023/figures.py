@@ -37,7 +37,9 @@ def _png(fig) -> bytes:
 
 def imc_figures(stage: ImcStage) -> dict[str, bytes]:
     """File name -> PNG bytes of the module docstring's figures."""
-    import matplotlib
+    from pipeline.optional import need
+
+    matplotlib = need("matplotlib", "pipeline reproduce's figures")
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -317,7 +317,9 @@ def _load_trial(folder: Path, mvn_source: str = "auto") -> tuple[dict, dict, str
         return omc, mvn, "c3d"
     if mvn_source not in ("auto", "rawData.mat"):
         raise ValueError(f"mvn_source must be 'auto', 'c3d' or 'rawData.mat', got {mvn_source!r}")
-    from matio import load_from_mat
+    from pipeline.optional import need
+
+    load_from_mat = need("matio", "reading MATLAB files").load_from_mat
 
     path = folder / "rawData.mat"
     if not path.is_file():
