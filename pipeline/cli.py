@@ -18,7 +18,7 @@ from pipeline.calibration.conventions import (
     METHODS,
 )
 from pipeline.cli_options import PORT, add_ik_options, int_from
-from pipeline.errors import InputError, QualityError, Terminated
+from pipeline.errors import InputError, QualityError, RecordingError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS
 
@@ -364,7 +364,7 @@ def _run(args) -> int:
             raise
         print(f"error: {exc}", file=sys.stderr)
         return 3
-    except (InputError, FileNotFoundError) as exc:
+    except (InputError, FileNotFoundError, RecordingError) as exc:
         if args.debug:
             raise
         print(f"error: {exc}", file=sys.stderr)

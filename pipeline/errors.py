@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["InputError", "QualityError", "RecordingError", "Terminated"]
+
 
 class InputError(ValueError):
     """Bad user input: names the file, the field and what was expected.
@@ -44,3 +46,8 @@ class QualityError(InputError):
 class Terminated(BaseException):
     """SIGTERM received: unwinds like Ctrl-C (a ``BaseException``, so that no ``except
     Exception`` takes it for a failure) and partial outputs are removed; the CLI exits 143."""
+
+
+class RecordingError(RuntimeError):
+    """The rerun recording could not be written (its writer failed, died or did not finish in
+    time): the command ends with this one line and exit code 2, and writes nothing."""

@@ -96,3 +96,29 @@ def test_a_fork_that_fails_falls_back_to_the_callers_process(monkeypatch):
     before = len(os.listdir("/proc/self/fd"))
     assert BackgroundRecording.start() is None
     assert len(os.listdir("/proc/self/fd")) == before  # its pipes closed
+
+
+def _sleep(seconds: float) -> None:
+    time.sleep(seconds)
+
+
+def test_a_child_that_hangs_or_dies_ends_the_wait_in_one_line():
+    """A writer stuck (e.g. on a hung disk) is stopped after the timeout; a writer killed (the
+    OOM killer, a full tmpfs's SIGBUS) is reported at once: a RecordingError, never a hang."""
+    from pipeline.errors import RecordingError
+
+    for _ in range(3):  # repeated: no race between the child's end and the wait
+        worker = BackgroundRecording.start()
+        worker.submit(_sleep, 60)
+        t0 = time.monotonic()
+        with pytest.raises(RecordingError, match="did not finish within 1 s"):
+            worker.wait(timeout_s=1.0)
+        assert time.monotonic() - t0 < 5 and not _alive(worker.pid)
+        worker = BackgroundRecording.start()
+        worker.submit(_sleep, 60)
+        time.sleep(0.2)
+        os.kill(worker.pid, 9)
+        t0 = time.monotonic()
+        with pytest.raises(RecordingError, match=r"its writer was killed \(signal 9"):
+            worker.wait()
+        assert time.monotonic() - t0 < 5

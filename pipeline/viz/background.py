@@ -16,7 +16,8 @@ Where ``os.fork`` is missing or unsafe (Windows; macOS, whose system libraries d
 locks the child could inherit held) :meth:`BackgroundRecording.start` returns None and the caller
 logs in its own process.
 The child never returns into the caller's code: it ends by ``os._exit``, on success, on error
-(its message is sent back and raised in the parent as :class:`RuntimeError`) and when the parent
+(its message is sent back and raised in the parent as
+:class:`~pipeline.errors.RecordingError`) and when the parent
 goes away (the pipe's end of file). :meth:`~BackgroundRecording.close` kills and reaps a child
 that is still running: call it before removing the files the child may be writing.
 """
@@ -25,13 +26,20 @@ from __future__ import annotations
 
 import os
 import pickle
+import select
 import signal
 import sys
 import threading
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["BackgroundRecording"]
+from pipeline.errors import RecordingError
+
+__all__ = ["WAIT_TIMEOUT_S", "BackgroundRecording"]
+
+#: How long (s) the parent waits for the child's job once it needs it: the child logs at most
+#: ``pipeline.commands.ik.BACKGROUND_FRAMES`` frames, ~1-2 s.
+WAIT_TIMEOUT_S = 60.0
 
 
 def _read_all(fd: int) -> bytes:
@@ -116,20 +124,30 @@ class BackgroundRecording:
         self._feeder = threading.Thread(target=feed, name="recording-job", daemon=True)
         self._feeder.start()
 
-    def wait(self) -> None:
-        """Wait for the job; raise :class:`RuntimeError` with the child's error if it failed."""
+    def wait(self, timeout_s: float = WAIT_TIMEOUT_S) -> None:
+        """Wait for the job; raise :class:`~pipeline.errors.RecordingError` with the child's
+        error if it failed, or if it has not finished after ``timeout_s`` (the child is killed:
+        a writer stuck on a full or hung disk never holds the command)."""
         if self._job_fd >= 0:  # no job was submitted: let the child end
             os.close(self._job_fd)
             self._job_fd = -1
+        ready, _, _ = select.select([self._status_fd], [], [], timeout_s)
+        if not ready:
+            self.close()
+            raise RecordingError(f"the rerun recording did not finish within {timeout_s:g} s "
+                                 "(its writer was stopped)")  # fmt: skip
         status = _read_all(self._status_fd)
         if self._feeder is not None:
             self._feeder.join()
         os.close(self._status_fd)
         self._status_fd = -1
-        _, code = os.waitpid(self.pid, 0)
+        _, raw = os.waitpid(self.pid, 0)
         self._done = True
+        code = os.waitstatus_to_exitcode(raw)
         if status != b"ok" and (status or code != 0):
-            raise RuntimeError(f"the rerun recording failed: {status.decode() or code}")
+            why = (f"its writer was killed (signal {-code})" if code < 0
+                   else f"its writer exited with code {code}")  # fmt: skip
+            raise RecordingError(f"the rerun recording failed: {status.decode() or why}")
 
     def close(self) -> None:
         """Kill and reap the child if it is still running; close the pipes (idempotent)."""
