@@ -24,11 +24,11 @@ from pipeline.simulate.conventions import MOTIONS
 
 EXAMPLES = {
     "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
-    "ik": "pipeline ik --orientations ../shared/data/opensim/xsens_walking_orientations.sto "
-    "--sex m --height-m 1.80 --sensor-to-model -1.5708 0 0 --out out/walk",
+    "ik": "pipeline ik --orientations example:ximu3_lower_body --sex m --height-m 1.80 "
+    "--out out/ximu3",
     "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
-    "orientations": "pipeline orientations --imu out/sim/imu --filter vqf "
-    "--out out/sim_orientations.sto",
+    "orientations": "pipeline orientations --imu example:ximu3_lower_body --filter vqf "
+    "--out out/ximu3_orientations.sto",
     "calibrate": "pipeline calibrate hinge --imu1 out/sim/imu/right_femur_imu.csv "
     "--imu2 out/sim/imu/right_tibia_imu.csv --method ipopt --json",
     "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",

@@ -221,7 +221,7 @@ def to_toml(spec: Spec, value: object) -> object:
     if spec.kind == "words":
         return list(value)  # type: ignore[call-overload]
     if spec.kind == "path":
-        return str(Path(str(value)).resolve())
+        return _absolute(str(value), Path.cwd())
     if spec.kind == "pairs":
         return dict(value)  # type: ignore[call-overload]
     return value
@@ -266,6 +266,10 @@ def from_cell(spec: Spec, text: str, base: Path, file: Path, line: int) -> objec
 
 
 def _absolute(text: str, base: Path) -> str:
+    """``text`` as an absolute path against ``base``; an installed example's name
+    (``example:<name>``, :mod:`pipeline.examples`) is kept as it is."""
+    if text.startswith("example:"):
+        return text
     p = Path(text).expanduser()
     return str(p if p.is_absolute() else (base / p).resolve())
 

@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 # in the order a new user would run them: calibrate reads what simulate wrote
 ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "batch", "demo", "reproduce")
-NEEDS_DATA = {"ik": SHARED / "opensim", "batch": SHARED / "opensim",
+NEEDS_DATA = {"batch": SHARED / "opensim",
               "reproduce": SHARED / "wang2023"}  # fmt: skip
 
 

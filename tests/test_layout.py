@@ -161,6 +161,9 @@ def test_wheel_installs_and_scales_a_model(tmp_path):
         assert pipeline.__file__.startswith({str(target)!r}), pipeline.__file__
         from pipeline.cli import main
         assert main(["scale", "--sex", "f", "--height-m", "1.62", "--out", "s.urdf"]) == 0
+        from pipeline.io.formats import read_recording
+        rec = read_recording("example:ximu3_lower_body")  # the examples ship in the wheel
+        assert len(rec.sensors) == 7 and read_recording("example:opensense_imu_ik_test").sensors
         from pipeline.model.resources import models_file
         print(models_file("wang2023_knee_aor.csv"))
         """,

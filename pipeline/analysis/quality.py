@@ -10,8 +10,9 @@
   model that cannot follow the data).
 * **A leg at its limits:** on one leg, some joint at a limit in more than
   :data:`AT_LIMIT_LEG_SHARE` of the frames (a knee's ab/adduction swinging between its limits
-  while the ankle sits at one, each joint alone below :data:`AT_LIMIT_SHARE`): that leg's sensors
-  are likely faulty, mis-mounted or mis-mapped.
+  while the ankle sits at one, each joint alone below :data:`AT_LIMIT_SHARE`; a straight knee,
+  at its extension limit, is not counted): that leg's sensors are likely faulty, mis-mounted or
+  mis-mapped.
 * **Calibration pose:** a lying or seated calibration pose given for a recording in which the
   subject walks (``strides`` found), whose first seconds are then standing.
 * **Heading:** the hip and knee flexion axes disagree (see
@@ -70,7 +71,9 @@ def quality_flags(
         if share > AT_LIMIT_SHARE:
             at_limit.append(f"{joint} ({100 * share:.0f}% of frames)")
         side = joint.split("_", 1)[0]
-        if share > 0 and side in ("right", "left"):
+        if joint.endswith(("_knee_Z", "_knee")):  # a straight knee (its lower limit) is normal
+            held = q[ok, i] >= hi - AT_LIMIT_TOL
+        if held.any() and side in ("right", "left"):
             legs.setdefault(side, []).append((joint, held))
     for side, held in legs.items():
         share = float(np.mean(np.any([h for _, h in held], axis=0)))

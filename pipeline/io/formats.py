@@ -134,8 +134,11 @@ def read_recording(
     ignore: Sequence[str] = (),
 ) -> Recording:
     """A recording (module docstring): one file, an x-IMU3 device folder, or a folder of
-    one-sensor files, with our sensor names; time from 0."""
-    path = Path(path)
+    one-sensor files, with our sensor names; time from 0. ``example:<name>`` reads an example
+    installed with the package (:mod:`pipeline.examples`)."""
+    from pipeline.examples import resolve
+
+    path = resolve(path)
     if not path.exists():
         raise InputError("no such file or folder", file=path)
     fmt = recognise(path)
@@ -266,6 +269,9 @@ def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False
 
 
 def recording_name(path: str | Path) -> str:
-    """The name a recording's outputs take: the file's stem, or the folder's name."""
-    path = Path(path)
+    """The name a recording's outputs take: the file's stem, or the folder's name (an
+    ``example:<name>``'s)."""
+    from pipeline.examples import resolve
+
+    path = resolve(path)
     return path.stem if path.suffix and not path.is_dir() else path.name

@@ -58,7 +58,8 @@ __all__ = [
 _FOOT_LENGTH_RANGE_M = (0.15, 0.35)
 _FORMATS = ("an OpenSim .sto of quaternions, one IMU file (our CSV, Movella DOT .csv, Xsens MT "
             ".txt), or a folder of them (Xsens MT .txt exports, <sensor>.csv, Movella DOT "
-            ".csv, x-IMU3 device folders)")  # fmt: skip
+            ".csv, x-IMU3 device folders), or example:NAME, a recording shipped with the "
+            "package (example:ximu3_lower_body, example:opensense_imu_ik_test)")  # fmt: skip
 
 
 @dataclass(frozen=True)
