@@ -1,0 +1,59 @@
+"""The figures the README and docs/results.md quote are the ones the benchmarks last wrote to
+results/: each quoted figure is found beside the value its results file holds (issue 25: a
+documented figure and its results file never disagree)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+NUM = r"(-?[\d.]+)"
+
+#: (document, its regex with the figure as group 1, results file, its regex for the same figure)
+FIGURES = [
+    ("docs/results.md", rf"vendor orientations {NUM}°", "results/bench_real_gait.txt",
+     rf"\| vendor \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("docs/results.md", rf"VQF 9-D {NUM}°", "results/bench_real_gait.txt",
+     rf"\| vqf9 \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("docs/results.md", rf"magnetometers\) {NUM}°", "results/bench_real_gait.txt",
+     rf"\| vqf6 \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("docs/results.md", rf"the PI filter 6-D {NUM}°", "results/bench_real_gait.txt",
+     rf"\| pi6 \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("README.md", rf"median RMSE is\n{NUM}° from the vendor", "results/bench_real_gait.txt",
+     rf"\| vendor \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("README.md", rf"and {NUM}° from raw signals", "results/bench_real_gait.txt",
+     rf"\| vqf9 \| defaults \|.*\*\*{NUM}\*\* \|"),
+    ("docs/results.md", rf"initial contact {NUM} ms", "results/bench_gait.txt",
+     rf"IC median \|error\| {NUM} ms"),
+    ("README.md", rf"within {NUM} ms \(median\)", "results/bench_gait.txt",
+     rf"IC median \|error\| {NUM} ms"),
+    ("docs/results.md", rf"stride time\n?\s*{NUM} ms", "results/bench_gait.txt",
+     rf"stride time median \|error\| {NUM} ms"),
+    ("docs/results.md", rf"length {NUM} % \(mean absolute\)", "results/bench_gait.txt",
+     rf"stride length mean \|error\| {NUM} %"),
+    ("README.md", rf"lengths within\n?\s*{NUM} %", "results/bench_gait.txt",
+     rf"stride length mean \|error\| {NUM} %"),
+    ("docs/results.md", rf"95th percentile {NUM} cm", "results/bench_gait.txt",
+     rf"95th percentile {NUM} cm \(target 5\)"),
+    ("docs/results.md", rf"horizontal path {NUM} %", "results/bench_gait.txt",
+     rf"mean {NUM} % of the distance"),
+    ("README.md", rf"path within {NUM} % of the distance", "results/bench_gait.txt",
+     rf"mean {NUM} % of the distance"),
+    ("README.md", rf"IK runs {NUM}-[\d]+× faster", "results/bench_opensense.txt",
+     rf"xsens_walking_orientations.sto \| 2432 \| ours \| anatomical \| hinge .* {NUM}x "),
+    ("README.md", rf"IK runs [\d]+-{NUM}× faster", "results/bench_opensense.txt",
+     rf"quaternions_4_ik.sto \| 1401 \| ours \| anatomical \| hinge .* {NUM}x "),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("doc, doc_re, result, result_re", FIGURES)
+def test_a_documented_figure_is_its_results_files(doc, doc_re, result, result_re):
+    quoted = re.search(doc_re, (ROOT / doc).read_text())
+    assert quoted, f"{doc}: no match for {doc_re!r}"
+    measured = re.search(result_re, (ROOT / result).read_text())
+    assert measured, f"{result}: no match for {result_re!r}"
+    assert float(quoted.group(1)) == float(measured.group(1)), (doc, quoted.group(0),
+                                                                 measured.group(0))
