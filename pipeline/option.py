@@ -220,8 +220,9 @@ def to_toml(spec: Spec, value: object) -> object:
         return [float(v) for v in value]  # type: ignore[union-attr]
     if spec.kind == "words":
         return list(value)  # type: ignore[call-overload]
-    if spec.kind == "path":
-        return _absolute(str(value), Path.cwd())
+    if spec.kind == "path":  # an installed example's name is kept as it is
+        text = str(value)
+        return text if text.startswith("example:") else str(Path(text).resolve())
     if spec.kind == "pairs":
         return dict(value)  # type: ignore[call-overload]
     return value
