@@ -158,9 +158,10 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
              if r.split(" | ")[3] not in ("-", "nan") and "swapped" not in r]
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
-              f"(all but the swap) moved by up to {max(moved):.2f} deg (target 0.5): an excluded "
-              "shank also changes "
-              "the anatomical heading and the standing posture, which its knee informs."]
+              f"(all but the swap) moved by up to {max(moved):.2f} deg (target 0.5): without the "
+              "shank its leg's standing lean (measured from the knee and ankle centres) is not "
+              "measured and the leg is taken upright, which moves that hip's flexion by the lean; "
+              "the anatomical heading loses that knee's axis."]
     return lines + [""]
 
 
