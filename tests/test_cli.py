@@ -321,3 +321,37 @@ def test_demo_standing_time_is_used_and_checked(capsys):
 
     with pytest.raises(InputError, match="field standing_s: expected 0.5-10 s"):
         demo("unused", standing_s=0.0)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A 64 KiB tmpfs (where this machine lets the tests mount one): every output overflows."""
+    import subprocess
+
+    mnt = tmp_path / "full"
+    mnt.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)],
+                          capture_output=True)  # fmt: skip
+    if done.returncode != 0:
+        pytest.skip("cannot mount a tmpfs here")
+    yield mnt
+    subprocess.run(["umount", str(mnt)], check=False)
+
+
+def test_a_full_disk_is_one_line_and_exit_2_never_a_hang(full_disk):
+    """`pipeline ik` as a program (its recording written by a forked child) into a full disk,
+    repeated: exit 2 within seconds, one line, nothing left."""
+    import subprocess
+    import sys
+    import time
+
+    for _ in range(3):
+        t0 = time.monotonic()
+        done = subprocess.run([sys.executable, "-m", "pipeline", "ik", "--orientations",
+                               "example:ximu3_lower_body", "--sex", "m", "--height-m", "1.8",
+                               "--out", str(full_disk / "out")], capture_output=True, text=True,
+                              timeout=60)  # fmt: skip
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.strip().splitlines()[-1] == (
+            "error: cannot write the outputs: No space left on device")
+        assert time.monotonic() - t0 < 30 and list(full_disk.iterdir()) == []
