@@ -121,6 +121,12 @@ def s02(data: Path) -> list[str]:
         all_pct += pct
         all_ic += list(ic_err[np.isfinite(ic_err)])
         all_t += t_err
+    for side, sensor in (("right", "tibia_r_imu"), ("left", "tibia_l_imu")):  # no foot sensor
+        sig = rec.sensors[sensor]
+        ev = gait_events(sig.gyr, sig.acc, RATE, "shank")
+        lines.append(f"| {side} (shank sensor alone) | "
+                     f"{_stats(_nearest(ev.ic / RATE, truth[side]['ic']), 1000, 0)} | "
+                     f"{_stats(_nearest(ev.fc / RATE, truth[side]['fc']), 1000, 0)} | | | | |")
     a = np.abs(np.array(all_len))
     lines += ["", "Against the targets (both feet): "
               f"IC median |error| {1000 * np.median(np.abs(all_ic)):.0f} ms (target 30); "

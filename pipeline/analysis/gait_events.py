@@ -18,8 +18,9 @@ Vicon heel and toe markers (Zeni et al. 2008's events): :file:`results/bench_gai
 movement between two rests counts as a swing
 only when its peak exceeds :data:`MIN_SWING_RATE`; standing still, shuffling or turning on the
 spot gives no event. A shank sensor never rests in stance: its swings are the peaks of ``w``
-and its contacts the minima within :data:`CONTACT_SEARCH_S` before and after each peak
-(Salarian et al. 2004, IEEE TBME 51(8)).
+(Salarian et al. 2004, IEEE TBME 51(8)), its FC the minimum within :data:`CONTACT_SEARCH_S`
+before each peak, its IC, as the foot's, where the swing's rotation ends (``w`` crosses zero
+downwards after the peak; else the minimum within :data:`CONTACT_SEARCH_S` after it).
 """
 
 from __future__ import annotations
@@ -127,10 +128,18 @@ def _shank_events(w: np.ndarray, rate_hz: float):
     from scipy.signal import find_peaks
 
     peaks, _ = find_peaks(w, height=MIN_SWING_RATE, distance=max(1, int(0.6 * rate_hz)))
+    peaks = peaks[peaks > 0]
     reach = int(CONTACT_SEARCH_S * rate_hz)
-    fc = [max(0, p - reach) + int(np.argmin(w[max(0, p - reach):p])) for p in peaks if p > 0]
-    ic = [p + int(np.argmin(w[p:p + reach + 1])) for p in peaks if p > 0]
-    return peaks[peaks > 0], np.asarray(ic, float), np.asarray(fc, float)
+    fc = [max(0, p - reach) + int(np.argmin(w[max(0, p - reach):p])) for p in peaks]
+    ic = []
+    for p in peaks:
+        after = w[p:p + 2 * reach]
+        below = np.flatnonzero(after < 0)
+        if len(below):  # the swing's forward rotation ends: the heel lands
+            ic.append(_crossing(w, p + int(below[0])))
+        else:
+            ic.append(float(p + np.argmin(after[:reach + 1])))
+    return peaks, np.asarray(ic, float), np.asarray(fc, float)
 
 
 #: The segments whose sensor gives events: a foot's rests in stance, a shank's swing peaks.
