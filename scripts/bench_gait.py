@@ -199,6 +199,18 @@ def simulated(seeds=(0, 1, 2)) -> list[str]:
     return lines
 
 
+def plausibility() -> list[str]:
+    """The shipped x-IMU3 recording (no truth: leg movements with some steps): what is found."""
+    notes: list[str] = []
+    gait = gait_of(read_recording("example:ximu3_lower_body"), notes)
+    rows = [f"{s.side} {s.start_s:.1f}-{s.end_s:.1f} s: {s.stride_length_m:.2f} m, "
+            f"{s.stride_time_s:.2f} s, stance {100 * s.stance_share:.0f} %, clearance "
+            f"{100 * s.clearance_m:.1f} cm" for s in gait.strides]  # fmt: skip
+    return ["", "## Plausibility: the x-IMU3 example (no truth)", "",
+            f"{len(gait.strides)} strides: " + ("; ".join(rows) or "none") + "."
+            + (" Notes: " + "; ".join(notes) if notes else "")]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", type=Path, default=Path("../shared/data"))
@@ -208,6 +220,7 @@ def main() -> None:
     lines += simulated() + [""]
     data = args.data / "gaittoolbox_s02"
     lines += s02(data) if data.exists() else [f"S02 not found in {data}: skipped"]
+    lines += plausibility()
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)
