@@ -20,7 +20,7 @@ from pipeline.calibration.conventions import (
 from pipeline.cli_options import PORT, add_ik_options, int_from
 from pipeline.errors import InputError, QualityError, RecordingError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
-from pipeline.simulate.conventions import MOTIONS
+from pipeline.simulate.conventions import MOTIONS, STANDING_S
 
 EXAMPLES = {
     "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
@@ -131,8 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="duration in seconds (default 15; at most 600)")  # fmt: skip
     p.add_argument("--standing-s", type=float,
                    help="seconds standing still in the neutral pose first (a calibration pose "
-                   "for pipeline ik), then a 1.5 s transition into the motion (default 2 for "
-                   "gait and static, whose rest pose is standing; 0 for the others)")
+                   f"for pipeline ik), then a 1.5 s transition into the motion (default "
+                   f"{STANDING_S:g} for gait and static, whose rest pose is standing; 0 for the "
+                   "others)")
     p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the motion, placements and noise (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
@@ -172,9 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
     p.add_argument("--out", type=Path, default=Path("out/demo"),
                    help="output directory (default out/demo)")  # fmt: skip
-    p.add_argument("--standing-s", type=float, default=2.0,
+    p.add_argument("--standing-s", type=float, default=STANDING_S,
                    help="seconds standing still in the neutral pose first (the calibration "
-                   "pose; 0.5-10), then a 1.5 s transition into gait (default 2)")
+                   f"pose; 0.5-10), then a 1.5 s transition into gait (default {STANDING_S:g})")
     p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the simulation (default 0)")  # fmt: skip
     p.set_defaults(func=_cmd_demo)
@@ -242,7 +243,8 @@ def _cmd_simulate(args) -> int:
 
     standing = args.standing_s
     if standing is None:  # a calibration pose where the motion's rest pose is standing
-        standing = 2.0 if args.motion in STANDING_MOTIONS and args.duration_s > 2.0 else 0.0
+        standing = (STANDING_S if args.motion in STANDING_MOTIONS and args.duration_s > STANDING_S
+                    else 0.0)  # fmt: skip
     print(run_simulation(args.out, args.motion, args.duration_s, args.seed, standing))
     return 0
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.filtering import lowpass
+from pipeline.io.gaps import true_runs
 
 __all__ = ["SEGMENTS", "GaitEvents", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events",
            "rest_periods", "sagittal_rate"]  # fmt: skip
@@ -72,10 +73,9 @@ def rest_periods(gyr: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray
     speed = _moving_max(np.linalg.norm(np.nan_to_num(gyr), axis=1), n)
     force = _moving_max(np.abs(np.linalg.norm(np.nan_to_num(acc), axis=1) - G), n)
     still = (speed < REST_GYRO) & (force < REST_ACC)
-    edges = np.diff(np.concatenate([[0], still.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    keep = stops - starts >= max(2, int(round(MIN_REST_S * rate_hz)))
-    return np.column_stack([starts[keep], stops[keep]]).astype(int).reshape(-1, 2)
+    least = max(2, int(round(MIN_REST_S * rate_hz)))
+    rests = [(a, b) for a, b in true_runs(still) if b - a >= least]
+    return np.array(rests, dtype=int).reshape(-1, 2)
 
 
 def _runs(w: np.ndarray) -> list[tuple[int, int]]:

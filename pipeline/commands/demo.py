@@ -40,13 +40,13 @@ from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
 from pipeline.process import mot_columns, process_recording
 from pipeline.rotations import angle_between
+from pipeline.simulate.conventions import STANDING_S
 from pipeline.simulate.model import simulate_trial
 from pipeline.viz.model import log_motion
 
 __all__ = ["SUBJECT", "DemoResult", "demo", "run_demo"]
 
 SUBJECT = Measures("f", 1.62, knee_width_m=0.095, ankle_width_m=0.066)
-STANDING_S = 2.0  # the calibration pose at the start of the recording (default)
 #: The standing time the demo accepts (s): the calibration pose needs half a second of rest.
 MIN_STANDING_S, MAX_STANDING_S = 0.5, 10.0
 #: The simulator's world is z-up (like Xsens); OpenSense's rotation to a y-up world.

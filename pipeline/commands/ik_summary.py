@@ -10,7 +10,7 @@ import numpy as np
 from pipeline.analysis.strides import stride_table
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.io.formats import recording_name
-from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.io.sensor_names import MODEL_FRAME_NAMES
 from pipeline.process.run import IKRun
 
 __all__ = ["summary_text"]
@@ -101,8 +101,7 @@ def _sensor_table(run: IKRun) -> list[str]:
     found: dict[str, list] = {}
     for f in run.sensor_findings:
         found.setdefault(f.sensor, []).append(f)
-    by_frame = {f"{seg}_imu": n for n, seg in SENSOR_TO_SEGMENT.items()}
-    used_names = {by_frame.get(frame, frame) for frame in run.placements}
+    used_names = {MODEL_FRAME_NAMES.get(frame, frame) for frame in run.placements}
     names = sorted(used_names | set(found) | set(run.magnetometers))
     lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: dead channels, saturation, "
              "units, moving with the segment; magnetometers against the other sensors' field):",

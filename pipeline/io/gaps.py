@@ -16,13 +16,13 @@ from pipeline.io.notes import Notes
 from pipeline.io.text import FileLike
 from pipeline.rotations import exp3, log3, matrix_from_quat, quat_from_matrix
 
-__all__ = ["DEFAULT_MAX_GAP_S", "fill_gaps"]
+__all__ = ["DEFAULT_MAX_GAP_S", "fill_gaps", "true_runs"]
 
 DEFAULT_MAX_GAP_S = 0.1
 """Longest run of missing samples (seconds) that is interpolated; longer gaps are refused."""
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Half-open index runs ``[a, b)`` where ``mask`` is True."""
     m = np.concatenate([[False], mask, [False]]).astype(np.int8)
     d = np.diff(m)
@@ -75,7 +75,7 @@ def fill_gaps(
     if missing.all():
         raise InputError("no finite values at all (every sample missing)", file=file, field=field)
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    runs = _runs(missing)
+    runs = true_runs(missing)
     for a, b in runs:
         dur = (b - a) * dt
         if dur > max_gap_s + 1e-9:

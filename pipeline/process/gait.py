@@ -31,7 +31,7 @@ from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.analysis.gait_events import GaitEvents, gait_events
 from pipeline.analysis.strides import Stride, foot_strides
 from pipeline.io.recording import Recording
-from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.io.sensor_names import SEGMENT_SENSOR
 
 __all__ = ["BLEND_S", "Gait", "gait_of", "with_pelvis_path"]
 
@@ -52,11 +52,10 @@ class Gait:
 
 
 def _sensor_of(rec: Recording, segment: str) -> str | None:
-    """The sensor on ``segment`` with a gyroscope and an accelerometer, if any."""
-    for name, s in rec.sensors.items():
-        if SENSOR_TO_SEGMENT.get(name) == segment and s.gyr is not None and s.acc is not None:
-            return name
-    return None
+    """The sensor on ``segment`` if it has a gyroscope and an accelerometer."""
+    name = SEGMENT_SENSOR[segment]
+    s = rec.sensors.get(name)
+    return name if s is not None and s.gyr is not None and s.acc is not None else None
 
 
 def gait_of(rec: Recording, notes: list[str]) -> Gait:

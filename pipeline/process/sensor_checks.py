@@ -10,7 +10,8 @@ done about it:
   magnetometer that never changes is **not used** (the sensor is filtered 6-D, its heading from
   the joints).
 * ``dropout``: a gyroscope or accelerometer with missing samples (NaN) for longer than
-  :data:`MAX_GAP_S` (a radio dropout; shorter gaps the readers fill): **excluded**.
+  :data:`~pipeline.io.gaps.DEFAULT_MAX_GAP_S` (a radio dropout; shorter gaps the readers fill):
+  **excluded**.
 * ``saturation``: samples held at the range's limit (plateaus: runs of at least
   :data:`PLATEAU_SAMPLES` samples and :data:`PLATEAU_S` within :data:`PLATEAU_TOL` of the
   largest magnitude) or an angular speed no human segment reaches
@@ -52,8 +53,10 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.filtering import lowpass
+from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.process.signals import gravity_in_world
 
 __all__ = ["CHECKS", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO", "ORDER_RATIO",
            "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors", "check_units",
@@ -126,8 +129,7 @@ def _plateau_share(x: np.ndarray, min_peak: float, rate_hz: float) -> tuple[floa
         if not peak >= min_peak:
             continue
         near = np.nan_to_num(v) >= (1.0 - PLATEAU_TOL) * peak
-        edges = np.diff(np.concatenate([[0], near.astype(np.int8), [0]]))
-        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        for a, b in true_runs(near):
             if b - a >= least:
                 held[a:b] = True
                 level = max(level, float(peak))
@@ -207,14 +209,9 @@ def _gravity_tilt(quat: np.ndarray, acc: np.ndarray) -> float:
     """The median angle (deg) between ``R(q) a`` over the samples near 1 g and the vertical
     world axis (y or z, the one nearest its median direction: every world the readers know):
     small when the orientations agree with the accelerometer."""
-    from pipeline.rotations import matrix_from_quat
-
-    a = np.nan_to_num(np.asarray(acc, float))
-    n = np.linalg.norm(a, axis=1)
-    calm = np.abs(n - 9.81) < 0.15 * 9.81
-    if np.sum(calm) < 10:
+    up = gravity_in_world(quat, acc)
+    if up is None:
         return float("nan")
-    up = np.einsum("nij,nj->ni", matrix_from_quat(quat[calm]), a[calm] / n[calm, None])
     mid = np.median(up, axis=0)
     k = 1 + int(np.argmax(np.abs(mid[1:])))
     return float(np.median(np.degrees(np.arccos(np.clip(np.sign(mid[k]) * up[:, k], -1, 1)))))
@@ -284,25 +281,19 @@ def _action_on_stillness(neighbours: list[str]) -> str:
     return "excluded" if len(neighbours) >= 2 else "noted"
 
 
-#: Missing samples (NaN) longer than this (s) are a dropout (shorter gaps the readers fill).
-MAX_GAP_S = 0.1
-
-
 def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
         x = getattr(s, field)
         if x is None:
             continue
-        missing = ~np.all(np.isfinite(x), axis=1)
-        edges = np.diff(np.concatenate([[0], missing.astype(np.int8), [0]]))
-        runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True))
-        long = [(a, b) for a, b in runs if (b - a) / rec.rate_hz > MAX_GAP_S]
+        runs = true_runs(~np.all(np.isfinite(x), axis=1))
+        long = [(a, b) for a, b in runs if (b - a) / rec.rate_hz > DEFAULT_MAX_GAP_S]
         if long:
             a, b = max(long, key=lambda r: r[1] - r[0])
             return Finding(name, "dropout", "excluded",
                            f"{what} missing for {(b - a) / rec.rate_hz:.1f} s (t = "
                            f"{rec.time[a]:.2f}-{rec.time[b - 1]:.2f} s; {len(long)} gap(s) "
-                           f"longer than {MAX_GAP_S:g} s)")  # fmt: skip
+                           f"longer than {DEFAULT_MAX_GAP_S:g} s)")  # fmt: skip
     return None
 
 

@@ -29,12 +29,12 @@ from pipeline.calibration.attitude import MAGNETOMETER_FILTERS, filter_orientati
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.calibration.magnetometer import FieldTrust, field_trust
 from pipeline.errors import InputError
-from pipeline.io.recording import Recording
+from pipeline.io.recording import WORLD, Z_UP_WORLDS, Recording
 from pipeline.process.sensors import known_segments
 from pipeline.rotations import matrix_from_quat
 
-__all__ = ["Z_UP_TO_Y_UP", "Orientations", "measured_up", "orientations_from_signals",
-           "world_to_model"]
+__all__ = ["Z_UP_TO_Y_UP", "Orientations", "gravity_in_world", "measured_up",
+           "orientations_from_signals", "world_to_model"]
 
 #: ``sensor_to_model`` of a z-up world (space-fixed XYZ angles, rad), as OpenSense's for Xsens.
 Z_UP_TO_Y_UP = (-float(np.pi) / 2, 0.0, 0.0)
@@ -124,21 +124,27 @@ def orientations_from_signals(
 UP_TOLERANCE_DEG = 20.0
 
 
+def gravity_in_world(quat: np.ndarray, acc: np.ndarray) -> np.ndarray | None:
+    """``R(q) a / |a|`` (M, 3) over the samples whose specific force is within 15 % of 1 g (at
+    rest and on average in motion it points up in the orientations' world); None with fewer
+    than 10 such samples."""
+    a = np.nan_to_num(np.asarray(acc, float))
+    norm = np.linalg.norm(a, axis=1)
+    calm = np.abs(norm - 9.81) < 0.15 * 9.81
+    if np.sum(calm) < 10:
+        return None
+    return np.einsum("nij,nj->ni", matrix_from_quat(quat[calm]), a[calm] / norm[calm, None])
+
+
 def measured_up(rec: Recording) -> np.ndarray | None:
     """The world's up axis measured from the recording's own orientations and accelerometers:
-    the median over every sensor's samples near 1 g of ``R(q) a / |a|`` (at rest and on average
-    in motion the specific force points up), normalised; None without both signals."""
+    the median over every sensor of its :func:`gravity_in_world`, normalised; None without both
+    signals."""
     ups = []
     for s in rec.sensors.values():
-        if s.quat is None or s.acc is None:
-            continue
-        a = np.nan_to_num(np.asarray(s.acc, float))
-        norm = np.linalg.norm(a, axis=1)
-        calm = np.abs(norm - 9.81) < 0.15 * 9.81
-        if np.sum(calm) < 10:
-            continue
-        up = np.einsum("nij,nj->ni", matrix_from_quat(s.quat[calm]), a[calm] / norm[calm, None])
-        ups.append(np.median(up, axis=0))
+        up = None if s.quat is None or s.acc is None else gravity_in_world(s.quat, s.acc)
+        if up is not None:
+            ups.append(np.median(up, axis=0))
     if not ups:
         return None
     up = np.median(ups, axis=0)
@@ -152,8 +158,6 @@ def world_to_model(rec: Recording) -> tuple[tuple[float, float, float] | None, s
     the up axis measured by the accelerometers (:func:`measured_up`) decides: z up is turned, y up
     kept; anything else (or no accelerometer) is left as it is (``(None, None)``) for the vertical
     check to refuse with a hint."""
-    from pipeline.io.recording import WORLD, Z_UP_WORLDS
-
     vendor = rec.header.get(WORLD)
     if vendor in Z_UP_WORLDS:
         return Z_UP_TO_Y_UP, (f"the orientations' world: {Z_UP_WORLDS[vendor]} (the vendor's "

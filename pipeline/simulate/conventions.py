@@ -7,6 +7,9 @@ the motions themselves are :mod:`pipeline.simulate.motions`.
 
 from __future__ import annotations
 
-__all__ = ["MOTIONS"]
+__all__ = ["MOTIONS", "STANDING_S"]
 
 MOTIONS = ("gait", "supine_hip_flexion", "still_thigh", "static")
+#: Seconds standing still first (the calibration pose) where the motion's rest pose is standing:
+#: the default of ``pipeline simulate`` (gait, static) and ``pipeline demo``.
+STANDING_S = 2.0
