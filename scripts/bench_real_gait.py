@@ -62,6 +62,10 @@ VARIANTS = (("defaults", {}), *((f"{name} {v}", {name: v}) for name, values in O
 MEDIAN_TARGET = {"vendor": 3.5, "vqf9": 3.5, "vqf6": 4.0, "pi6": 4.0}
 KNEE_TARGET, ANKLE_TARGET, ADDUCTION_R_TARGET = 3.5, 5.0, 0.8
 KJC_TARGET_MM, AJC_TARGET_MM = 25.0, 35.0
+#: Our model's segment frames -> the Vicon segments (every Vicon segment's z axis is anterior).
+SEGMENTS = {"pelvis": "Root", "right_femur": "R_Femur", "left_femur": "L_Femur",
+            "right_tibia": "R_Tibia", "left_tibia": "L_Tibia", "right_foot": "R_Foot",
+            "left_foot": "L_Foot"}  # fmt: skip
 
 
 def recording(data: Path, path: str):
@@ -138,6 +142,40 @@ def our_centres(run) -> dict[str, np.ndarray]:
             out[f"heading {j}_{s}"] = np.stack([np.sum(v * fwd, 1), v @ up, np.sum(v * right, 1)],
                                                1)  # fmt: skip
     return out
+
+
+def _elevation(anterior: np.ndarray, up: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arcsin(np.clip(anterior @ up, -1.0, 1.0)))
+
+
+def our_inclinations(run) -> dict[str, np.ndarray]:
+    """Each segment's sagittal inclination (deg): its anterior axis's elevation above the
+    horizontal (positive: the segment's front up), free of the heading."""
+    frames = frame_trajectories(run.skeleton, run.q, list(SEGMENTS))
+    return {s: _elevation(R[:, :, 0], np.array([0.0, 1.0, 0.0])) for s, (R, _) in frames.items()}
+
+
+def vicon_inclinations(data: Path) -> dict[str, np.ndarray]:
+    """As :func:`our_inclinations`, of the Vicon segments (anterior ``z``, lab ``z`` up)."""
+    import scipy.io as sio
+    from scipy.spatial.transform import Rotation
+
+    m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
+                    struct_as_record=False)  # fmt: skip
+    out = {}
+    for ours, seg in SEGMENTS.items():
+        R = Rotation.from_rotvec(np.radians(np.asarray(m[seg], float)[:, :3])).as_matrix()
+        out[ours] = _elevation(R[:, :, 2], np.array([0.0, 0.0, 1.0]))
+    return out
+
+
+def inclination_errors(ours: np.ndarray, truth: np.ndarray) -> tuple[float, float, float]:
+    """The standing offset, the walk's mean error beyond it, and the walk's RMSE with the
+    standing offset removed (deg)."""
+    e = ours - truth
+    offset = float(np.nanmean(e[STANDING]))
+    walk = e[WALK] - offset
+    return offset, float(np.nanmean(walk)), float(np.sqrt(np.nanmean(walk**2)))
 
 
 def vicon_lengths(data: Path) -> dict[str, float]:
@@ -230,7 +268,7 @@ def main() -> None:
     vicon = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_vicon_ik.mot")
     markers = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_markers_ik.mot")
     refs = {"angles": {"vicon": vicon, "markers": markers}, "centres": vicon_centres(args.data),
-            "lengths": vicon_lengths(args.data)}
+            "lengths": vicon_lengths(args.data), "inclinations": vicon_inclinations(args.data)}
     variants = VARIANTS[:1] if args.quick else VARIANTS
     rows, curves = [], {}
     for path in INPUTS:
@@ -365,6 +403,21 @@ def limits(rows, refs) -> str:
         v = scores["vicon"]
         lines.append(f"| {path} | {np.median([v[c]['rmse'] for c in SAGITTAL]):.1f} | "
                      f"{np.median([v[c]['rmse_offset'] for c in SAGITTAL]):.1f} | {fmed:.1f} |")
+    lines += ["", "**Segments**: each segment's sagittal inclination (its anterior axis's "
+              "elevation, free of the heading) against the Vicon segment's: standing offset / "
+              "the walk's mean error beyond it / the walk's RMSE with the standing offset "
+              "removed (deg), defaults. A joint's sagittal error is the difference of its two "
+              "segments' (hip = femur - pelvis, knee = femur - tibia, ankle = foot - tibia); a "
+              "segment whose error changes between standing and walking on every input moves "
+              "against Vicon's markers (the sensor on the skin, or the markers), which no "
+              "filter removes.", "",
+              "| segment | " + " | ".join(p for p, *_ in defaults) + " |",
+              "|---|" + "---|" * len(defaults)]  # fmt: skip
+    incl = {p: our_inclinations(run) for p, _, _, _, _, run in defaults}
+    for seg, truth in refs["inclinations"].items():
+        lines.append(f"| {seg} | " + " | ".join(
+            "{:+.1f} / {:+.1f} / {:.1f}".format(*inclination_errors(incl[p][seg], truth))
+            for p in incl) + " |")  # fmt: skip
     lines += ["", "**Joint centres**: the walk's mean error (length, mm) and the RMS about it, "
               "pelvis frame, defaults; then the dimensions (m) of the scaled model (from height "
               "and sex, no measurement of this subject) against Vicon's:", "",
@@ -375,6 +428,26 @@ def limits(rows, refs) -> str:
         lines.append(f"| {path} | " + " | ".join(
             f"{off[f'pelvis {j}_{x}'][0]:.0f} + {off[f'pelvis {j}_{x}'][1]:.0f}"
             for j in ("kjc", "ajc") for x in "rl") + " |")  # fmt: skip
+    side = {k: abs(float(np.nanmean(v[STANDING, 2]))) for k, v in refs["centres"].items()
+            if k.startswith("heading")}  # fmt: skip
+    lines += ["", "The same centres' mean error over the walk in the pelvis's heading frame, "
+              "forward / up / right (mm), defaults. The lateral part is the stance's width: "
+              "standing, Vicon puts the hip centres {:.0f} mm, the knees {:.0f} / {:.0f} mm and "
+              "the ankles {:.0f} / {:.0f} mm (right / left) from their midpoint; the model's "
+              "standing pose has the knees and ankles below the hips.".format(
+                  500 * refs["lengths"]["hip width"], *(1000 * side[f"heading {j}_{x}"]
+                                                        for j in ("kjc", "ajc") for x in "rl")),
+              "", "| input | " + " | ".join(f"{j}_{x}" for j in ("kjc", "ajc") for x in "rl")
+              + " |", "|---|" + "---|" * 4]  # fmt: skip
+    for path, _, _, _, _, run in defaults:
+        ours = our_centres(run)
+        cells = []
+        for j in ("kjc", "ajc"):
+            for x in "rl":
+                k = f"heading {j}_{x}"
+                mean = 1000 * np.nanmean(ours[k][WALK] - refs["centres"][k][WALK], axis=0)
+                cells.append(" / ".join(f"{v:+.0f}" for v in mean))
+        lines.append(f"| {path} | " + " | ".join(cells) + " |")
     ours = our_lengths(defaults[0][5])
     lines += ["", "| dimension | scaled model | Vicon |", "|---|---|---|"]
     lines += [f"| {k} | {ours[k]:.3f} | {refs['lengths'][k]:.3f} |" for k in refs["lengths"]]
