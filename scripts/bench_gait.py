@@ -1,5 +1,6 @@
-"""Gait events and strides against truth: the real S02 walk (Vicon heel, toe and pelvis markers)
-and the simulated foot (pipeline.simulate.foot_walk: three seeds, walks with turns).
+"""Gait events and strides against truth: the real S02 walk (Vicon heel, toe and pelvis markers),
+the simulated foot (pipeline.simulate.foot_walk: three seeds, walks with turns) and the simulated
+skeleton walking through the room (pipeline.simulate.walk: three seeds, a turn each).
 
     python scripts/bench_gait.py [--data ../shared/data] [--out results/bench_gait.txt]
 
@@ -199,6 +200,55 @@ def simulated(seeds=(0, 1, 2)) -> list[str]:
     return lines
 
 
+def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
+    """The simulated skeleton walking through the room (pipeline.simulate.walk) with soft tissue,
+    sensor bias and the floor's field (Artefacts()): `pipeline ik`'s strides and pelvis path
+    (defaults, raw signals) against the walk's own events, footprints and pelvis."""
+    from pipeline.io.recording import Recording, SensorSignals
+    from pipeline.io.sensor_names import MODEL_FRAME_NAMES
+    from pipeline.model.measures import Measures
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.process import process_recording
+    from pipeline.simulate.artefacts import Artefacts
+    from pipeline.simulate.model import simulate_trial
+    from pipeline.simulate.motions import ramp
+
+    measures, standing = Measures("m", 1.75), 3.0
+    sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer")
+    lines = ["", "## The simulated skeleton walking (pipeline.simulate.walk: feet that rest on "
+             "the floor, a turn of 60-120 deg, soft tissue, bias and the floor's field; "
+             "`pipeline ik` defaults on the raw signals)", "",
+             "| seed | IC error (ms) | stride time error (ms) | stride length error (cm) | "
+             "pelvis path: mean / 95th pct (cm), % of the distance |", "|---|---|---|---|---|"]
+    for seed in seeds:
+        sim = simulate_trial(sk, "walk", duration_s=20.0, seed=seed, standing_s=standing,
+                             artefacts=Artefacts())  # fmt: skip
+        rec = Recording(sim.time, 100.0, {MODEL_FRAME_NAMES[f]: SensorSignals(
+            gyr=i.recording.gyr, acc=i.recording.acc, mag=i.recording.mag)
+            for f, i in sim.imus.items()})  # fmt: skip
+        run = process_recording(rec, measures)
+        tau = ramp(sim.time, standing)[3]
+        ic_err, time_err, length_err = [], [], []
+        for side in ("right", "left"):
+            ic = np.interp(sim.walk.contacts(side)[0], tau, sim.time, right=np.nan)
+            lengths = sim.walk.stride_lengths(side)
+            for st in (x for x in run.gait.strides if x.side == side):
+                j = int(np.nanargmin(np.abs(ic - st.start_s)))
+                if j + 1 >= ic.size or not np.isfinite(ic[j + 1]):
+                    continue
+                ic_err.append(st.start_s - ic[j])
+                time_err.append(st.stride_time_s - (ic[j + 1] - ic[j]))
+                length_err.append(st.stride_length_m - lengths[j])
+        window = slice(int((standing - 1) * 100), None)
+        err, walked = path_error(run.gait.pelvis_path[window], sim.q[window, :3])
+        lines.append(f"| {seed} | {_stats(np.array(ic_err), 1000)} | "
+                     f"{_stats(np.array(time_err), 1000)} | {_stats(np.array(length_err), 100)} | "
+                     f"{100 * err.mean():.1f} / {100 * np.percentile(err, 95):.1f}, "
+                     f"{100 * err.mean() / walked:.1f} % of {walked:.1f} m |")  # fmt: skip
+    return lines
+
+
 def plausibility() -> list[str]:
     """The shipped x-IMU3 recording (no truth: leg movements with some steps): what is found."""
     notes: list[str] = []
@@ -217,7 +267,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("results/bench_gait.txt"))
     args = ap.parse_args()
     lines = ["# Gait events and strides against truth (scripts/bench_gait.py)", ""]
-    lines += simulated() + [""]
+    lines += simulated() + simulated_walk() + [""]
     data = args.data / "gaittoolbox_s02"
     lines += s02(data) if data.exists() else [f"S02 not found in {data}: skipped"]
     lines += plausibility()

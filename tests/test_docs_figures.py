@@ -30,6 +30,8 @@ FIGURES = [
      rf"\| pelvis \| [+-][\d.]+ / \+{NUM} / "),
     ("docs/results.md", rf"the left thigh's by \+{NUM}°", "results/bench_real_gait.txt",
      rf"\| left_femur \| [+-][\d.]+ / \+{NUM} / "),
+    ("docs/results.md", rf"the pelvis's path\n?\s*[\d.]+-{NUM} % of the", "results/bench_gait.txt",
+     rf"\| 2 \| .* [\d.]+ / [\d.]+, {NUM} % of"),
     ("docs/results.md", rf"initial contact {NUM} ms", "results/bench_gait.txt",
      rf"IC median \|error\| {NUM} ms"),
     ("README.md", rf"within {NUM} ms \(median\)", "results/bench_gait.txt",

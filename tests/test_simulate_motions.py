@@ -9,8 +9,7 @@ import pytest
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat
-from pipeline.simulate.conventions import MOTIONS
-from pipeline.simulate.motions import RAMP_S, joint_trajectories, standing_start
+from pipeline.simulate.motions import RAMP_S, SINUSOIDAL, joint_trajectories, standing_start
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +33,7 @@ def test_joint_limits_respected(tmp_path, knee):
         SubjectGeometry.default(1.62, "f", "right"), knee=knee, root="freeflyer"
     )
     t = np.arange(3000) / 100.0
-    for motion in MOTIONS:
+    for motion in SINUSOIDAL:
         for seed in range(4):
             q, v, a = joint_trajectories(sk, motion, t, seed)
             assert np.all(q[:, 7:] >= sk.lower_limits[7:]), (motion, seed)
@@ -43,7 +42,7 @@ def test_joint_limits_respected(tmp_path, knee):
 
 
 @pytest.mark.parametrize("standing_s", [0.0, 0.3])
-@pytest.mark.parametrize("motion", MOTIONS)
+@pytest.mark.parametrize("motion", SINUSOIDAL)
 def test_v_and_a_are_the_time_derivatives_of_q(skeleton, motion, standing_s):
     rate = 1000.0
     h = 1.0 / rate

@@ -1,5 +1,6 @@
 """Simulation (ground truth for every estimator): a model in, a trial with known truth out. Motions
-with exact ``q, v, a`` (:mod:`~pipeline.simulate.motions`), IMU signals of misplaced noisy sensors
+with exact ``q, v, a`` (:mod:`~pipeline.simulate.motions`), a walk through the room whose feet
+stand on the floor (:mod:`~pipeline.simulate.walk`), IMU signals of misplaced noisy sensors
 on the model (:func:`simulate_trial`), and a model-free two-segment chain
 (:mod:`~pipeline.simulate.chain`).
 
@@ -28,6 +29,9 @@ _EXPORTS = {
     "SimulatedTrial": "model",
     "Sinusoids": "chain",
     "spherical_trial": "joint_trials",
+    "walk_plan": "walk",
+    "walk_trajectories": "walk",
+    "WalkPlan": "walk",
     "standing_start": "motions",
 }
 __all__ = sorted(_EXPORTS)

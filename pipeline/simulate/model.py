@@ -2,7 +2,9 @@
 
 The motions - exact joint trajectories ``q``, ``v``, ``a`` on a free-flyer root, sums of
 sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'``,
-``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``). World frame: z up, gravity
+``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``) and, by inverse kinematics on
+prescribed feet, in :mod:`pipeline.simulate.walk` (``'walk'``: five-point differences on a
+finer grid). World frame: z up, gravity
 ``g = (0, 0, -9.81)``; segment frames ISB (x anterior, y proximal, z right).
 
 Every angle stays inside the model's joint limits (checked). Signals at each sensor, from
@@ -44,6 +46,7 @@ from pipeline.simulate.artefacts import (
     with_soft_tissue,
 )
 from pipeline.simulate.motions import joint_trajectories, motion_name, ramp, standing_start
+from pipeline.simulate.walk import WalkPlan, walk_trajectories
 
 __all__ = [
     "GRAVITY",
@@ -62,7 +65,7 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 #: dorsiflexion); the knee straight.
 STANDING_LEAN_DEG = (2.0, 6.0)
 #: The motions whose rest pose is standing (the others rest lying or seated).
-STANDING_MOTIONS = ("gait", "static")
+STANDING_MOTIONS = ("gait", "walk", "static")
 #: The earth's magnetic field in the simulator's world (x east, y north, z up; uT): 46 uT,
 #: inclination 62 deg (central Europe).
 MAGNETIC_FIELD = np.array([0.0, 21.6, -40.6])
@@ -120,6 +123,8 @@ class SimulatedTrial:
     that sensor's frame, for the thigh and shank sensors of each leg (hinge knee only).
     ``joint_centres``: ``'<side>_{hip,knee,ankle}'`` -> {IMU frame -> centre in that sensor's
     frame (sensor -> joint, m)}. ``landmarks``: landmark frame -> (N,3) world positions + noise.
+    ``walk``: the ``'walk'`` motion's :class:`~pipeline.simulate.walk.WalkPlan` (events,
+    footprints), else None.
     """
 
     time: np.ndarray
@@ -135,6 +140,7 @@ class SimulatedTrial:
     noise: SensorNoise
     skeleton: Skeleton = field(repr=False)
     gravity: np.ndarray = field(default_factory=lambda: GRAVITY.copy())
+    walk: WalkPlan | None = None
 
     @property
     def recording(self) -> Recording:
@@ -285,7 +291,10 @@ def simulate_trial(
         for side in skeleton.legs:
             lean = np.deg2rad(r_posture.uniform(*standing_lean_deg))
             posture[f"{side}_hip_Z"], posture[f"{side}_ankle_Z"] = -lean, lean
-    if standing_s > 0:
+    plan = None
+    if motion == "walk":
+        q, v, a, plan = walk_trajectories(skeleton, t, standing_s, r_motion, posture)
+    elif standing_s > 0:
         q, v, a = standing_start(skeleton, motion, t, standing_s, r_motion, posture)
     else:
         q, v, a = joint_trajectories(skeleton, motion, t, r_motion)
@@ -374,6 +383,7 @@ def simulate_trial(
         a=a,
         motion=motion,
         seed=int(seed),
+        walk=plan,
         imus=out_imus,
         knee_axis=knee_axis,
         joint_centres=_joint_truth(skeleton, placements),

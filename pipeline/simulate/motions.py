@@ -33,7 +33,8 @@ from pipeline.rotations import quat_xyzw_from_matrix, rot_x
 from pipeline.simulate.chain import Sinusoids, chain_kinematics
 from pipeline.simulate.conventions import MOTIONS
 
-__all__ = ["RAMP_S", "joint_trajectories", "motion_name", "ramp", "standing_start"]
+__all__ = ["RAMP_S", "SINUSOIDAL", "joint_trajectories", "motion_name", "ramp", "standing_height",
+           "standing_start"]
 
 _X, _Y, _Z = np.eye(3)
 _STANDING = rot_x(np.pi / 2)  # pelvis (y up, z right) -> world (z up, subject faces +x)
@@ -77,6 +78,8 @@ _SUPINE_LEFT = {"knee": 5.0}
 #: ``s, s', s'', tau`` of :func:`ramp` on the trial's samples.
 _Clock = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 _BASE_HZ = {"gait": (0.85, 1.0), "supine_hip_flexion": (0.22, 0.28), "still_thigh": (0.45, 0.55)}
+#: The motions defined here (``'walk'`` is :mod:`pipeline.simulate.walk`'s).
+SINUSOIDAL = tuple(m for m in MOTIONS if m != "walk")
 
 
 def motion_name(motion: str) -> str:
@@ -198,7 +201,7 @@ def _pelvis(
     return R, w, dw, p, dp, ddp
 
 
-def _standing_height(skeleton: Skeleton) -> float:
+def standing_height(skeleton: Skeleton) -> float:
     """Pelvis origin height with the ankle centres 8 cm above the floor, neutral pose."""
     q = skeleton.neutral()
     side = skeleton.legs[0]
@@ -223,6 +226,9 @@ def _trajectories(
     if skeleton.root != "freeflyer":
         raise InputError("expected a skeleton with root='freeflyer'", field="root")
     motion = motion_name(motion)
+    if motion not in SINUSOIDAL:
+        raise InputError(f"motion {motion!r} is pipeline.simulate.walk.walk_trajectories's",
+                         field="motion")  # fmt: skip
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     t = np.asarray(time, dtype=float)
     model = skeleton.model
@@ -231,7 +237,7 @@ def _trajectories(
     a = np.zeros((t.size, model.nv))
     base = rng.uniform(*_BASE_HZ[motion]) if motion in _BASE_HZ else 1.0  # stride rate, Hz
     phase = rng.uniform(0, 2 * np.pi)
-    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, _standing_height(skeleton), base, clock)
+    R, w, dw, p, dp, ddp = _pelvis(motion, t, rng, standing_height(skeleton), base, clock)
     vl = np.einsum("nji,nj->ni", R, dp)
     q[:, :3], q[:, 3:7] = p, quat_xyzw_from_matrix(R)
     v[:, :3], v[:, 3:6] = vl, w

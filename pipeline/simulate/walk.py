@@ -1,0 +1,329 @@
+"""A skeleton that walks through the room: feet that stand on the floor, the pelvis carried by
+the legs (the ``'walk'`` motion of :func:`pipeline.simulate.model.simulate_trial`).
+
+The other motions turn the joints by sinusoids, so their feet slide and never rest; a walk's
+truth for the pelvis's path and for zero-velocity updates needs feet that stay put while in
+contact. Here the feet's poses are prescribed and the legs follow by inverse kinematics:
+
+* **Path.** The pelvis moves along a path of arc length ``s_p(tau) = v (tau - c) + v c
+  exp(-tau / c)`` (at rest at ``tau = 0``, then at the walking speed ``v = L / T``; ``c = 0.35 T``
+  lets the first step be half a stride), heading ``psi(s)`` turning by ``turn_deg`` on a quintic
+  smoothstep over :data:`TURN_LENGTH_M`, on the motion clock ``tau`` of
+  :func:`pipeline.simulate.motions.ramp` (standing still first). The pelvis rises and falls by
+  :data:`BOUNCE_M` twice per stride (highest at each mid-stance), turns about the vertical by
+  +-4 deg with the stride and stays upright otherwise.
+* **Feet** (per stride ``T`` from an initial contact IC, as
+  :mod:`pipeline.simulate.foot_walk`): the foot turns about its lateral axis in raised-cosine
+  lobes (loading ``+20 deg`` -> flat in ``[0, 0.1 T]``, push-off ``-40 deg`` in
+  ``[0.45 T, 0.75 T]``, swing ``+60 deg`` in ``[0.75 T, T]``); it pivots about its heel during
+  loading, rests flat on its footprint in ``[0.1 T, 0.45 T]``, pivots about its toe during
+  push-off until the final contact FC ``= 0.6 T``, and swings to the next footprint on a
+  minimum-jerk blend of the two pivots (Flash & Hogan 1985) lifted by ``64 u^3 (1 - u)^3``
+  :data:`CLEARANCE_M`. Footprints lie a hip's half-width either side of the path, where the
+  pelvis passes at mid-stance, turned to the path's heading. The right foot pushes off first;
+  the left stays flat on its standing footprint until half a stride later.
+* **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF) solve the foot's pose
+  exactly (Newton on ``log6``, Pinocchio's frame Jacobian; a free knee's ab/adduction and
+  rotation stay zero). ``v`` and ``a`` are five-point central differences on a grid four times
+  finer than the trial's (errors ``O(dt^4)``), the root's as
+  :func:`pipeline.simulate.motions.joint_trajectories` defines them.
+
+:func:`walk_plan` gives the truth the gait analysis must recover (events, footprints).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.interpolate import CubicSpline
+
+from pipeline.errors import InputError
+from pipeline.model.skeleton import Skeleton
+from pipeline.rotations import quat_xyzw_from_matrix, rot_y, rot_z
+from pipeline.simulate.motions import ramp, standing_height
+
+__all__ = ["BOUNCE_M", "CLEARANCE_M", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
+
+_STANDING = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # pelvis (y up, z right) -> world
+#: The foot's pitch lobes (start, end, turn in deg) as shares of the stride from its IC.
+LOBES = ((0.0, 0.1, -20.0), (0.45, 0.75, -40.0), (0.75, 1.0, 60.0))
+FC_SHARE, FLAT, PUSH_OFF = 0.6, 0.1, 0.45
+CLEARANCE_M = 0.05
+BOUNCE_M = 0.025
+TURN_LENGTH_M = 3.0
+ANKLE_HEIGHT_M = 0.08  # the model's ankle centre above the floor (motions.standing_height)
+_FINE = 4  # the kinematics' grid, times finer than the trial's
+
+
+@dataclass(frozen=True)
+class WalkPlan:
+    """The walk's design and truth: stride ``T`` (s of the motion clock), stride length ``L`` (m),
+    ``turn`` (rad) starting at arc length ``turn_at_m``; per side the push-off starts ``po``
+    (clock s; the first from the standing footprint) and footprints ``(k, 3)`` (the ankle
+    centre when flat, world) with headings ``(k,)``."""
+
+    T: float
+    L: float
+    turn: float
+    turn_at_m: float
+    push_off: dict[str, np.ndarray]
+    footprints: dict[str, np.ndarray]
+    headings: dict[str, np.ndarray]
+    path: CubicSpline
+    heading: CubicSpline
+
+    @property
+    def speed(self) -> float:
+        return self.L / self.T
+
+    def contacts(self, side: str) -> tuple[np.ndarray, np.ndarray]:
+        """The foot's initial and final contacts (motion clock s): each IC lands on the
+        footprint after the standing one, in order."""
+        po = self.push_off[side]
+        return po[:-1] + (1 - PUSH_OFF) * self.T, po + (FC_SHARE - PUSH_OFF) * self.T
+
+    def stride_lengths(self, side: str) -> np.ndarray:
+        """The horizontal length of each stride from one IC to the next (m)."""
+        return np.linalg.norm(np.diff(self.footprints[side][1:, :2], axis=0), axis=1)
+
+
+def _bump_integral(s: np.ndarray) -> np.ndarray:
+    c = np.clip(s, 0.0, 1.0)
+    return c - np.sin(2 * np.pi * c) / (2 * np.pi)
+
+
+def _min_jerk(u: np.ndarray) -> np.ndarray:
+    u = np.clip(u, 0.0, 1.0)
+    return 10 * u**3 - 15 * u**4 + 6 * u**5
+
+
+def _path(turn: float, turn_at: float, length: float) -> tuple[CubicSpline, CubicSpline]:
+    """The path's horizontal position and heading as cubic splines of the arc length."""
+    s = np.arange(-1.0, length + 1.0, 0.005)
+    psi = turn * _min_jerk((s - turn_at) / TURN_LENGTH_M)
+    d = np.stack([np.cos(psi), np.sin(psi)], axis=1)
+    xy = np.concatenate([[[0.0, 0.0]], np.cumsum(0.5 * (d[1:] + d[:-1]) * 0.005, axis=0)])
+    xy -= xy[np.searchsorted(s, 0.0)]
+    return CubicSpline(s, xy), CubicSpline(s, psi)
+
+
+def _arc(plan_T: float, v: float, tau: np.ndarray) -> np.ndarray:
+    c = 0.35 * plan_T
+    return v * (tau - c) + v * c * np.exp(-np.asarray(tau) / c)
+
+
+def _leg_length(skeleton: Skeleton) -> float:
+    q = skeleton.neutral()
+    return float(np.linalg.norm(skeleton.relative_pose("right_AJC", "right_HJC", q)[:3, 3]))
+
+
+def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
+              standing_feet: dict[str, np.ndarray]) -> WalkPlan:  # fmt: skip
+    """Draw a walk (stride ``T ~ U(1.0, 1.15)`` s, length ``~U(1.25, 1.4)`` leg lengths, a turn of
+    ``+-U(60, 120)`` deg after two strides) and place its footprints (module docstring)."""
+    leg = _leg_length(skeleton)
+    T, L = rng.uniform(1.0, 1.15), leg * rng.uniform(1.25, 1.4)
+    turn = np.deg2rad(rng.uniform(60, 120)) * rng.choice([-1.0, 1.0])
+    turn_at = 2 * L
+    n_strides = int(duration_s / T) + 2
+    path, heading = _path(turn, turn_at, L * (n_strides + 2))
+    half = abs(float(skeleton.relative_pose("right_HJC", "pelvis", skeleton.neutral())[2, 3]))
+    floor_z = np.mean([f[2] for f in standing_feet.values()])
+    push, prints, heads = {}, {}, {}
+    for side, first in (("right", 0.0), ("left", 0.5 * T)):
+        po = first + T * np.arange(n_strides)
+        ic = po[:-1] + (1 - PUSH_OFF) * T  # the IC after each push-off
+        s = _arc(T, L / T, ic + 0.3 * T)  # the pelvis above the foot at mid-stance
+        psi = heading(s)
+        lateral = np.stack([np.sin(psi), -np.cos(psi), 0 * psi], 1) * (1 if side == "right" else -1)
+        xy = np.concatenate([path(s), np.zeros((s.size, 1))], axis=1) + half * lateral
+        xy[:, 2] = floor_z
+        push[side] = po
+        prints[side] = np.concatenate([standing_feet[side][None], xy])
+        heads[side] = np.concatenate([[0.0], psi])
+    return WalkPlan(T, L, turn, turn_at, push, prints, heads, path, heading)
+
+
+def _foot_frame(psi: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    return rot_z(psi) @ _STANDING @ rot_z(phi)
+
+
+def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray):
+    """The foot frame's world rotation (N, 3, 3) and origin (N, 3) at clock times ``tau``."""
+    T, po = plan.T, plan.push_off[side]
+    F, H = plan.footprints[side], plan.headings[side]
+    phi = np.zeros_like(tau)
+    for j, p in enumerate(po):
+        ic = p - PUSH_OFF * T
+        for a, b, turn in LOBES:
+            if j == 0 and a == 0.0:
+                continue  # the standing footprint: no loading response
+            phi += np.deg2rad(turn) * _bump_integral((tau - ic - a * T) / ((b - a) * T))
+    psi = np.zeros_like(tau)
+    pos = np.repeat(F[:1], tau.size, axis=0)
+    for j, p in enumerate(po[: len(F) - 1]):
+        fc, nxt = p + (FC_SHARE - PUSH_OFF) * T, p + (1 - PUSH_OFF) * T
+        u = (tau - fc) / (nxt - fc)
+        m = _min_jerk(u)
+        dpsi = H[j + 1] - H[j]
+        psi += dpsi * m
+        toe_j = F[j] + _foot_frame(H[j], 0.0) @ toe
+        heel_n = F[j + 1] + _foot_frame(H[j + 1], 0.0) @ heel
+        a = toe_j - _foot_frame(np.full_like(tau, H[j]), phi) @ toe
+        b = heel_n - _foot_frame(np.full_like(tau, H[j + 1]), phi) @ heel
+        lift = 64 * CLEARANCE_M * np.clip(u, 0, 1) ** 3 * (1 - np.clip(u, 0, 1)) ** 3
+        swing = (1 - m)[:, None] * a + m[:, None] * b + lift[:, None] * [0.0, 0.0, 1.0]
+        pivot_toe = (tau >= p) & (tau < fc)
+        in_swing = (tau >= fc) & (tau < nxt)
+        pivot_heel = (tau >= nxt) & (tau < nxt + FLAT * T)
+        flat = tau >= nxt + FLAT * T
+        pos = np.where(pivot_toe[:, None], a, pos)
+        pos = np.where(in_swing[:, None], swing, pos)
+        pos = np.where(pivot_heel[:, None], b, pos)
+        pos = np.where(flat[:, None], F[j + 1], pos)
+    return _foot_frame(psi, phi), pos
+
+
+def _five_point(x: np.ndarray, h: float) -> np.ndarray:
+    """First derivative along axis 0 by five-point central differences (one-sided at the ends
+    are not needed: the caller trims two samples each side)."""
+    d = np.zeros_like(x)
+    d[2:-2] = (x[:-4] - 8 * x[1:-3] + 8 * x[3:-1] - x[4:]) / (12 * h)
+    return d
+
+
+def _reach_coefficients(skeleton: Skeleton, side: str, knee: int) -> tuple[float, float, float]:
+    """``P, A, B`` of the hip-to-ankle distance ``d^2 = P + A cos k + B sin k`` over the knee's
+    flexion ``k`` (a turn about a fixed axis: exact), from three configurations."""
+    q = skeleton.neutral()
+    d2 = []
+    for k in (0.0, np.pi / 2, np.pi):
+        q[knee] = k
+        d2.append(float(np.sum(skeleton.relative_pose(f"{side}_AJC", f"{side}_HJC", q)[:3, 3]
+                               ** 2)))  # fmt: skip
+    P = 0.5 * (d2[0] + d2[2])
+    return P, d2[0] - P, d2[1] - P
+
+
+def _solve_leg(skeleton: Skeleton, q: np.ndarray, side: str, target: pin.SE3,
+               cols: list[int], reach: tuple[float, float, float]) -> np.ndarray:  # fmt: skip
+    """The leg's joints that put its foot frame at ``target``: the knee's flexion from the hip
+    centre's distance to the ankle's (:func:`_reach_coefficients`), then the hip's three and the
+    ankle's two angles by Newton steps on the pose's ``log6`` error (six equations, five
+    unknowns, consistent once the knee is set)."""
+    model, data = skeleton.model, skeleton.data
+    fid, hip = skeleton.frame_id(f"{side}_foot"), skeleton.frame_id(f"{side}_HJC")
+    knee = cols[3] + 1  # its q index (the free-flyer's quaternion has one entry more than v)
+    pin.framesForwardKinematics(model, data, q)
+    d2 = float(np.sum((target.translation - data.oMf[hip].translation) ** 2))
+    P, A, B = reach
+    c = (d2 - P) / np.hypot(A, B)
+    if c > 1 + 1e-9:
+        raise InputError(f"the {side} leg cannot reach its foot's pose in the simulated walk",
+                         field="motion")  # fmt: skip
+    base, half = np.arctan2(B, A), np.arccos(np.clip(c, -1.0, 1.0))
+    q = q.copy()
+    q[knee] = max(base + half, base - half, key=lambda k: -abs(k - q[knee]) if k > -1e-9 else -9)
+    free = [c for i, c in enumerate(cols) if i != 3]
+    for _ in range(12):
+        pin.framesForwardKinematics(model, data, q)
+        err = pin.log6(data.oMf[fid].actInv(target)).vector
+        if np.linalg.norm(err) < 1e-10:
+            return q
+        J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)[:, free]
+        dv = np.zeros(model.nv)
+        dv[free] = np.linalg.lstsq(J, err, rcond=None)[0]
+        q = pin.integrate(model, q, dv)
+    if np.linalg.norm(err) < 1e-7:  # the straight knee's rounding
+        return q
+    raise InputError(f"the {side} leg did not converge to its foot's pose in the simulated walk",
+                     field="motion")  # fmt: skip
+
+
+def walk_trajectories(
+    skeleton: Skeleton, time: np.ndarray, standing_s: float, rng: np.random.Generator,
+    posture: dict[str, float] | None = None,
+):  # fmt: skip
+    """``q, v, a`` (as :func:`pipeline.simulate.motions.joint_trajectories`) and the
+    :class:`WalkPlan` of a walk after ``standing_s`` s standing in ``posture`` (module
+    docstring)."""
+    if skeleton.root != "freeflyer":
+        raise InputError("expected a skeleton with root='freeflyer'", field="root")
+    t = np.asarray(time, dtype=float)
+    dt = (t[1] - t[0]) / _FINE if t.size > 1 else 0.01
+    tf = t[0] + dt * np.arange(-4, _FINE * (t.size - 1) + 5)
+    s, _, _, tau = ramp(tf, float(standing_s))
+    model = skeleton.model
+    q0 = skeleton.neutral()
+    z0 = standing_height(skeleton)
+    q0[:3], q0[3:7] = [0.0, 0.0, z0], quat_xyzw_from_matrix(_STANDING)
+    for name, angle in (posture or {}).items():
+        q0[skeleton.q_index(name)] = angle
+    skeleton.forward(q0)
+    feet = {x: skeleton.data.oMf[skeleton.frame_id(f"{x}_foot")].translation.copy()
+            for x in skeleton.legs}  # fmt: skip
+    plan = walk_plan(skeleton, float(tf[-1] - standing_s), rng, feet)
+    foot_len = 0.31 * _leg_length(skeleton)  # foot 0.152, leg 0.485 of the height
+    heel = np.array([-0.25 * foot_len, -ANKLE_HEIGHT_M, 0.0])
+    toe = np.array([0.55 * foot_len, -ANKLE_HEIGHT_M, 0.0])
+    poses = {x: foot_poses(plan, x, tau, heel, toe) for x in skeleton.legs}
+    sp = _arc(plan.T, plan.speed, tau)
+    sway = np.deg2rad(4.0) * s**2 * np.sin(2 * np.pi * tau / plan.T + rng.uniform(0, 2 * np.pi))
+    R = rot_z(plan.heading(sp)) @ _STANDING @ rot_y(sway)
+    p = np.concatenate([plan.path(sp), np.full((tf.size, 1), z0)], axis=1)
+    p[:, 2] += s**2 * _height_change(skeleton, plan, p, R, poses, s**2, tau)
+    cols = {x: [model.joints[model.getJointId(n)].idx_v for n in (
+        *skeleton.leg_joints(x, "hip"), skeleton.leg_joints(x, "knee")[0],
+        *skeleton.leg_joints(x, "ankle"))] for x in skeleton.legs}  # fmt: skip
+    reach = {x: _reach_coefficients(skeleton, x, cols[x][3] + 1) for x in skeleton.legs}
+    Q = np.empty((tf.size, model.nq))
+    qk = q0.copy()
+    for k in range(tf.size):
+        qk[:3], qk[3:7] = p[k], quat_xyzw_from_matrix(R[k])
+        for x in skeleton.legs:
+            qk = _solve_leg(skeleton, qk, x, pin.SE3(poses[x][0][k], poses[x][1][k]), cols[x],
+                            reach[x])
+        Q[k] = qk
+    return (*_derivatives(Q, p, R, dt), plan)
+
+
+def _height_change(skeleton, plan, p, R, poses, s, tau) -> np.ndarray:
+    """The pelvis's height relative to standing: a constant drop, the lowest that keeps every
+    ankle within 98.5 % of the leg's length of its hip, plus the bounce (module docstring)."""
+    q = skeleton.neutral()
+    leg = _leg_length(skeleton)
+    bounce = BOUNCE_M * np.cos(4 * np.pi * (tau - 0.85 * plan.T) / plan.T)
+    drop = 0.0
+    for x in skeleton.legs:
+        hjc = skeleton.relative_pose(f"{x}_HJC", "pelvis", q)[:3, 3]
+        hip = p + R @ hjc
+        d = poses[x][1] - hip
+        reach = ((1 - 0.015 * s) * leg) ** 2 - d[:, 0] ** 2 - d[:, 1] ** 2
+        if np.any(reach <= 0):
+            raise InputError("the simulated walk's steps are longer than the legs", field="motion")
+        room = -d[:, 2] - np.sqrt(reach)  # how far the hip must come down (<= 0: none)
+        moving = s > 0.04
+        drop = max(drop, float(np.max((room[moving] + s[moving] * bounce[moving]) / s[moving])))
+    return -drop + bounce
+
+
+def _derivatives(Q: np.ndarray, p: np.ndarray, R: np.ndarray, dt: float):
+    """``q, v, a`` on the trial's samples from the fine grid (module docstring)."""
+    v = np.empty((Q.shape[0], Q.shape[1] - 1))
+    a = np.empty_like(v)
+    dp, ddp = _five_point(p, dt), None
+    ddp = _five_point(dp, dt)
+    dR = _five_point(R, dt)
+    W = np.einsum("nji,njk->nik", R, dR)
+    w = 0.5 * np.stack([W[:, 2, 1] - W[:, 1, 2], W[:, 0, 2] - W[:, 2, 0],
+                        W[:, 1, 0] - W[:, 0, 1]], axis=1)  # fmt: skip
+    dw = _five_point(w, dt)
+    vl = np.einsum("nji,nj->ni", R, dp)
+    v[:, :3], v[:, 3:6] = vl, w
+    a[:, :3], a[:, 3:6] = np.einsum("nji,nj->ni", R, ddp) - np.cross(w, vl), dw
+    dq = _five_point(Q[:, 7:], dt)
+    v[:, 6:], a[:, 6:] = dq, _five_point(dq, dt)
+    keep = slice(4, Q.shape[0] - 4 + 1, _FINE)
+    return Q[keep], v[keep], a[keep]

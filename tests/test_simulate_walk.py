@@ -1,0 +1,118 @@
+"""The simulated walk (pipeline.simulate.walk): feet that rest on their footprints, legs that
+reach them exactly, q/v/a consistent, and the gait analysis recovering its strides and the
+pelvis's path from the sensors alone."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.errors import InputError
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import MODEL_FRAME_NAMES
+from pipeline.model.measures import Measures
+from pipeline.model.scaling import geometry_from_measures
+from pipeline.model.skeleton import Skeleton
+from pipeline.rotations import matrix_from_quat
+from pipeline.simulate.model import simulate_trial
+from pipeline.simulate.motions import joint_trajectories, ramp
+from pipeline.simulate.walk import FLAT, PUSH_OFF, walk_trajectories
+
+MEASURES = Measures("m", 1.75)
+STANDING = 2.0
+
+
+@pytest.fixture(scope="module")
+def trial():
+    sk = Skeleton.build(geometry_from_measures(MEASURES)[0], knee="free", root="freeflyer")
+    return simulate_trial(sk, "walk", duration_s=12.0, seed=3, standing_s=STANDING)
+
+
+def _flat_samples(trial, side: str) -> np.ndarray:
+    """Samples where the foot lies flat on a footprint after a step (truth from the plan)."""
+    tau = ramp(trial.time, STANDING)[3]
+    T = trial.walk.T
+    ic = trial.walk.contacts(side)[0]
+    flat = np.zeros(trial.time.size, bool)
+    for c in ic:
+        flat |= (tau > c + FLAT * T + 0.02) & (tau < c + PUSH_OFF * T - 0.02)
+    return flat
+
+
+def test_feet_rest_flat_on_their_footprints(trial):
+    for side in ("right", "left"):
+        flat = _flat_samples(trial, side)
+        assert flat.sum() > 100
+        imu = trial.imus[f"{side}_foot_imu"]  # the sensor's true pose
+        starts = np.flatnonzero(np.diff(flat.astype(int)) == 1) + 1
+        for a in starts:
+            b = a + int(np.argmin(flat[a:]))
+            assert np.ptp(imu.position[a:b], axis=0).max() < 1e-9, (side, a)
+            assert np.ptp(imu.rotation[a:b], axis=0).max() < 1e-9, (side, a)
+        # every footprint on the standing feet's floor (the two legs' leans put the standing
+        # feet a few mm apart in height)
+        ajc_z = trial.walk.footprints[side][:, 2]
+        assert np.ptp(ajc_z) < 0.005
+
+
+def test_the_pelvis_moves_through_the_room_and_turns(trial):
+    p = trial.q[:, :3]
+    walked = np.sum(np.linalg.norm(np.diff(p[:, :2], axis=0), axis=1))
+    assert walked > 0.8 * trial.walk.speed * (12.0 - STANDING - 1.0)
+    heading = np.unwrap(np.arctan2(*np.diff(p[-200:, :2], axis=0).T[::-1]))
+    assert abs(abs(np.mean(heading)) - abs(trial.walk.turn)) < np.deg2rad(10)
+    # the standing start is still
+    assert np.ptp(p[: int(100 * STANDING) - 5], axis=0).max() < 1e-9
+
+
+def test_v_and_a_are_the_time_derivatives_of_q(trial):
+    # at 500 Hz: a heel strike turns the ankle at up to ~250 rad/s^2 within a tenth of a
+    # second, which a central difference at 100 Hz cannot follow
+    t = np.arange(1500) / 500.0
+    q, v, a, _ = walk_trajectories(trial.skeleton, t, 0.3, np.random.default_rng(1))
+    h, moving = 1 / 500.0, slice(200, None)  # after the ramp's start (its jerk jumps there)
+
+    def close(fd, exact, tol):
+        np.testing.assert_allclose(fd[moving], exact[1:-1][moving], atol=tol)
+
+    # a = dv/dt, integrated over 0.1 s windows: the foot's pitch lobes make the jerk jump at
+    # their ends, where a central difference of v errs by ~h |jump| / 4 (~5 rad/s^2 here)
+    steps = np.cumsum(0.5 * h * (a[1:] + a[:-1]), axis=0)
+    np.testing.assert_allclose((v[250::50] - v[200:-50:50]), steps[249::50] - steps[199:-50:50],
+                               atol=1e-3 * np.abs(v).max())  # fmt: skip
+    close((q[2:, 7:] - q[:-2, 7:]) / (2 * h), v[:, 6:], 3e-3 * np.abs(v[:, 6:]).max())
+    R = matrix_from_quat(q[:, [6, 3, 4, 5]])
+    dp = (q[2:, :3] - q[:-2, :3]) / (2 * h)
+    close(np.einsum("nji,nj->ni", R[1:-1], dp), v[:, :3], 1e-3)
+
+
+def test_the_sinusoidal_generator_refuses_the_walk(trial):
+    with pytest.raises(InputError, match="walk"):
+        joint_trajectories(trial.skeleton, "walk", trial.time)
+
+
+def test_strides_and_the_pelvis_path_are_recovered_from_the_sensors(trial):
+    from pipeline.process import process_recording
+
+    rec = Recording(trial.time, 100.0, {MODEL_FRAME_NAMES[f]: SensorSignals(
+        gyr=i.recording.gyr, acc=i.recording.acc) for f, i in trial.imus.items()})  # fmt: skip
+    run = process_recording(rec, MEASURES)
+    strides = run.gait.strides
+    assert len(strides) >= 10
+    tau = ramp(trial.time, STANDING)[3]
+    for side in ("right", "left"):
+        ic = np.interp(trial.walk.contacts(side)[0], tau, trial.time, right=np.nan)
+        lengths = trial.walk.stride_lengths(side)
+        for st in (s for s in strides if s.side == side):
+            j = int(np.nanargmin(np.abs(ic - st.start_s)))
+            assert abs(st.start_s - ic[j]) < 0.03
+            assert abs(st.stride_length_m - lengths[j]) < 0.03
+    path = run.gait.pelvis_path
+    ours = path[:, [0, 2]] * [1.0, -1.0]  # the model's y-up world to the simulator's z-up
+    truth = trial.q[:, :2]
+    ok = np.all(np.isfinite(ours), axis=1)
+    a, b = ours[ok] - ours[ok].mean(0), truth[ok] - truth[ok].mean(0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    err = np.linalg.norm(a @ (u @ vt) - b, axis=1)
+    walked = np.sum(np.linalg.norm(np.diff(truth, axis=0), axis=1))
+    assert err.mean() < 0.01 * walked
