@@ -86,3 +86,18 @@ def test_output_set_commit_failure_rolls_back(tmp_path, monkeypatch):
     monkeypatch.undo()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]
     assert keep.read_text() == "old b"
+
+
+def test_committed_outputs_lists_what_a_set_committed_and_nothing_aborted(tmp_path):
+    from pipeline.io.atomic import committed_outputs, output_set
+
+    before = committed_outputs()
+    with pytest.raises(RuntimeError), output_set() as out:
+        with out.open(tmp_path / "aborted.csv") as f:
+            f.write("x")
+        raise RuntimeError("stop")
+    assert committed_outputs() == before
+    with output_set() as out:
+        with out.open(tmp_path / "a.csv") as f:
+            f.write("x")
+    assert committed_outputs() == (*before, tmp_path / "a.csv")

@@ -20,6 +20,7 @@ from typing import IO, Any
 from pipeline.errors import InputError
 
 __all__ = [
+    "committed_outputs",
     "OutputSet",
     "atomic_write",
     "output_dir",
@@ -127,6 +128,16 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
     return Path(path)
 
 
+#: Every destination an :class:`OutputSet` committed in this process (what a signal that
+#: arrives afterwards, while the command ends, leaves complete).
+_COMMITTED: list[Path] = []
+
+
+def committed_outputs() -> tuple[Path, ...]:
+    """The files output sets have committed in this process, in order."""
+    return tuple(_COMMITTED)
+
+
 class OutputSet:
     """Several output files committed together (use through :func:`output_set`).
 
@@ -197,6 +208,7 @@ class OutputSet:
         for _, backup in committed:
             if backup is not None:
                 _remove(backup)
+        _COMMITTED.extend(self._pending)
         return tuple(self._pending)
 
     def abort(self) -> None:
