@@ -391,8 +391,7 @@ def _left(args) -> str:
         return "the trials that finished are complete, batch_summary.csv lists them"
     from pipeline.io.atomic import committed_outputs
 
-    done = committed_outputs()
-    if done:  # the signal came after the outputs were committed, while the command ended
+    if done := committed_outputs():  # the signal came after the commit, while the command ended
         return f"the outputs were complete before it ({len(done)} files in {done[0].parent})"
     return "no output was written"
 
