@@ -166,8 +166,6 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
 
 
 def simulated_walk() -> tuple[Recording, Measures]:
-    from pipeline.io.recording import SensorSignals
-    from pipeline.io.sensor_names import MODEL_FRAME_NAMES
     from pipeline.model.scaling import geometry_from_measures
     from pipeline.model.skeleton import Skeleton
     from pipeline.simulate.artefacts import Artefacts
@@ -177,10 +175,7 @@ def simulated_walk() -> tuple[Recording, Measures]:
     sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer")
     trial = simulate_trial(sk, "gait", duration_s=20.0, seed=5, standing_s=3.0,
                            artefacts=Artefacts())  # fmt: skip
-    rec = Recording(trial.time, 100.0, {MODEL_FRAME_NAMES[f]: SensorSignals(
-        gyr=i.recording.gyr, acc=i.recording.acc, mag=i.recording.mag)
-        for f, i in trial.imus.items()})  # fmt: skip
-    return rec, measures
+    return trial.raw_recording(), measures
 
 
 def s02(data: Path) -> tuple[Recording, Measures]:

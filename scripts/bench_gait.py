@@ -204,8 +204,6 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
     """The simulated skeleton walking through the room (pipeline.simulate.walk) with soft tissue,
     sensor bias and the floor's field (Artefacts()): `pipeline ik`'s strides and pelvis path
     (defaults, raw signals) against the walk's own events, footprints and pelvis."""
-    from pipeline.io.recording import Recording, SensorSignals
-    from pipeline.io.sensor_names import MODEL_FRAME_NAMES
     from pipeline.model.measures import Measures
     from pipeline.model.scaling import geometry_from_measures
     from pipeline.model.skeleton import Skeleton
@@ -224,10 +222,7 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
     for seed in seeds:
         sim = simulate_trial(sk, "walk", duration_s=20.0, seed=seed, standing_s=standing,
                              artefacts=Artefacts())  # fmt: skip
-        rec = Recording(sim.time, 100.0, {MODEL_FRAME_NAMES[f]: SensorSignals(
-            gyr=i.recording.gyr, acc=i.recording.acc, mag=i.recording.mag)
-            for f, i in sim.imus.items()})  # fmt: skip
-        run = process_recording(rec, measures)
+        run = process_recording(sim.raw_recording(), measures)
         tau = ramp(sim.time, standing)[3]
         ic_err, time_err, length_err = [], [], []
         for side in ("right", "left"):

@@ -27,6 +27,7 @@ Usage: ``python scripts/bench_real_gait.py [--data ../shared/data/gaittoolbox_s0
 from __future__ import annotations
 
 import argparse
+import functools
 import time
 from pathlib import Path
 
@@ -88,12 +89,26 @@ def angle_scores(ours: np.ndarray, truth: np.ndarray) -> dict[str, float]:
             "rom_truth": float(np.degrees(np.ptp(truth[WALK])))}  # fmt: skip
 
 
+@functools.cache
+def vicon_mat(data: Path) -> dict:
+    """The S02 Vicon export (markers, joint centres, segments), read once."""
+    import scipy.io as sio
+
+    return sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
+                       struct_as_record=False)  # fmt: skip
+
+
+def vicon_rotations(data: Path, segment: str) -> np.ndarray:
+    """A Vicon segment's rotation (segment -> lab) per frame, (N, 3, 3)."""
+    from scipy.spatial.transform import Rotation
+
+    angles = np.radians(np.asarray(vicon_mat(data)[segment], float)[:, :3])
+    return Rotation.from_rotvec(angles).as_matrix()
+
+
 def vicon_centres(data: Path) -> dict[str, np.ndarray]:
     """Knee and ankle centres relative to the hip centres' midpoint, (N, 3) m, in the Vicon
     pelvis frame (OpenSim axes) and in its heading frame (forward, up, right)."""
-    import scipy.io as sio
-    from scipy.spatial.transform import Rotation
-
     rows = np.genfromtxt(data / "vicon" / "S02-Trial-Walk-1_joint_centres_pelvis.csv",
                          delimiter=",", names=True)  # fmt: skip
     out = {}
@@ -102,9 +117,8 @@ def vicon_centres(data: Path) -> dict[str, np.ndarray]:
     for s in "rl":
         for j in ("kjc", "ajc"):
             out[f"pelvis {j}_{s}"] = np.stack([rows[f"{j}_{s}_os_{a}"] for a in "xyz"], 1) - mid
-    m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
-    root = Rotation.from_rotvec(np.radians(np.asarray(m["Root"], float)[:, :3])).as_matrix()
+    m = vicon_mat(data)
+    root = vicon_rotations(data, "Root")
     fwd = root[:, :, 2].copy()
     fwd[:, 2] = 0.0
     fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
@@ -157,14 +171,9 @@ def our_inclinations(run) -> dict[str, np.ndarray]:
 
 def vicon_inclinations(data: Path) -> dict[str, np.ndarray]:
     """As :func:`our_inclinations`, of the Vicon segments (anterior ``z``, lab ``z`` up)."""
-    import scipy.io as sio
-    from scipy.spatial.transform import Rotation
-
-    m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
     out = {}
     for ours, seg in SEGMENTS.items():
-        R = Rotation.from_rotvec(np.radians(np.asarray(m[seg], float)[:, :3])).as_matrix()
+        R = vicon_rotations(data, seg)
         out[ours] = _elevation(R[:, :, 2], np.array([0.0, 0.0, 1.0]))
     return out
 
@@ -181,10 +190,7 @@ def inclination_errors(ours: np.ndarray, truth: np.ndarray) -> tuple[float, floa
 def vicon_lengths(data: Path) -> dict[str, float]:
     """Mean thigh (HJC-KJC) and shank (KJC-AJC) lengths per side and the hip centres' distance
     (m) of the Vicon model over the walk."""
-    import scipy.io as sio
-
-    m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
+    m = vicon_mat(data)
     c = {k: np.asarray(m[k], float)[WALK] / 1000.0 for k in
          ("RHJC", "RKJC", "RAJC", "LHJC", "LKJC", "LAJC")}  # fmt: skip
     return _lengths({f"{side}_{j}": c[f"{side[0].upper()}{j}"] for side in ("right", "left")

@@ -8,8 +8,6 @@ import numpy as np
 import pytest
 
 from pipeline.errors import InputError
-from pipeline.io.recording import Recording, SensorSignals
-from pipeline.io.sensor_names import MODEL_FRAME_NAMES
 from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
@@ -94,9 +92,7 @@ def test_the_sinusoidal_generator_refuses_the_walk(trial):
 def test_strides_and_the_pelvis_path_are_recovered_from_the_sensors(trial):
     from pipeline.process import process_recording
 
-    rec = Recording(trial.time, 100.0, {MODEL_FRAME_NAMES[f]: SensorSignals(
-        gyr=i.recording.gyr, acc=i.recording.acc) for f, i in trial.imus.items()})  # fmt: skip
-    run = process_recording(rec, MEASURES)
+    run = process_recording(trial.raw_recording(magnetometers=False), MEASURES)
     strides = run.gait.strides
     assert len(strides) >= 10
     tau = ramp(trial.time, STANDING)[3]

@@ -31,9 +31,10 @@ from scipy.interpolate import make_interp_spline
 
 from pipeline.errors import InputError
 from pipeline.io.recording import Recording
-from pipeline.rotations import exp3, normalize, quat_from_matrix
+from pipeline.rotations import exp3, normalize, quat_from_matrix, rot_x
 
 __all__ = [
+    "UPRIGHT",
     "JointTrial",
     "Sinusoids",
     "chain_kinematics",
@@ -44,6 +45,8 @@ __all__ = [
 ]
 
 G = 9.81
+#: An upright ISB segment (y up, z right) in the simulator's z-up world, facing +x.
+UPRIGHT = rot_x(np.pi / 2)
 AngleFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 

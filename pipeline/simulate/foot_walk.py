@@ -20,7 +20,7 @@ import numpy as np
 
 from pipeline.rotations import exp3, rot_z
 
-__all__ = ["FootWalk", "foot_walk"]
+__all__ = ["FC_SHARE", "LOBES", "FootWalk", "bump_integral", "foot_walk", "min_jerk"]
 
 G = 9.81
 #: The lobes of the sagittal rate: (start, end, turn in deg) as shares of the stride.
@@ -51,13 +51,13 @@ def _bump(s: np.ndarray) -> np.ndarray:
     return np.where(inside, 1.0 - np.cos(2 * np.pi * np.clip(s, 0, 1)), 0.0)
 
 
-def _bump_integral(s: np.ndarray) -> np.ndarray:
+def bump_integral(s: np.ndarray) -> np.ndarray:
     """The integral of :func:`_bump` from 0 to ``s`` (0 before, 1 after)."""
     c = np.clip(s, 0, 1)
     return c - np.sin(2 * np.pi * c) / (2 * np.pi)
 
 
-def _min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Minimum-jerk position and second derivative (per unit duration^2) on ``[0, 1]``."""
     s = np.clip(s, 0, 1)
     return 10 * s**3 - 15 * s**4 + 6 * s**5, 60 * s - 180 * s**2 + 120 * s**3
@@ -85,12 +85,12 @@ def foot_walk(strides: int = 8, stride_time_s: float = 1.1, length_m: float = 1.
                 break
             s = (time - ic[k] - a * T) / ((b - a) * T)
             pitch_rate += np.radians(turn) * _bump(s) / ((b - a) * T)
-            pitch += np.radians(turn) * _bump_integral(s)
+            pitch += np.radians(turn) * bump_integral(s)
         if k == strides:
             break
         d = (1 - FC_SHARE) * T
         s = (time - ic[k] - FC_SHARE * T) / d
-        x, xdd = _min_jerk(s)
+        x, xdd = min_jerk(s)
         swing = (s >= 0) & (s <= 1)
         yaw = np.radians(turns[k])
         step = length_m * np.array([np.cos(heading + yaw / 2), np.sin(heading + yaw / 2)])
@@ -100,7 +100,7 @@ def foot_walk(strides: int = 8, stride_time_s: float = 1.1, length_m: float = 1.
         acc_w[:, 2] += np.where(swing, clearance_m * 2 * (np.pi / d) ** 2 * np.cos(2 * np.pi * s),
                                 0.0)  # fmt: skip
         yaw_rate += yaw * _bump(s) / d
-        yaw_angle += yaw * _bump_integral(s)
+        yaw_angle += yaw * bump_integral(s)
         heading += yaw
         base += step
     mount = exp3(rng.normal(size=3) * 0.6)

@@ -9,6 +9,7 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.rotations import exp3, normalize, rot_x
 from pipeline.simulate.chain import (
+    UPRIGHT,
     JointTrial,
     Sinusoids,
     chain_kinematics,
@@ -23,7 +24,6 @@ __all__ = ["hinge_trial", "spherical_trial"]
 
 _KINDS = ("rich", "supine_hip_flexion", "still_thigh", "poor")
 _X, _Y, _Z = np.eye(3)
-_STANDING = rot_x(np.pi / 2)  # ISB segment (y up) -> z-up world
 _SUPINE = rot_x(np.pi / 2) @ np.array([[0.0, 1, 0], [-1, 0, 0], [0, 0, 1]])  # y -> head, x -> up
 
 
@@ -40,7 +40,7 @@ def _proximal_motion(kind: str, rng: np.random.Generator, t: np.ndarray):
     ph = rng.uniform(0, 2 * np.pi, 8)
     if kind == "rich":
         base = [
-            _STANDING,
+            UPRIGHT,
             (_Y, Sinusoids(0.0, _deg(25, 8), [0.21, 0.9], ph[:2])),
             (_Z, Sinusoids(np.deg2rad(10), _deg(25, 8), [0.9, 1.7], ph[2:4])),
             (_X, Sinusoids(0.0, _deg(8, 4), [0.6, 1.3], ph[4:6])),
@@ -61,7 +61,7 @@ def _proximal_motion(kind: str, rng: np.random.Generator, t: np.ndarray):
         pos = [Sinusoids(0.0, [0.002], [0.4], ph[:1]), Sinusoids(0.0), Sinusoids(0.2)]
     else:  # still proximal segment: seated, thigh horizontal, physiological tremor only
         base = [
-            _STANDING,
+            UPRIGHT,
             (_Z, Sinusoids(np.deg2rad(90), _deg(0.3, 0.1), [0.5, 3.1], ph[:2])),
             (_X, Sinusoids(0.0, _deg(0.2, 0.1), [0.7, 2.7], ph[2:4])),
             (_Y, Sinusoids(0.0, _deg(0.2), [0.6], ph[4:5])),

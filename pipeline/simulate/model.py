@@ -3,8 +3,7 @@
 The motions - exact joint trajectories ``q``, ``v``, ``a`` on a free-flyer root, sums of
 sinusoids - are defined in :mod:`pipeline.simulate.motions` (``'gait'``,
 ``'supine_hip_flexion'``, ``'still_thigh'``, ``'static'``) and, by inverse kinematics on
-prescribed feet, in :mod:`pipeline.simulate.walk` (``'walk'``: five-point differences on a
-finer grid). World frame: z up, gravity
+prescribed feet, in :mod:`pipeline.simulate.walk` (``'walk'``). World frame: z up, gravity
 ``g = (0, 0, -9.81)``; segment frames ISB (x anterior, y proximal, z right).
 
 Every angle stays inside the model's joint limits (checked). Signals at each sensor, from
@@ -34,7 +33,8 @@ import numpy as np
 import pinocchio as pin
 
 from pipeline.errors import InputError
-from pipeline.io.recording import Recording
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.io.sensor_names import MODEL_FRAME_NAMES
 from pipeline.model.geometry import SubjectGeometry
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import exp3, normalize, quat_from_matrix
@@ -123,8 +123,7 @@ class SimulatedTrial:
     that sensor's frame, for the thigh and shank sensors of each leg (hinge knee only).
     ``joint_centres``: ``'<side>_{hip,knee,ankle}'`` -> {IMU frame -> centre in that sensor's
     frame (sensor -> joint, m)}. ``landmarks``: landmark frame -> (N,3) world positions + noise.
-    ``walk``: the ``'walk'`` motion's :class:`~pipeline.simulate.walk.WalkPlan` (events,
-    footprints), else None.
+    ``walk``: the ``'walk'`` motion's :class:`~pipeline.simulate.walk.WalkPlan`, else None.
     """
 
     time: np.ndarray
@@ -149,6 +148,14 @@ class SimulatedTrial:
         first = next(iter(self.imus.values())).recording
         sensors = {name: imu.recording.sensor for name, imu in self.imus.items()}
         return Recording(self.time, first.rate_hz, sensors, notes=(f"simulated {self.motion!r}",))
+
+    def raw_recording(self, magnetometers: bool = True) -> Recording:
+        """Raw signals only, each sensor named as ``pipeline ik`` reads it (``femur_r_imu``)."""
+        keep = ("gyr", "acc", "mag") if magnetometers else ("gyr", "acc")
+        rec = self.recording
+        sensors = {MODEL_FRAME_NAMES[name]: SensorSignals(**{k: getattr(sig, k) for k in keep})
+                   for name, sig in rec.sensors.items()}  # fmt: skip
+        return Recording(self.time, rec.rate_hz, sensors)
 
     def hinge_truth(self, side: str = "right") -> dict[str, np.ndarray]:
         """Knee truth for a thigh (1) / shank (2) sensor pair, in the calibration's terms:

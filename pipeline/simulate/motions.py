@@ -29,15 +29,14 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import quat_xyzw_from_matrix, rot_x
-from pipeline.simulate.chain import Sinusoids, chain_kinematics
+from pipeline.rotations import quat_xyzw_from_matrix
+from pipeline.simulate.chain import UPRIGHT, Sinusoids, chain_kinematics
 from pipeline.simulate.conventions import MOTIONS
 
 __all__ = ["RAMP_S", "SINUSOIDAL", "joint_trajectories", "motion_name", "ramp", "standing_height",
            "standing_start"]
 
 _X, _Y, _Z = np.eye(3)
-_STANDING = rot_x(np.pi / 2)  # pelvis (y up, z right) -> world (z up, subject faces +x)
 _SUPINE = np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]])  # pelvis x -> up, y -> +x (head)
 
 # joint suffix -> (offset deg, ((amplitude deg, frequency x base, phase rad), ...))
@@ -175,7 +174,7 @@ def _pelvis(
     stands upright before walking."""
     n = t.size
     if motion != "gait":
-        R0 = {"supine_hip_flexion": _SUPINE, "still_thigh": _STANDING}.get(motion, _STANDING)
+        R0 = {"supine_hip_flexion": _SUPINE, "still_thigh": UPRIGHT}.get(motion, UPRIGHT)
         z = {"supine_hip_flexion": 0.15, "still_thigh": 0.55}.get(motion, height)
         p = np.tile([0.0, 0.0, z], (n, 1))
         zero = np.zeros((n, 3))
@@ -186,7 +185,7 @@ def _pelvis(
         t,
         [
             (_Z, _follow(_heading(weave, fw, ph[0], speed), clock)),
-            _STANDING,
+            UPRIGHT,
             (_Y, _grow(Sinusoids(0.0, [np.deg2rad(5.0)], [f], ph[1:2]), clock)),  # rotation
             (_X, _grow(Sinusoids(0.0, [np.deg2rad(4.0)], [f], ph[2:3]), clock)),  # obliquity
             (_Z, _grow(Sinusoids(np.deg2rad(3.0), [np.deg2rad(2.0)], [2 * f], ph[3:4]), clock)),

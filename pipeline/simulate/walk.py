@@ -42,14 +42,14 @@ from scipy.interpolate import CubicSpline
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import quat_xyzw_from_matrix, rot_y, rot_z
+from pipeline.simulate.chain import UPRIGHT
+from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
 from pipeline.simulate.motions import ramp, standing_height
 
 __all__ = ["BOUNCE_M", "CLEARANCE_M", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
 
-_STANDING = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # pelvis (y up, z right) -> world
-#: The foot's pitch lobes (start, end, turn in deg) as shares of the stride from its IC.
-LOBES = ((0.0, 0.1, -20.0), (0.45, 0.75, -40.0), (0.75, 1.0, 60.0))
-FC_SHARE, FLAT, PUSH_OFF = 0.6, 0.1, 0.45
+#: Where the foot lies flat in a stride from its IC (shares of the stride; the lobes between).
+FLAT, PUSH_OFF = LOBES[0][1], LOBES[1][0]
 CLEARANCE_M = 0.05
 BOUNCE_M = 0.025
 TURN_LENGTH_M = 3.0
@@ -89,20 +89,10 @@ class WalkPlan:
         return np.linalg.norm(np.diff(self.footprints[side][1:, :2], axis=0), axis=1)
 
 
-def _bump_integral(s: np.ndarray) -> np.ndarray:
-    c = np.clip(s, 0.0, 1.0)
-    return c - np.sin(2 * np.pi * c) / (2 * np.pi)
-
-
-def _min_jerk(u: np.ndarray) -> np.ndarray:
-    u = np.clip(u, 0.0, 1.0)
-    return 10 * u**3 - 15 * u**4 + 6 * u**5
-
-
 def _path(turn: float, turn_at: float, length: float) -> tuple[CubicSpline, CubicSpline]:
     """The path's horizontal position and heading as cubic splines of the arc length."""
     s = np.arange(-1.0, length + 1.0, 0.005)
-    psi = turn * _min_jerk((s - turn_at) / TURN_LENGTH_M)
+    psi = turn * min_jerk((s - turn_at) / TURN_LENGTH_M)[0]
     d = np.stack([np.cos(psi), np.sin(psi)], axis=1)
     xy = np.concatenate([[[0.0, 0.0]], np.cumsum(0.5 * (d[1:] + d[:-1]) * 0.005, axis=0)])
     xy -= xy[np.searchsorted(s, 0.0)]
@@ -147,7 +137,7 @@ def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
 
 
 def _foot_frame(psi: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    return rot_z(psi) @ _STANDING @ rot_z(phi)
+    return rot_z(psi) @ UPRIGHT @ rot_z(phi)
 
 
 def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray):
@@ -160,13 +150,13 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
         for a, b, turn in LOBES:
             if j == 0 and a == 0.0:
                 continue  # the standing footprint: no loading response
-            phi += np.deg2rad(turn) * _bump_integral((tau - ic - a * T) / ((b - a) * T))
+            phi += np.deg2rad(turn) * bump_integral((tau - ic - a * T) / ((b - a) * T))
     psi = np.zeros_like(tau)
     pos = np.repeat(F[:1], tau.size, axis=0)
     for j, p in enumerate(po[: len(F) - 1]):
         fc, nxt = p + (FC_SHARE - PUSH_OFF) * T, p + (1 - PUSH_OFF) * T
         u = (tau - fc) / (nxt - fc)
-        m = _min_jerk(u)
+        m = min_jerk(u)[0]
         dpsi = H[j + 1] - H[j]
         psi += dpsi * m
         toe_j = F[j] + _foot_frame(H[j], 0.0) @ toe
@@ -207,26 +197,27 @@ def _reach_coefficients(skeleton: Skeleton, side: str, knee: int) -> tuple[float
     return P, d2[0] - P, d2[1] - P
 
 
-def _solve_leg(skeleton: Skeleton, q: np.ndarray, side: str, target: pin.SE3,
-               cols: list[int], reach: tuple[float, float, float]) -> np.ndarray:  # fmt: skip
-    """The leg's joints that put its foot frame at ``target``: the knee's flexion from the hip
-    centre's distance to the ankle's (:func:`_reach_coefficients`), then the hip's three and the
-    ankle's two angles by Newton steps on the pose's ``log6`` error (six equations, five
-    unknowns, consistent once the knee is set)."""
+def _solve_leg(
+    skeleton: Skeleton, q: np.ndarray, side: str, target: pin.SE3, free: list[int], knee: int,
+    reach: tuple[float, float, float],
+) -> np.ndarray:
+    """The leg's joints that put its foot frame at ``target``: the knee's flexion (q index
+    ``knee``) from the hip centre's distance to the ankle's (:func:`_reach_coefficients`), then
+    the hip's three and the ankle's two angles (v indices ``free``) by Newton steps on the pose's
+    ``log6`` error (six equations, five unknowns, consistent once the knee is set)."""
     model, data = skeleton.model, skeleton.data
     fid, hip = skeleton.frame_id(f"{side}_foot"), skeleton.frame_id(f"{side}_HJC")
-    knee = cols[3] + 1  # its q index (the free-flyer's quaternion has one entry more than v)
     pin.framesForwardKinematics(model, data, q)
     d2 = float(np.sum((target.translation - data.oMf[hip].translation) ** 2))
     P, A, B = reach
-    c = (d2 - P) / np.hypot(A, B)
-    if c > 1 + 1e-9:
+    cosine = (d2 - P) / np.hypot(A, B)
+    if cosine > 1 + 1e-9:
         raise InputError(f"the {side} leg cannot reach its foot's pose in the simulated walk",
                          field="motion")  # fmt: skip
-    base, half = np.arctan2(B, A), np.arccos(np.clip(c, -1.0, 1.0))
+    base, half = np.arctan2(B, A), np.arccos(np.clip(cosine, -1.0, 1.0))
+    bent = [k for k in (base + half, base - half) if k > -1e-9] or [base + half]  # flexed
     q = q.copy()
-    q[knee] = max(base + half, base - half, key=lambda k: -abs(k - q[knee]) if k > -1e-9 else -9)
-    free = [c for i, c in enumerate(cols) if i != 3]
+    q[knee] = min(bent, key=lambda k: abs(k - q[knee]))  # the root nearest the last sample's
     for _ in range(12):
         pin.framesForwardKinematics(model, data, q)
         err = pin.log6(data.oMf[fid].actInv(target)).vector
@@ -258,7 +249,7 @@ def walk_trajectories(
     model = skeleton.model
     q0 = skeleton.neutral()
     z0 = standing_height(skeleton)
-    q0[:3], q0[3:7] = [0.0, 0.0, z0], quat_xyzw_from_matrix(_STANDING)
+    q0[:3], q0[3:7] = [0.0, 0.0, z0], quat_xyzw_from_matrix(UPRIGHT)
     for name, angle in (posture or {}).items():
         q0[skeleton.q_index(name)] = angle
     skeleton.forward(q0)
@@ -271,20 +262,21 @@ def walk_trajectories(
     poses = {x: foot_poses(plan, x, tau, heel, toe) for x in skeleton.legs}
     sp = _arc(plan.T, plan.speed, tau)
     sway = np.deg2rad(4.0) * s**2 * np.sin(2 * np.pi * tau / plan.T + rng.uniform(0, 2 * np.pi))
-    R = rot_z(plan.heading(sp)) @ _STANDING @ rot_y(sway)
+    R = rot_z(plan.heading(sp)) @ UPRIGHT @ rot_y(sway)
     p = np.concatenate([plan.path(sp), np.full((tf.size, 1), z0)], axis=1)
     p[:, 2] += s**2 * _height_change(skeleton, plan, p, R, poses, s**2, tau)
-    cols = {x: [model.joints[model.getJointId(n)].idx_v for n in (
-        *skeleton.leg_joints(x, "hip"), skeleton.leg_joints(x, "knee")[0],
-        *skeleton.leg_joints(x, "ankle"))] for x in skeleton.legs}  # fmt: skip
-    reach = {x: _reach_coefficients(skeleton, x, cols[x][3] + 1) for x in skeleton.legs}
+    knee = {x: skeleton.q_index(skeleton.leg_joints(x, "knee")[0]) for x in skeleton.legs}
+    free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
+        *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle"))]
+        for x in skeleton.legs}  # fmt: skip
+    reach = {x: _reach_coefficients(skeleton, x, knee[x]) for x in skeleton.legs}
     Q = np.empty((tf.size, model.nq))
     qk = q0.copy()
     for k in range(tf.size):
         qk[:3], qk[3:7] = p[k], quat_xyzw_from_matrix(R[k])
         for x in skeleton.legs:
-            qk = _solve_leg(skeleton, qk, x, pin.SE3(poses[x][0][k], poses[x][1][k]), cols[x],
-                            reach[x])
+            qk = _solve_leg(skeleton, qk, x, pin.SE3(poses[x][0][k], poses[x][1][k]), free[x],
+                            knee[x], reach[x])
         Q[k] = qk
     return (*_derivatives(Q, p, R, dt), plan)
 
@@ -313,7 +305,7 @@ def _derivatives(Q: np.ndarray, p: np.ndarray, R: np.ndarray, dt: float):
     """``q, v, a`` on the trial's samples from the fine grid (module docstring)."""
     v = np.empty((Q.shape[0], Q.shape[1] - 1))
     a = np.empty_like(v)
-    dp, ddp = _five_point(p, dt), None
+    dp = _five_point(p, dt)
     ddp = _five_point(dp, dt)
     dR = _five_point(R, dt)
     W = np.einsum("nji,njk->nik", R, dR)
