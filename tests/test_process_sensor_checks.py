@@ -135,6 +135,21 @@ def test_a_still_thigh_or_a_foot_on_the_floor_is_not_a_fallen_sensor(walk):
     assert "calcn_r_imu" in out.sensors
 
 
+def test_feet_that_rest_through_mid_stance_are_not_taken_for_fallen_sensors():
+    """The simulated walk's feet rest flat through every mid-stance and through the standing
+    start (their median speed below 0.15 of the shanks'): no finding."""
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.simulate.model import simulate_trial
+
+    sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
+    rec = simulate_trial(sk, "walk", duration_s=10.0, seed=0, standing_s=2.0).raw_recording()
+    feet = rec.sensors["calcn_r_imu"].gyr, rec.sensors["tibia_r_imu"].gyr
+    assert np.median(np.linalg.norm(feet[0], axis=1)) < 0.15 * np.median(
+        np.linalg.norm(feet[1], axis=1))  # the median alone would call it fallen
+    assert [f for f in check_sensors(rec)[1] if f.check == "moves with its segment"] == []
+
+
 def test_the_run_names_the_excluded_sensor_and_writes_none_of_its_joints(walk):
     from pipeline.commands.ik import summary_text
     from pipeline.process import process_recording
