@@ -66,9 +66,15 @@ def turned(rec: Recording) -> Recording:
 
 
 def slipping(rec: Recording) -> Recording:
-    """Halfway through, the sensor slips by 30 deg about its x axis and stays so."""
+    """Halfway through the walk (between the leg's first and last initial contact), the sensor
+    slips by 30 deg about its x axis and stays so. Not halfway through the recording: S02
+    stands for 11 of its 25 s, so that would be its first stride, with no walk before the slip to
+    tell it from a sensor mounted so from the start."""
+    from pipeline.process.gait import gait_of
+
+    ic = gait_of(rec, []).events["right"].ic
     R = exp3(np.array([np.radians(30.0), 0.0, 0.0]))
-    s, half = rec.sensors[TARGET], len(rec.time) // 2
+    s, half = rec.sensors[TARGET], int(round((ic[0] + ic[-1]) / 2))
 
     def slip(x):
         if x is None:
@@ -130,6 +136,13 @@ def _change(run, base) -> tuple[float, float]:
     return float(np.nanmax(untouched)), float(np.nanmax(touched))
 
 
+def _leans(run) -> str:
+    """The run's measured standing leans, for the summary."""
+    lean = run.posture.lean if run.posture else {}
+    return ", ".join(f"{side} {np.degrees(lean[f'{side}_tibia']):+.1f} deg" for side in
+                     ("right", "left") if f"{side}_tibia" in lean) or "no lean"  # fmt: skip
+
+
 def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
     base = process_recording(rec, measures, filter="vqf")
     lines = [f"## {label}", "", "| fault | detected | what the run said | untouched joints "
@@ -160,8 +173,9 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
               f"(all but the swap) moved by up to {max(moved):.2f} deg (target 0.5): without the "
               "shank its leg's standing lean (measured from the knee and ankle centres) is not "
-              "measured and the leg is taken upright, which moves that hip's flexion by the lean; "
-              "the anatomical heading loses that knee's axis."]
+              "measured and the leg takes the other leg's, which moves that hip's flexion by the "
+              f"difference (the undisturbed run measured {_leans(base)}); the anatomical heading "
+              "loses that knee's axis."]
     return lines + [""]
 
 
@@ -173,7 +187,7 @@ def simulated_walk() -> tuple[Recording, Measures]:
 
     measures = Measures("m", 1.75)
     sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer")
-    trial = simulate_trial(sk, "gait", duration_s=20.0, seed=5, standing_s=3.0,
+    trial = simulate_trial(sk, "walk", duration_s=20.0, seed=5, standing_s=3.0,
                            artefacts=Artefacts())  # fmt: skip
     return trial.raw_recording(), measures
 
@@ -198,7 +212,7 @@ def main() -> None:
     args = ap.parse_args()
     lines = ["# Fault injection (scripts/bench_faults.py): one fault in the right shank's sensor",
              ""]  # fmt: skip
-    lines += bench(*simulated_walk(), "The simulator (gait with soft tissue, wandering biases, "
+    lines += bench(*simulated_walk(), "The simulator (the walk with soft tissue, wandering biases, "
                    "the floor's field; 9-D)")  # fmt: skip
     if (args.data / "gaittoolbox_s02").exists():
         lines += bench(*s02(args.data), "S02 (the real walk, raw signals through VQF)")

@@ -89,6 +89,26 @@ def test_the_stance_weight_and_a_path_needs_both_feet():
     assert notes[-1] == "the pelvis's path needs a foot sensor on each foot: not written"
 
 
+def test_a_foot_outside_the_ik_model_writes_no_path():
+    """The simulated walk without its pelvis and right shank sensors: the right leg's joints are
+    not observed, the model has no right foot, and the path is not written (this crashed)."""
+    from pipeline.model.measures import Measures
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.process import process_recording
+    from pipeline.simulate.model import simulate_trial
+
+    m = Measures("m", 1.75)
+    sk = Skeleton.build(geometry_from_measures(m)[0], knee="hinge", root="freeflyer")
+    rec = simulate_trial(sk, "walk", duration_s=12.0, seed=0, standing_s=2.0).raw_recording()
+    rec = rec.with_sensors({n: s for n, s in rec.sensors.items()
+                            if n not in ("pelvis_imu", "tibia_r_imu")})  # fmt: skip
+    run = process_recording(rec, m, filter="vqf")
+    assert run.gait.pelvis_path is None and len(run.gait.strides) > 4
+    assert "the pelvis's path needs both feet's orientations from the IK, and the model has no "\
+           "right foot (its leg's joints are not observed): not written" in run.notes
+
+
 @pytest.mark.dataset
 def test_s02_the_body_walks_the_room(tmp_path):
     """pipeline ik --landmarks world: pelvis_tx/ty/tz in the .mot, within 2.5 % of the distance

@@ -65,3 +65,23 @@ def test_a_leg_without_foot_or_raw_signals_stands_upright(trial):
     run = process_recording(quats, M, sensor_to_model=(-np.pi / 2, 0, 0))
     assert run.posture.lean == {}
     assert any("standing lean not measured" in n for n in run.notes)
+
+
+def test_a_leg_without_its_shank_sensor_takes_the_other_legs_lean(trial):
+    raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
+                                                                acc=i.recording.acc)
+                                        for f, i in trial.imus.items()
+                                        if f != "right_tibia_imu"})  # fmt: skip
+    truth = joint_angles(trial.skeleton, trial.q)
+    run = process_recording(raw, M, filter="vqf")
+    upright = process_recording(raw, M, filter="vqf", posture="neutral")
+    lean = run.posture.lean
+    assert lean["right_femur"] == lean["right_tibia"] == lean["left_tibia"]
+    assert "right" not in run.posture.length  # borrowed, not measured
+    assert any("right leg: standing lean not measured (no right_tibia sensor); it takes the "
+               "left leg's" in n for n in run.notes)
+    key = "right_hip_flexion"
+    err = {r: np.degrees(np.mean(x.joint_angles[key][200:] - truth[key][200:]))
+           for r, x in (("borrowed", run), ("upright", upright))}  # fmt: skip
+    legs_differ = np.degrees(truth["right_ankle_flexion"][100] - truth["left_ankle_flexion"][100])
+    assert abs(err["borrowed"]) < abs(legs_differ) + 0.5 < abs(err["upright"]), err

@@ -197,7 +197,7 @@ def test_a_dropout_excludes_the_sensor(walk):
 
 
 def test_the_registry_names_every_check():
-    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment"}
+    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment", "slipped"}
 
 
 @pytest.mark.dataset

@@ -17,8 +17,9 @@ weight (1 from IC to FC and at rest, 0 in swing, smoothed over :data:`BLEND_S`) 
 the stance foot where it rests carries the body, and the hand-over from one foot to the other
 moves it by no more than the feet move (the two estimates differ by the model's error). The
 floor (``y = 0``) is the lowest foot landmark at the first rest; before the feet's first rest
-and after their last the body stands where it was. Both feet, each with strides, are needed;
-without them the path is not written and a note says why.
+and after their last the body stands where it was. Both feet, each with strides and in the
+IK's model (a leg whose joints are not observed has none), are needed; without them the
+path is not written and a note says why.
 """
 
 from __future__ import annotations
@@ -118,6 +119,12 @@ def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
         return gait
     n, sides = len(rec.time), ("right", "left")
     feet = [f"{side}_foot_imu" for side in sides]
+    unsolved = [side for side, f in zip(sides, feet, strict=True) if not skeleton.has_frame(f)]
+    if unsolved:  # e.g. a foot sensor without its shank's and no pelvis sensor
+        notes.append(f"the pelvis's path needs both feet's orientations from the IK, and the "
+                     f"model has no {' or '.join(unsolved)} foot (its leg's joints are not "
+                     "observed): not written")  # fmt: skip
+        return gait
     soles = [f for f in skeleton.landmark_frames
              if LANDMARK_SEGMENT.get(f.split("_", 1)[1]) == "foot"]  # fmt: skip
     traj = frame_trajectories(skeleton, Q, feet + soles)

@@ -30,7 +30,12 @@ has no centre line the sensors can see and stays at the model's neutral.
 
 A lean is used only when the centres are plausible: the distance between them within
 :data:`LENGTH_TOL` of the model's shank length, the fit's residual below :data:`MAX_RESIDUAL`,
-and the lean within :data:`MAX_LEAN_DEG`; the notes say why a leg was taken upright.
+and the lean within :data:`MAX_LEAN_DEG`. A leg whose lean is not measured (no shank or foot
+sensor, one excluded as faulty, or implausible centres) takes the other leg's: people stand on
+both legs alike (measured leans, right / left: S02 +3.5 / +2.9 deg, the x-IMU3 walk +0.8 / -1.1
+deg), so the borrowed lean is off by the legs' difference (0.6 and 1.9 deg) where upright is off
+by the lean itself (0.8-3.5 deg). With neither leg measured both stand upright. The notes say
+which leg was measured, which borrowed and why.
 """
 
 from __future__ import annotations
@@ -62,7 +67,8 @@ MIN_CONDITIONING = 0.1
 @dataclass(frozen=True)
 class Posture:
     """``lean``: segment (``right_femur``, ``right_tibia``, ...) -> forward lean (rad) at the
-    calibration pose, for the legs whose lean was measured; ``length``: leg -> the distance (m)
+    calibration pose, for the legs whose lean was measured or borrowed from the other leg;
+    ``length``: leg -> the distance (m)
     between the knee's and the ankle's centres; ``residual``: leg -> the worse of the two
     centres' fits (m/s^2)."""
 
@@ -104,15 +110,18 @@ def standing_posture(
     lean: dict[str, float] = {}
     length: dict[str, float] = {}
     residual: dict[str, float] = {}
+    unmeasured: dict[str, str] = {}  # leg -> why its lean was not measured
     for side in legs:
         femur, tibia, foot = (f"{side}_{s}" for s in ("femur", "tibia", "foot"))
-        if not all(s in rotations for s in (femur, tibia, foot)):
-            continue  # the knee and the ankle must both be observed
+        missing = [s for s in (femur, tibia, foot) if s not in rotations]
+        if missing:  # the knee and the ankle must both be observed
+            unmeasured[side] = f"no {' or '.join(missing)} sensor"
+            continue
         try:
             knee = _centre(trial, rotations, femur, tibia)
             ankle = _centre(trial, rotations, tibia, foot)
         except InputError as e:
-            notes.append(f"{side} leg: standing lean not measured ({e.message}); taken upright")
+            unmeasured[side] = e.message
             continue
         v_s = knee.o_2 - ankle.o_1  # in the tibia's sensor frame
         if knee.conditioning < MIN_CONDITIONING:  # a hinge: its centre's place on its axis
@@ -130,7 +139,7 @@ def standing_posture(
         elif abs(np.degrees(angle)) > MAX_LEAN_DEG:
             why = f"the tibia would lean {np.degrees(angle):.0f} deg (> {MAX_LEAN_DEG:g})"
         if why:
-            notes.append(f"{side} leg: standing lean not measured, {why}; taken upright")
+            unmeasured[side] = why
             continue
         lean[femur] = lean[tibia] = angle
         length[side], residual[side] = L, res
@@ -138,7 +147,20 @@ def standing_posture(
         notes.append("standing posture from the knee and ankle centres: " + ", ".join(
             f"{side} leg leans {np.degrees(lean[f'{side}_tibia']):+.1f} deg"
             for side in legs if f"{side}_tibia" in lean))  # fmt: skip
+    for side, why in unmeasured.items():
+        notes.append(f"{side} leg: standing lean not measured ({why}); "
+                     + _borrow_other_legs_lean(lean, side))
     return Posture(lean, length, residual)
+
+
+def _borrow_other_legs_lean(lean: dict[str, float], side: str) -> str:
+    """Give ``side``'s femur and tibia the other leg's measured lean (module docstring), in
+    place; what was done, for the note."""
+    other = "left" if side == "right" else "right"
+    if f"{other}_tibia" not in lean or f"{other}_femur" not in lean:
+        return "taken upright"
+    lean[f"{side}_femur"] = lean[f"{side}_tibia"] = lean[f"{other}_tibia"]
+    return f"it takes the {other} leg's ({np.degrees(lean[f'{other}_tibia']):+.1f} deg)"
 
 
 def lean_pose(pose: dict[str, np.ndarray], posture: Posture) -> dict[str, np.ndarray]:

@@ -41,6 +41,11 @@ done about it:
   read as x, y, z, w than as w, x, y, z are **refused** (median tilt: S02's vendor quaternions
   0.2-1.0 deg, 3.4-40 deg read the other way; the simulator's 0.3-8 deg, 7-88 deg).
 
+* ``slipped`` (:mod:`pipeline.process.slip`): a leg sensor whose own view of its segment (the
+  flexion axis, gravity at mid-stance) turns between the strides before and after some stride by
+  more than :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is
+  wrong from then on: **excluded**. Checked in walking (four strides or more on its leg).
+
 Magnetometer trust (field strength and dip against the other sensors and over time) is
 :mod:`pipeline.calibration.magnetometer`'s; the summary's sensor table shows both.
 """
@@ -58,6 +63,7 @@ from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.process.signals import gravity_in_world
+from pipeline.process.slip import slip_step
 
 __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
            "ORDER_RATIO", "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors",
@@ -307,12 +313,20 @@ def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     return None
 
 
+def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    step = slip_step(name, rec)
+    if step is None or not step.slipped:
+        return None
+    return Finding(name, "slipped", "excluded", step.evidence())
+
+
 #: Check name -> function of (sensor name, its signals, the recording).
 CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
     "dead": _dead,
     "dropout": _dropout,
     "saturation": _saturation,
     "moves with its segment": _moves_with_segment,
+    "slipped": _slipped,
 }
 
 

@@ -10,8 +10,9 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   lets the first step be half a stride), heading ``psi(s)`` turning by ``turn_deg`` on a quintic
   smoothstep over :data:`TURN_LENGTH_M`, on the motion clock ``tau`` of
   :func:`pipeline.simulate.motions.ramp` (standing still first). The pelvis rises and falls by
-  :data:`BOUNCE_M` twice per stride (highest at each mid-stance), turns about the vertical by
-  +-4 deg with the stride and stays upright otherwise.
+  :data:`BOUNCE_M` twice per stride (highest at each mid-stance) and turns with the stride as a
+  walking pelvis does (:data:`PELVIS_TURN_DEG`): about the vertical and forward axes once per
+  stride, about the lateral axis twice.
 * **Feet** (per stride ``T`` from an initial contact IC, as
   :mod:`pipeline.simulate.foot_walk`): the foot turns about its lateral axis in raised-cosine
   lobes (loading ``+20 deg`` -> flat in ``[0, 0.1 T]``, push-off ``-40 deg`` in
@@ -41,17 +42,24 @@ from scipy.interpolate import CubicSpline
 
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
-from pipeline.rotations import quat_xyzw_from_matrix, rot_y, rot_z
+from pipeline.rotations import quat_xyzw_from_matrix, rot_x, rot_y, rot_z
 from pipeline.simulate.chain import UPRIGHT
 from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
 from pipeline.simulate.motions import ramp, standing_height
 
-__all__ = ["BOUNCE_M", "CLEARANCE_M", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
+__all__ = ["BOUNCE_M", "CLEARANCE_M", "PELVIS_TURN_DEG", "TURN_LENGTH_M", "WalkPlan", "walk_plan",
+           "walk_trajectories"]
 
 #: Where the foot lies flat in a stride from its IC (shares of the stride; the lobes between).
 FLAT, PUSH_OFF = LOBES[0][1], LOBES[1][0]
 CLEARANCE_M = 0.05
 BOUNCE_M = 0.025
+#: Amplitudes (deg) of the walking pelvis's rotation (about the vertical), obliquity (about the
+#: forward axis) and anterior tilt (about the lateral axis, twice per stride), as normal gait's
+#: pelvis turns (about +-4, +-4 and +-2 deg; Perry & Burnfield, Gait Analysis, 2010, ch. 10): its
+#: sensor then turns at 27 deg/s (median over the walk; the real S02 pelvis's 33, x-IMU3's 26)
+#: where the rotation alone gave 12, which a fallen-off sensor's check mistook for a still sensor.
+PELVIS_TURN_DEG = (4.0, 4.0, 2.0)
 TURN_LENGTH_M = 3.0
 ANKLE_HEIGHT_M = 0.08  # the model's ankle centre above the floor (motions.standing_height)
 _FINE = 4  # the kinematics' grid, times finer than the trial's
@@ -261,8 +269,7 @@ def walk_trajectories(
     toe = np.array([0.55 * foot_len, -ANKLE_HEIGHT_M, 0.0])
     poses = {x: foot_poses(plan, x, tau, heel, toe) for x in skeleton.legs}
     sp = _arc(plan.T, plan.speed, tau)
-    sway = np.deg2rad(4.0) * s**2 * np.sin(2 * np.pi * tau / plan.T + rng.uniform(0, 2 * np.pi))
-    R = rot_z(plan.heading(sp)) @ UPRIGHT @ rot_y(sway)
+    R = rot_z(plan.heading(sp)) @ UPRIGHT @ _pelvis_turns(tau / plan.T, s, rng)
     p = np.concatenate([plan.path(sp), np.full((tf.size, 1), z0)], axis=1)
     p[:, 2] += s**2 * _height_change(skeleton, plan, p, R, poses, s**2, tau)
     knee = {x: skeleton.q_index(skeleton.leg_joints(x, "knee")[0]) for x in skeleton.legs}
@@ -279,6 +286,16 @@ def walk_trajectories(
                             knee[x], reach[x])
         Q[k] = qk
     return (*_derivatives(Q, p, R, dt), plan)
+
+
+def _pelvis_turns(phase: np.ndarray, s: np.ndarray, rng) -> np.ndarray:
+    """(N, 3, 3) the pelvis's turns in its own frame at stride ``phase`` (strides since the
+    walk's start), ramped in by ``s**2`` (module docstring, :data:`PELVIS_TURN_DEG`)."""
+    rotation, obliquity, tilt = np.deg2rad(PELVIS_TURN_DEG)
+    theta = 2 * np.pi * phase + rng.uniform(0, 2 * np.pi)
+    ramp = s**2
+    return (rot_y(rotation * ramp * np.sin(theta)) @ rot_x(obliquity * ramp * np.cos(theta))
+            @ rot_z(tilt * ramp * np.sin(2 * theta)))
 
 
 def _height_change(skeleton, plan, p, R, poses, s, tau) -> np.ndarray:

@@ -1,0 +1,145 @@
+"""A sensor that slips on its segment during a walk: its own view of the segment turns.
+
+A segment's flexion axis is fixed in the segment, and so, nearly, is gravity's direction in it at
+mid-stance, when the foot rests flat and the leg passes over it in the same posture stride after
+stride. A sensor sees both in its own frame without any orientation estimate: the flexion axis
+as the principal axis of the horizontal angular velocity (:mod:`pipeline.calibration.flexion_axis`,
+eq 1 there, the vertical ``u`` from the low-passed accelerometer), gravity as the mean
+accelerometer over the foot's rest. A sensor fixed to its segment keeps both from stride to
+stride; one that slipped by ``theta`` turns them in its frame by up to ``theta`` (the axis unless
+it slipped about the axis itself, gravity unless about the vertical: every slip turns one).
+
+Per stride ``k`` of the sensor's leg (initial contact to the next, from the foot's events, else
+the shank's: :mod:`pipeline.analysis.gait_events`), the scatter of the horizontal angular velocity
+``C_k = sum w_h w_h^T`` and the mid-stance gravity ``g_k`` (strides with a foot rest). At each
+split ``m`` of the strides, with at least :data:`MIN_SIDE` strides on either side,
+
+    d_axis(m) = angle(e1(sum_{k<m} C_k), e1(sum_{k>=m} C_k))                       (1)
+    d_g(m)    = angle(mean_{k<m} g_k, mean_{k>=m} g_k)                             (2)
+
+(``e1``: the principal eigenvector, its sign free). The step is the largest ``max(d_axis, d_g)``
+over the splits; beyond :data:`SLIP_DEG` the sensor slipped at that stride. Measured without a
+slip: up to 7 deg on the real walk gaittoolbox_s02 (4-6 strides a side, a turn), 6 on the x-IMU3
+recording, 8 on the simulated walk with soft tissue (its first strides from standing differ); a
+30 deg slip about any of the sensor's axes, of a thigh, shank or foot sensor halfway through the
+walk: 19-33 deg on S02, 25-32 on the simulated walk (``tests/test_process_slip.py``,
+``scripts/bench_faults.py``). The pelvis is not checked (it barely flexes in walking: no axis),
+nor a leg with fewer than ``2 MIN_SIDE`` strides (no walk to compare).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.analysis.gait_events import gait_events
+from pipeline.filtering import lowpass
+from pipeline.io.recording import Recording
+from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
+
+__all__ = ["MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "slip_step"]
+
+#: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
+#: docstring), under the 19-33 deg a 30 deg slip gives.
+SLIP_DEG = 15.0
+#: Strides needed on each side of a split.
+MIN_SIDE = 2
+#: A longer interval between initial contacts is a pause, not a stride (up to this, a missed
+#: contact joins two strides into one bin, as S02's right foot's at its turn).
+MAX_STRIDE_S = 4.0
+#: The flexion axis's low-pass cut-off (Hz) and the vertical's, and the horizontal angular speed
+#: (rad/s) from which a sample counts (as :mod:`pipeline.calibration.flexion_axis`).
+AXIS_CUTOFF_HZ = 3.0
+VERTICAL_CUTOFF_HZ = 0.5
+MIN_SPEED = 0.5
+
+
+@dataclass(frozen=True)
+class Slip:
+    """The largest step of one sensor's view of its segment: ``axis_deg`` (eq 1) and
+    ``gravity_deg`` (eq 2, NaN without foot rests) at the split ``time_s`` (the first stride
+    after it starts there), with ``before`` and ``after`` strides."""
+
+    axis_deg: float
+    gravity_deg: float
+    time_s: float
+    before: int
+    after: int
+
+    @property
+    def deg(self) -> float:
+        return float(np.nanmax([self.axis_deg, self.gravity_deg]))
+
+    @property
+    def slipped(self) -> bool:
+        return self.deg > SLIP_DEG
+
+    def evidence(self) -> str:
+        """What turned, where, for a finding."""
+        turned = f"its segment's flexion axis turned by {self.axis_deg:.0f} deg"
+        if np.isfinite(self.gravity_deg):
+            turned += f" and gravity at mid-stance by {self.gravity_deg:.0f} deg"
+        return (f"in its own frame {turned} between the {self.before} strides before t = "
+                f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}): it slipped "
+                "on its segment (a loose strap?)")
+
+
+def _angle(a: np.ndarray, b: np.ndarray, signed: bool = True) -> float:
+    c = float(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)))
+    return float(np.degrees(np.arccos(np.clip(c if signed else abs(c), -1.0, 1.0))))
+
+
+def _principal(C: np.ndarray) -> np.ndarray:
+    return np.linalg.eigh(C)[1][:, -1]
+
+
+def _strides(rec: Recording, side: str) -> tuple[list[tuple[int, int]], np.ndarray]:
+    """The leg's strides as sample ranges and its foot's rests (none from a shank)."""
+    for segment, kind in ((f"{side}_foot", "foot"), (f"{side}_tibia", "shank")):
+        s = rec.sensors.get(SEGMENT_SENSOR[segment])
+        if s is not None and s.gyr is not None and s.acc is not None:
+            ev = gait_events(s.gyr, s.acc, rec.rate_hz, kind)
+            ics = np.round(ev.ic).astype(int)
+            longest = MAX_STRIDE_S * rec.rate_hz
+            strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True) if b - a <= longest]
+            return strides, (ev.rests if kind == "foot" else np.zeros((0, 2), int))
+    return [], np.zeros((0, 2), int)
+
+
+def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarray]:
+    """``C_k`` (k, 3, 3) and ``g_k`` (k, 3), NaN for a stride without a foot rest."""
+    w = lowpass(gyr, rate_hz, AXIS_CUTOFF_HZ)
+    u = lowpass(acc, rate_hz, VERTICAL_CUTOFF_HZ)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    w_h = w - np.sum(w * u, axis=1, keepdims=True) * u
+    w_h[np.linalg.norm(w_h, axis=1) < MIN_SPEED] = 0.0
+    C = np.array([w_h[a:b].T @ w_h[a:b] for a, b in strides])
+    g = np.full((len(strides), 3), np.nan)
+    for k, (a, b) in enumerate(strides):
+        inside = [(r0, r1) for r0, r1 in rests if a <= r0 and r1 <= b]
+        if inside:
+            r0, r1 = max(inside, key=lambda r: r[1] - r[0])
+            g[k] = np.mean(acc[r0:r1], axis=0)
+    return C, g
+
+
+def slip_step(name: str, rec: Recording) -> Slip | None:
+    """The largest step (module docstring) of sensor ``name`` over its leg's strides; None for
+    a pelvis or torso sensor, one without raw signals, or a leg with too few strides."""
+    s, segment = rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
+    if s.gyr is None or s.acc is None or not segment.startswith(("right_", "left_")):
+        return None
+    strides, rests = _strides(rec, segment.split("_", 1)[0])
+    if len(strides) < 2 * MIN_SIDE:
+        return None
+    C, g = _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides, rests)
+    best = None
+    for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
+        d_axis = _angle(_principal(C[:m].sum(0)), _principal(C[m:].sum(0)), signed=False)
+        before, after = g[:m][np.isfinite(g[:m, 0])], g[m:][np.isfinite(g[m:, 0])]
+        d_g = _angle(before.mean(0), after.mean(0)) if len(before) and len(after) else np.nan
+        step = Slip(d_axis, d_g, float(rec.time[strides[m][0]]), m, len(strides) - m)
+        if best is None or step.deg > best.deg:
+            best = step
+    return best

@@ -1,0 +1,111 @@
+"""pipeline.process.slip: a sensor that slips on its segment halfway through a walk, on the
+simulated walk (soft tissue, biases) with known truth, and on the real S02 walk."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.io.recording import Recording
+from pipeline.model.measures import Measures
+from pipeline.process import process_recording
+from pipeline.process.gait import gait_of
+from pipeline.process.sensor_checks import check_sensors
+from pipeline.process.slip import SLIP_DEG, slip_step
+from pipeline.rotations import exp3
+
+S02 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "gaittoolbox_s02"
+M = Measures("m", 1.75)
+
+
+@pytest.fixture(scope="module")
+def walk() -> Recording:
+    from pipeline.model.scaling import geometry_from_measures
+    from pipeline.model.skeleton import Skeleton
+    from pipeline.simulate.artefacts import Artefacts
+    from pipeline.simulate.model import simulate_trial
+
+    sk = Skeleton.build(geometry_from_measures(M)[0], knee="free", root="freeflyer")
+    trial = simulate_trial(sk, "walk", duration_s=20.0, seed=1, standing_s=3.0,
+                           artefacts=Artefacts())  # fmt: skip
+    return trial.raw_recording()
+
+
+def _mid_walk(rec: Recording, side: str = "right") -> int:
+    ic = gait_of(rec, []).events[side].ic
+    return int(round((ic[0] + ic[-1]) / 2))
+
+
+def _slipped(rec: Recording, name: str, axis: int, at: int, deg: float = 30.0) -> Recording:
+    """From sample ``at`` on, the sensor turned by ``deg`` about its own ``axis``."""
+    R = exp3(np.radians(deg) * np.eye(3)[axis])
+    s = rec.sensors[name]
+
+    def turned(x):
+        if x is None:
+            return None
+        x = x.copy()
+        x[at:] = x[at:] @ R
+        return x
+
+    return rec.with_sensors({**rec.sensors, name: s.replace(gyr=turned(s.gyr), acc=turned(s.acc),
+                                                              mag=turned(s.mag))})  # fmt: skip
+
+
+def test_sensors_that_stay_put_do_not_step(walk):
+    steps = {n: slip_step(n, walk) for n in walk.sensors}
+    assert steps["pelvis_imu"] is None  # not checked
+    legs = {n: s for n, s in steps.items() if n != "pelvis_imu"}
+    assert len(legs) == 6 and all(s.deg < SLIP_DEG / 1.5 for s in legs.values()), legs
+    assert not [f for f in check_sensors(walk)[1] if f.check == "slipped"]
+
+
+@pytest.mark.parametrize("name", ["femur_r_imu", "tibia_r_imu", "calcn_r_imu"])
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_a_30_deg_slip_about_any_axis_is_found_where_it_happened(walk, name, axis):
+    at = _mid_walk(walk)
+    step = slip_step(name, _slipped(walk, name, axis, at))
+    assert step.slipped and step.deg > 20.0, step
+    stride = 1.4  # s, about; the stride the slip happened in goes to either side
+    assert abs(step.time_s - walk.time[at]) <= stride, (step.time_s, walk.time[at])
+    assert step.before >= 2 and step.after >= 2
+
+
+def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
+    at = _mid_walk(walk)
+    assert not slip_step("tibia_r_imu", _slipped(walk, "tibia_r_imu", 0, at, deg=3.0)).slipped
+    n = int(round(gait_of(walk, []).events["right"].ic[2]))  # two strides: nothing to compare
+    short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
+        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
+    assert slip_step("tibia_r_imu", short) is None
+
+
+def test_the_slipped_sensor_is_excluded_and_named_and_the_run_goes_on(walk):
+    """Its knee is not written, the other leg's is."""
+    run = process_recording(_slipped(walk, "tibia_r_imu", 0, _mid_walk(walk)), M, filter="vqf")
+    (flag,) = [f for f in run.flags if "slipped" in f]
+    assert flag.startswith("sensor tibia_r_imu: slipped: in its own frame its segment's flexion "
+                           "axis turned by") and flag.endswith("(excluded)")
+    assert "right_knee_flexion" not in run.joint_angles and "left_knee_flexion" in run.joint_angles
+
+
+@pytest.mark.dataset
+def test_s02_no_sensor_steps_and_a_mid_walk_slip_is_found():
+    """The real walk (4-7 strides a side, a turn): every leg sensor's step under the limit; a
+    30 deg slip of the right shank, thigh or foot halfway through the walk found."""
+    if not S02.exists():
+        pytest.skip("../shared/data/gaittoolbox_s02 not present")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from bench_gait import S02_MAP
+
+    from pipeline.io.formats import read_recording
+
+    rec = read_recording(S02 / "imu", S02_MAP)
+    for name in rec.sensors:
+        step = slip_step(name, rec)
+        assert step is None or not step.slipped, (name, step)
+    at = _mid_walk(rec)
+    for name in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu"):
+        assert slip_step(name, _slipped(rec, name, 0, at)).slipped, name
