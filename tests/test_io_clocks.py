@@ -42,3 +42,13 @@ def test_different_rates_and_no_overlap_are_refused():
         align_clocks({"a": _rec(np.arange(300) / 100.0), "b": _rec(np.arange(300) / 120.0)})
     with pytest.raises(InputError, match="do not overlap"):
         align_clocks({"a": _rec(np.arange(300) / 100.0), "b": _rec(10 + np.arange(300) / 100.0)})
+
+
+def test_each_sensor_keeps_its_own_files_notes():
+    """The merged recording says which sensor a reader's repair concerns (the sensor table)."""
+    t = np.arange(500) / 100.0
+    noted = _rec(t).with_notes("d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)")
+    rec = align_clocks({"femur_r_imu": _rec(t), "tibia_r_imu": noted})
+    assert rec.sensor_notes == {"tibia_r_imu": (
+        "d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)",)}  # fmt: skip
+    assert "d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)" in rec.notes

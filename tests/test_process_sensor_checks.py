@@ -196,8 +196,33 @@ def test_a_dropout_excludes_the_sensor(walk):
     assert [x.check for x in check_sensors(_with(walk, "femur_l_imu", gyr=gyr, acc=acc))[1]] == []
 
 
+def test_a_repair_of_one_sensors_file_is_named_on_that_sensor(tmp_path):
+    """A folder of Xsens files, one with dropped packets (filled by the reader): the finding is
+    that sensor's, listed (not a flag), with the reader's words."""
+    import dataclasses
+
+    from pipeline.io.formats import read_recording
+
+    folder = tmp_path / "imu"
+    folder.mkdir()
+    rows = [f"{k}\t0\t0\t9.81\t0.1\t0.2\t0.3" for k in range(200) if k not in (50, 51)]
+    for name in ("femur_r_imu", "tibia_r_imu"):
+        lines = ["// Update Rate: 100.0Hz", "PacketCounter\tAcc_X\tAcc_Y\tAcc_Z\tGyr_X\tGyr_Y"
+                 "\tGyr_Z"]  # fmt: skip
+        body = rows if name == "tibia_r_imu" else [r for k, r in enumerate(
+            f"{k}\t0\t0\t9.81\t0.1\t0.2\t0.3" for k in range(200))]  # fmt: skip
+        (folder / f"{name}.txt").write_text("\n".join(lines + body) + "\n")
+    rec = read_recording(folder)
+    assert set(rec.sensor_notes) == {"tibia_r_imu"}
+    _, found = check_sensors(dataclasses.replace(rec, time=rec.time))
+    (f,) = [f for f in found if f.check == "read"]
+    assert (f.sensor, f.action, f.flagged) == ("tibia_r_imu", "listed", False)
+    assert f.evidence.startswith("its file's reader: 2 dropped packet(s) (PacketCounter jumps)")
+
+
 def test_the_registry_names_every_check():
-    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment", "slipped"}
+    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment", "slipped",
+                           "read"}
 
 
 @pytest.mark.dataset
@@ -215,4 +240,4 @@ def test_the_real_recordings():
     _, findings = check_sensors(read_recording(s02, ids))
     assert {(f.sensor, f.check, f.action) for f in findings} == {
         ("tibia_l_imu", "saturation", "noted"), ("tibia_r_imu", "saturation", "noted")}
-    assert check_sensors(read_recording(ximu3))[1] == []
+    assert [f for f in check_sensors(read_recording(ximu3))[1] if f.flagged] == []

@@ -103,8 +103,9 @@ def _sensor_table(run: IKRun) -> list[str]:
         found.setdefault(f.sensor, []).append(f)
     used_names = {MODEL_FRAME_NAMES.get(frame, frame) for frame in run.placements}
     names = sorted(used_names | set(found) | set(run.magnetometers))
-    lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: dead channels, saturation, "
-             "units, moving with the segment; magnetometers against the other sensors' field):",
+    lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: what the reader repaired in "
+             "the sensor's file, dead channels, dropouts, saturation, units, moving with the "
+             "segment, slipping on it; magnetometers against the other sensors' field):",
              "", "| sensor | checks | magnetometer | used |", "|---|---|---|---|"]  # fmt: skip
     for n in names:
         fs = found.get(n, [])

@@ -51,7 +51,8 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
     if len(recs) == 1:
         (name, r), = recs.items()
         return Recording(r.time - r.time[0], r.rate_hz, {name: r.sensor},
-                         _header(r.rate_hz, recs.values()), r.notes, source)  # fmt: skip
+                         _header(r.rate_hz, recs.values()), r.notes, source,
+                         _own_notes(recs))  # fmt: skip
     rate = check_same_rate({n: r.rate_hz for n, r in recs.items()}, file=source)
     first = next(iter(recs.values()))
     reference = float(device_time(first)[0])
@@ -85,7 +86,12 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
         notes.append(f"clocks aligned by time stamp: devices started up to {spread:.1f} ms apart; "
                      f"kept the {t1 - t0:.2f} s all cover, resampled to {rate:.4g} Hz")  # fmt: skip
     return Recording(t - t0, float(rate), sensors, _header(rate, recs.values()), tuple(notes),
-                     source)  # fmt: skip
+                     source, _own_notes(recs))  # fmt: skip
+
+
+def _own_notes(recs: Mapping[str, Recording]) -> dict[str, tuple[str, ...]]:
+    """Sensor -> what its own file's reader repaired or noticed (``Recording.sensor_notes``)."""
+    return {name: tuple(r.notes) for name, r in recs.items() if r.notes}
 
 
 def _header(rate: float, recs) -> dict[str, str]:

@@ -6,7 +6,9 @@ sensors, each with any of: the orientation ``quat`` (N, 4) unit ``[w, x, y, z]``
 the IMU world, ``p_world = R(q) p_sensor``), the angular velocity ``gyr`` (N, 3) rad/s, the
 specific force ``acc`` (N, 3) m/s^2 and the magnetic field ``mag`` (N, 3) (arbitrary units), all
 in the sensor frame and in SI units (readers convert). ``header`` keeps the file's metadata,
-``notes`` what the reader repaired or noticed, ``source`` the file or folder it came from.
+``notes`` what the reader repaired or noticed, ``source`` the file or folder it came from, and
+``sensor_notes`` (sensor -> its own file's notes, for a folder of one-sensor files) which sensor
+a repair concerns (dropped samples filled, an irregular clock: the sensor check names them).
 
 ``header[WORLD]`` names the world frame of the orientations when the reader knows it from the
 vendor (:data:`Z_UP_WORLDS`: a vendor's earth frame with z up, which ``pipeline ik`` turns to its
@@ -70,6 +72,7 @@ class Recording:
     header: dict[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
     source: Path | None = None
+    sensor_notes: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     # ---- construction -------------------------------------------------------------------------
     @classmethod

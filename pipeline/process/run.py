@@ -232,7 +232,7 @@ def process_recording(
     angles = _angles(sk, Q, sensors, rotations, placements, cal.H)
     gait = with_pelvis_path(gait, trial, sk, Q, notes)
     landmarks = _landmarks(sk, Q, sensors)
-    flags = [f.line() for f in findings] + quality_flags(
+    flags = [f.line() for f in findings if f.flagged] + quality_flags(
         sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if _observed(j, sensors)],
         opts.calibration_pose, len(gait.strides))  # fmt: skip
     return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,

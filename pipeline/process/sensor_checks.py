@@ -46,6 +46,11 @@ done about it:
   more than :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is
   wrong from then on: **excluded**. Checked in walking (four strides or more on its leg).
 
+* ``read``: what the reader of the sensor's own file repaired or noticed (in a folder of
+  one-sensor files: dropped samples or packets filled, an irregular clock kept as recorded;
+  ``Recording.sensor_notes``): **listed** in the sensor table, so that it shows which sensor's
+  clock jumped (the run's notes already say it: not a flag, ``--strict`` does not stop on it).
+
 Magnetometer trust (field strength and dip against the other sensors and over time) is
 :mod:`pipeline.calibration.magnetometer`'s; the summary's sensor table shows both.
 """
@@ -96,12 +101,18 @@ UNIT_RATIO = (0.1, 10.0)
 @dataclass(frozen=True)
 class Finding:
     """One fault of one sensor: ``check`` (a :data:`CHECKS` name), ``action`` (``'excluded'``,
-    ``'magnetometer not used'`` or ``'noted'``) and the ``evidence`` a summary prints."""
+    ``'magnetometer not used'``, ``'noted'`` or ``'listed'``) and the ``evidence`` a summary
+    prints. Every action but ``'listed'`` is also a flag (:attr:`flagged`); a listed finding is
+    the sensor table's only (the reader's repairs, already among the run's notes)."""
 
     sensor: str
     check: str
     action: str
     evidence: str
+
+    @property
+    def flagged(self) -> bool:
+        return self.action != "listed"
 
     def line(self) -> str:
         return f"sensor {self.sensor}: {self.check}: {self.evidence} ({self.action})"
@@ -313,6 +324,15 @@ def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     return None
 
 
+def _repaired_on_reading(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+    said = rec.sensor_notes.get(name, ())
+    if not said:
+        return None
+    return Finding(name, "read", "listed", "its file's reader: " + "; ".join(
+        n.split(": ", 1)[1] if rec.source and n.startswith(str(rec.source)) else n
+        for n in said))  # fmt: skip
+
+
 def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     step = slip_step(name, rec)
     if step is None or not step.slipped:
@@ -322,6 +342,7 @@ def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
 
 #: Check name -> function of (sensor name, its signals, the recording).
 CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
+    "read": _repaired_on_reading,  # first: an exclusion below stops the sensor's checks
     "dead": _dead,
     "dropout": _dropout,
     "saturation": _saturation,
