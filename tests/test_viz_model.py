@@ -285,3 +285,35 @@ def test_recording_opens_playing_from_the_start_in_a_loop(motion):
     assert panel["TimePanelBlueprint:timeline"] == ["time"]
     assert panel["TimePanelBlueprint:play_state"] == [PlayState.Playing.value]
     assert panel["TimePanelBlueprint:loop_mode"] == [LoopMode.All.value]
+
+
+def test_a_body_that_walks_through_the_room(motion, tmp_path):
+    """With a root path (4 m along x, swaying 0.3 m along z), the recording draws the pelvis's
+    path on the floor and each foot's footprints (static), and the camera frames the whole walk
+    from across its main direction, raised 30 deg; a body that stays put has neither."""
+    from pipeline.viz.scene import ROOM_DISTANCE, ROOM_ELEVATION_DEG
+
+    _, sk, t, Q, _, _ = motion
+    n = len(t)
+    root = np.zeros((n, 3))
+    root[:, 0] = np.clip(t - 2.0, 0.0, 4.0)
+    root[:, 2] = 0.15 * np.sin(2 * t)
+    prints = np.full((n, 3), np.nan)
+    prints[500:1500], prints[1500:] = [1.0, -0.9, 0.1], [2.5, -0.9, 0.1]
+    path = log_motion(tmp_path / "walk.rrd", t, sk, Q, root_path=root, landmarks=False,
+                      reference_landmarks={"right_footprint": prints})  # fmt: skip
+    strip = np.array(_rows(path, "/world/walk/path", static=True)["LineStrips3D:strips"][0][0])
+    footprints = np.array(_rows(path, "/world/walk/right_footprints", static=True)[
+        "Points3D:positions"][0])  # fmt: skip
+    np.testing.assert_allclose(footprints, [[1.0, -0.9, 0.1], [2.5, -0.9, 0.1]])
+    assert np.ptp(strip[:, 1]) == 0.0  # on the floor
+    assert np.ptp(strip[:, 0]) > 3.9 and np.ptp(strip[:, 2]) > 0.29
+    views = blueprint_views(bp := read_blueprint(path))
+    eye = bp[f"{views['3D'][2]}/EyeControls3D"]
+    target = np.array(eye["EyeControls3D:look_target"][0])
+    offset = np.array(eye["EyeControls3D:position"][0]) - target
+    assert abs(target[0] - 2.0) < 0.1  # the middle of the path along its main direction (x)
+    up = np.degrees(np.arcsin(offset[1] / np.linalg.norm(offset)))
+    assert abs(up - ROOM_ELEVATION_DEG) < 0.1 and abs(offset[0]) < 0.05 * np.linalg.norm(offset)
+    assert np.linalg.norm(offset) == pytest.approx(ROOM_DISTANCE * 4.0, rel=0.05)
+    assert not [e for e in entity_row_counts(motion[0]) if e.startswith("/world/walk")]

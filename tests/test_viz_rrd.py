@@ -94,9 +94,10 @@ def _normalised(bp: dict) -> list:
     return sorted(re.findall(r"\('/[^']*', \{.*?\}\)", text))
 
 
-def _scene():
+def _scene(walk: bool = False):
     """A simulated gait on a scaled model: meshes, poses, landmarks with references and error
-    arrows, IMU axes, bones, angles with truth, an extra scalar (one NaN)."""
+    arrows, IMU axes, bones, angles with truth, an extra scalar (one NaN); ``walk``: carried 2 m
+    further through the room, with footprints."""
     from pipeline.simulate.model import simulate_trial
     from pipeline.viz.model import motion_scene
 
@@ -106,19 +107,28 @@ def _scene():
     extra = np.sin(t)
     extra[5] = np.nan
     truth = {"right_knee_flexion": 0.1 * np.sin(t)}
+    root = None
+    if walk:
+        root = np.zeros((len(t), 3))
+        root[:, 0] = t
+        ref["left_footprint"] = np.where(t[:, None] < 1.0, [0.2, -0.9, -0.1], [1.3, -0.9, -0.1])
     return motion_scene(t, sim.skeleton, sim.q, reference_landmarks=ref, reference_angles=truth,
-                        extra_scalars={"residual": extra}, recording_name="sim")  # fmt: skip
+                        extra_scalars={"residual": extra}, recording_name="sim",
+                        root_path=root)  # fmt: skip
 
 
-def test_recording_equals_rerun_sdk(tmp_path, monkeypatch):
+@pytest.mark.parametrize("walk", [False, True])
+def test_recording_equals_rerun_sdk(tmp_path, monkeypatch, walk):
     from pipeline.viz.scene import log_scene
 
-    scene = _scene()
+    scene = _scene(walk)
     ours = log_scene(tmp_path / "ours.rrd", scene)
     monkeypatch.setattr(recording, "RrdWriter", SdkWriter)
     sdk = log_scene(tmp_path / "sdk.rrd", scene)
     a, b = _content(ours), _content(sdk)
     assert len(a) == len(b) > 40
+    walked = {row[0] for row in a if row[0].startswith("/world/walk")}  # the sim walks 2.3 m
+    assert walked == {"/world/walk/path"} | ({"/world/walk/left_footprints"} if walk else set())
     for x, y in zip(a, b, strict=True):
         assert x == y
     assert _normalised(read_blueprint(ours)) == _normalised(read_blueprint(sdk))

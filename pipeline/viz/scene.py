@@ -198,6 +198,71 @@ def _camera(
     return target + distance * direction / np.linalg.norm(direction), target
 
 
+#: A pelvis whose horizontal path spans more than this (m) walks through the room: the camera
+#: frames the room walked and the recording draws the path and the footprints.
+WALKS_M = 1.0
+PATH_COLOR = (60, 160, 90)
+#: The room camera: raised this much (deg) above the horizontal, this many path lengths away
+#: (a path filling about the 3D view's width at rerun's field of view).
+ROOM_ELEVATION_DEG = 30.0
+ROOM_DISTANCE = 1.1
+
+
+def _pelvis_walk(traj: Mapping[str, tuple[np.ndarray, np.ndarray]], segments: Mapping[str, str],
+                 axis: int) -> np.ndarray | None:  # fmt: skip
+    """The pelvis's positions (finite rows) when they span more than :data:`WALKS_M`
+    horizontally, else None."""
+    frame = segments.get("pelvis")
+    if frame is None:
+        return None
+    p = traj[frame][1]
+    p = p[np.all(np.isfinite(p), axis=1)]
+    if not len(p) or np.max(np.ptp(np.delete(p, axis, axis=1), axis=0)) <= WALKS_M:
+        return None
+    return p
+
+
+def _room_camera(walk: np.ndarray, traj, frames: Sequence[str], ground: float | None,
+                 axis: int) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+    """Eye and target framing the whole walk from its side: aimed at the middle of the pelvis's
+    path (at the body's mid-height, as :func:`_camera`), from the horizontal direction across the
+    path's main direction (its principal axis), raised by :data:`ROOM_ELEVATION_DEG`, at
+    :data:`ROOM_DISTANCE` times the path's length along that axis (at least the body's height)."""
+    body = _camera(traj, frames, ground, axis)
+    if body is None:
+        return None
+    eye, target = body
+    up = np.zeros(3)
+    up[axis] = 1.0
+    flat = walk - walk.mean(axis=0)
+    flat[:, axis] = 0.0
+    main = np.linalg.svd(flat, full_matrices=False)[2][0]
+    across = np.cross(up, main)
+    along = flat @ main
+    middle = walk.mean(axis=0) + 0.5 * (along.max() + along.min()) * main
+    middle[axis] = target[axis]
+    e = np.radians(ROOM_ELEVATION_DEG)
+    away = np.cos(e) * across / np.linalg.norm(across) + np.sin(e) * up
+    length = max(float(np.ptp(along)), float(np.linalg.norm(eye - target)))
+    return middle + ROOM_DISTANCE * length * away, middle
+
+
+def _log_walk(rec, walk: np.ndarray, reference: Mapping[str, np.ndarray], ground: float | None,
+              axis: int) -> None:  # fmt: skip
+    """Static: the pelvis's path on the floor (``world/walk/path``) and each foot's footprints
+    (``world/walk/<side>_footprints``: the rests of ``reference``'s ``<side>_footprint``)."""
+    path = walk.copy()
+    path[:, axis] = ground if ground is not None else float(walk[:, axis].min())
+    rec.log("world/walk/path", "LineStrips3D", strips=[path], radii=[0.008],
+            colors=pack_colors([PATH_COLOR]))  # fmt: skip
+    for name, xyz in reference.items():
+        if name.endswith("_footprint"):
+            prints = np.unique(xyz[np.all(np.isfinite(xyz), axis=1)], axis=0)
+            if len(prints):
+                rec.log(f"world/walk/{name}s", "Points3D", positions=prints, radii=[0.03],
+                        colors=pack_colors([PATH_COLOR]))  # fmt: skip
+
+
 @dataclass(frozen=True)
 class MotionScene:
     """What a recording of a model's motion shows, as arrays (:func:`log_scene` writes it).
@@ -254,7 +319,11 @@ def log_scene(path: str | Path, scene: MotionScene,
     mesh_data = meshes_from_urdf(scene.urdf, scene.source, segments) if scene.meshes else {}
     ground = _lowest_height(view, segments, mesh_data, [view[m][1] for m in lm_names],
                             scene.vertical)  # fmt: skip
-    camera = _camera(view, list(segments.values()), ground, scene.vertical)
+    walk = _pelvis_walk(view, segments, scene.vertical)
+    if walk is None:
+        camera = _camera(view, list(segments.values()), ground, scene.vertical)
+    else:
+        camera = _room_camera(walk, view, list(segments.values()), ground, scene.vertical)
     plots = []
     for side in scene.legs:
         for joint in ("hip", "knee", "ankle"):
@@ -272,6 +341,8 @@ def log_scene(path: str | Path, scene: MotionScene,
             rec.log(f"world/model/{seg}/mesh", "Mesh3D", vertex_positions=mesh.vertices,
                     triangle_indices=mesh.triangles, vertex_normals=mesh.normals,
                     albedo_factor=pack_colors([BONE_COLOR]))  # fmt: skip
+        if walk is not None:
+            _log_walk(rec, walk, scene.reference, ground, scene.vertical)
         shown = scene.shown
         for start in range(0, len(shown), CHUNK_SAMPLES):  # bounded memory on long recordings
             rows = shown[start : start + CHUNK_SAMPLES]
