@@ -31,6 +31,7 @@ _EXPORTS = {
     "mot_columns": "process",
     "process_recording": "process",
     "read_orientations_sto": "io.opensim",
+    "read_recording": "io.formats",
     "solve_ik": "ik.solver",
 }
 __all__ = ["__version__", *sorted(_EXPORTS)]
