@@ -71,6 +71,18 @@ def test_a_30_deg_slip_about_any_axis_is_found_where_it_happened(walk, name, axi
     assert step.before >= 2 and step.after >= 2
 
 
+def test_a_step_the_whole_leg_takes_is_not_a_slip(walk):
+    """The thigh, shank and foot sensors turned together (as a change of the walk turns them
+    all): each steps as much as a slip, none alone."""
+    at, rec = _mid_walk(walk), walk
+    for name in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu"):
+        rec = _slipped(rec, name, 0, at)
+    steps = [slip_step(n, rec) for n in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu")]
+    assert all(s.deg > SLIP_DEG and s.others_deg > 20.0 and not s.slipped for s in steps), steps
+    alone = slip_step("tibia_r_imu", _slipped(walk, "tibia_r_imu", 0, at))
+    assert alone.slipped and alone.others_deg < 5.0, alone
+
+
 def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     at = _mid_walk(walk)
     assert not slip_step("tibia_r_imu", _slipped(walk, "tibia_r_imu", 0, at, deg=3.0)).slipped

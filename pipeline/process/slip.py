@@ -25,10 +25,17 @@ recording, 8 on the simulated walk with soft tissue (its first strides from stan
 walk: 19-33 deg on S02, 25-32 on the simulated walk (``tests/test_process_slip.py``,
 ``scripts/bench_faults.py``). The pelvis is not checked (it barely flexes in walking: no axis),
 nor a leg with fewer than ``2 MIN_SIDE`` strides (no walk to compare).
+
+A slip moves one sensor; a change of the walk itself (stairs, a slope, gait initiation's first
+strides) turns every sensor of the leg. So a step is a slip only while the leg's other sensors
+step less than :data:`ALONE_DEG` at the same split: with a 30 deg slip they step 2-4 deg (S02,
+the simulated walk); without one, the early splits where a sensor steps most are common to the
+leg (others at 6-8 deg: the first strides from standing).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,11 +45,14 @@ from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 
-__all__ = ["MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "slip_step"]
+__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "slip_step"]
 
 #: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
 #: docstring), under the 19-33 deg a 30 deg slip gives.
 SLIP_DEG = 15.0
+#: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
+#: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
+ALONE_DEG = 0.5 * SLIP_DEG
 #: Strides needed on each side of a split.
 MIN_SIDE = 2
 #: A longer interval between initial contacts is a pause, not a stride (up to this, a missed
@@ -59,13 +69,15 @@ MIN_SPEED = 0.5
 class Slip:
     """The largest step of one sensor's view of its segment: ``axis_deg`` (eq 1) and
     ``gravity_deg`` (eq 2, NaN without foot rests) at the split ``time_s`` (the first stride
-    after it starts there), with ``before`` and ``after`` strides."""
+    after it starts there), with ``before`` and ``after`` strides; ``others_deg``: the largest
+    step of the leg's other sensors at that split (0 without any)."""
 
     axis_deg: float
     gravity_deg: float
     time_s: float
     before: int
     after: int
+    others_deg: float = 0.0
 
     @property
     def deg(self) -> float:
@@ -73,7 +85,8 @@ class Slip:
 
     @property
     def slipped(self) -> bool:
-        return self.deg > SLIP_DEG
+        """Beyond :data:`SLIP_DEG`, and alone on its leg (:data:`ALONE_DEG`)."""
+        return self.deg > SLIP_DEG and self.others_deg < ALONE_DEG
 
     def evidence(self) -> str:
         """What turned, where, for a finding."""
@@ -81,8 +94,9 @@ class Slip:
         if np.isfinite(self.gravity_deg):
             turned += f" and gravity at mid-stance by {self.gravity_deg:.0f} deg"
         return (f"in its own frame {turned} between the {self.before} strides before t = "
-                f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}): it slipped "
-                "on its segment (a loose strap?)")
+                f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
+                f"other sensors by {self.others_deg:.0f} at most: it slipped on its segment (a "
+                "loose strap?)")
 
 
 def _angle(a: np.ndarray, b: np.ndarray, signed: bool = True) -> float:
@@ -111,7 +125,8 @@ def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarr
     """``C_k`` (k, 3, 3) and ``g_k`` (k, 3), NaN for a stride without a foot rest."""
     w = lowpass(gyr, rate_hz, AXIS_CUTOFF_HZ)
     u = lowpass(acc, rate_hz, VERTICAL_CUTOFF_HZ)
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    norm = np.linalg.norm(u, axis=1, keepdims=True)
+    u = np.divide(u, norm, out=np.zeros_like(u), where=norm > 0)
     w_h = w - np.sum(w * u, axis=1, keepdims=True) * u
     w_h[np.linalg.norm(w_h, axis=1) < MIN_SPEED] = 0.0
     C = np.array([w_h[a:b].T @ w_h[a:b] for a, b in strides])
@@ -124,22 +139,47 @@ def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarr
     return C, g
 
 
+def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
+    """Eq (1) and (2) at split ``m``; ``d_g`` NaN without rests on both sides."""
+    d_axis = _angle(_principal(C[:m].sum(0)), _principal(C[m:].sum(0)), signed=False)
+    before, after = g[:m][np.isfinite(g[:m, 0])], g[m:][np.isfinite(g[m:, 0])]
+    d_g = _angle(before.mean(0), after.mean(0)) if len(before) and len(after) else np.nan
+    return d_axis, d_g
+
+
+def _views(rec: Recording, names, strides, rests) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Sensor -> its ``(C_k, g_k)`` over the strides, for the sensors with raw signals (the
+    first, ``names[0]``, always; the others only when every sample is finite: a sensor with a
+    dropout is excluded by its own check)."""
+    out = {}
+    for i, n in enumerate(names):
+        s = rec.sensors.get(n)
+        if s is None or s.gyr is None or s.acc is None:
+            continue
+        if i == 0 or (np.isfinite(s.gyr).all() and np.isfinite(s.acc).all()):
+            out[n] = _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz,
+                                 strides, rests)  # fmt: skip
+    return out
+
+
 def slip_step(name: str, rec: Recording) -> Slip | None:
-    """The largest step (module docstring) of sensor ``name`` over its leg's strides; None for
-    a pelvis or torso sensor, one without raw signals, or a leg with too few strides."""
+    """The largest step (module docstring) of sensor ``name`` over its leg's strides, with the
+    leg's other sensors' steps at the same split; None for a pelvis or torso sensor, one without
+    raw signals, or a leg with too few strides."""
     s, segment = rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
     if s.gyr is None or s.acc is None or not segment.startswith(("right_", "left_")):
         return None
-    strides, rests = _strides(rec, segment.split("_", 1)[0])
+    side = segment.split("_", 1)[0]
+    strides, rests = _strides(rec, side)
     if len(strides) < 2 * MIN_SIDE:
         return None
-    C, g = _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides, rests)
+    leg = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
+    views = _views(rec, [name] + [n for n in leg if n != name], strides, rests)
     best = None
     for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
-        d_axis = _angle(_principal(C[:m].sum(0)), _principal(C[m:].sum(0)), signed=False)
-        before, after = g[:m][np.isfinite(g[:m, 0])], g[m:][np.isfinite(g[m:, 0])]
-        d_g = _angle(before.mean(0), after.mean(0)) if len(before) and len(after) else np.nan
-        step = Slip(d_axis, d_g, float(rec.time[strides[m][0]]), m, len(strides) - m)
+        step = Slip(*_step_at(*views[name], m), float(rec.time[strides[m][0]]), m,
+                    len(strides) - m)  # fmt: skip
         if best is None or step.deg > best.deg:
             best = step
-    return best
+    others = [np.nanmax(_step_at(C, g, best.before)) for n, (C, g) in views.items() if n != name]
+    return dataclasses.replace(best, others_deg=float(max(others, default=0.0)))
