@@ -121,3 +121,15 @@ def test_s02_no_sensor_steps_and_a_mid_walk_slip_is_found():
     at = _mid_walk(rec)
     for name in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu"):
         assert slip_step(name, _slipped(rec, name, 0, at)).slipped, name
+
+
+def test_a_neighbour_with_missing_samples_is_left_out_of_the_comparison(walk):
+    """A thigh sensor with a 5 s dropout (its own check excludes it): the shank's step is
+    computed against the foot alone, without the thigh's NaN."""
+    s = walk.sensors["femur_r_imu"]
+    gyr, acc = s.gyr.copy(), s.acc.copy()
+    gyr[500:1000], acc[500:1000] = np.nan, np.nan
+    rec = walk.with_sensors({**walk.sensors, "femur_r_imu": s.replace(gyr=gyr, acc=acc)})
+    rec = _slipped(rec, "tibia_r_imu", 0, _mid_walk(walk))
+    step = slip_step("tibia_r_imu", rec)
+    assert step.slipped and np.isfinite(step.others_deg), step
