@@ -30,7 +30,9 @@ A slip moves one sensor; a change of the walk itself (stairs, a slope, gait init
 strides) turns every sensor of the leg. So a step is a slip only while the leg's other sensors
 step less than :data:`ALONE_DEG` at the same split: with a 30 deg slip they step 2-4 deg (S02,
 the simulated walk); without one, the early splits where a sensor steps most are common to the
-leg (others at 6-8 deg: the first strides from standing).
+leg (others at 6-8 deg: the first strides from standing), and on the qmt full-body recording,
+whose movement changes at 67-70 s, the thighs' mid-stance gravity steps 21-29 deg with the
+shanks' 10-15: a change of the movement, which the rule keeps from being taken for two slips.
 """
 
 from __future__ import annotations
