@@ -101,3 +101,17 @@ def test_scale_cli_hinge_about_a_given_knee_axis(tmp_path):
     a_F, a_T = knee_axis(pin.buildModelFromUrdf(str(out)), "right")
     np.testing.assert_allclose(a_F, np.array([-0.1, -0.1, 1]) / np.sqrt(1.02), atol=1e-9)
     np.testing.assert_allclose(a_T, np.array([0, 0.05, 1]) / np.sqrt(1.0025), atol=1e-9)
+
+
+def test_a_measured_pelvis_width_places_the_hip_centres():
+    """Bell et al. 1989: each hip centre 14 % of the inter-ASIS distance medial of its ASIS, so
+    the two 0.72 of it apart; their other coordinates stay the template's; without the width the
+    template's hips scaled with height (0.157 m apart at 1.72 m)."""
+    measured, _ = geometry_from_measures(Measures("m", 1.72, pelvis_width_m=0.242))
+    default, _ = geometry_from_measures(Measures("m", 1.72))
+    assert measured.right_hip[2] - measured.left_hip[2] == pytest.approx(0.72 * 0.242)
+    np.testing.assert_allclose(measured.right_hip[:2], default.right_hip[:2])
+    np.testing.assert_allclose(measured.left_hip, measured.right_hip * [1, 1, -1])
+    assert default.right_hip[2] - default.left_hip[2] == pytest.approx(0.157, abs=5e-4)
+    with pytest.raises(InputError, match="looks like centimetres"):
+        Measures("m", 1.72, pelvis_width_m=24.2)

@@ -92,6 +92,7 @@ def _value(spec):
         "sensor_map": ("pelvis_imu=P1", "femur_r_imu=T1"), "ignore": ("notes.txt", "*.log"),
         "sex": ("f",), "height_m": ("1.62",), "shank_lateral_m": ("0.41",),
         "shank_medial_m": ("0.40",), "knee_width_m": ("0.095",), "ankle_width_m": ("0.07",),
+        "pelvis_width_m": ("0.25",),
         "knee_axis_femur": ("0", "0.1", "1"), "knee_axis_tibia": ("0.1", "0", "1"),
         "sensor_to_model": ("-1.5708", "0", "0"), "foot_length_m": ("0.25",),
     }
@@ -153,7 +154,7 @@ def test_every_option_is_accepted_by_flag_config_and_manifest_alike(tmp_path):
     for settings in (filed, listed):
         assert settings.inputs.orientations == str((tmp_path / "walk.sto").resolve())
     assert flagged.subject == filed.subject == listed.subject == Measures(
-        "f", 1.62, 0.41, 0.40, 0.095, 0.07)
+        "f", 1.62, 0.41, 0.40, 0.095, 0.07, 0.25)
     assert flagged.options == filed.options == listed.options
     assert flagged.outputs == filed.outputs == listed.outputs
     assert flagged.inputs.sensor_map == filed.inputs.sensor_map == listed.inputs.sensor_map

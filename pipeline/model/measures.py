@@ -29,6 +29,7 @@ PLAUSIBLE_M = {
     "shank_medial_m": (0.2, 0.7),
     "knee_width_m": (0.05, 0.2),
     "ankle_width_m": (0.03, 0.15),
+    "pelvis_width_m": (0.15, 0.40),
 }
 _ABSENT = "default: not measured; the equations use the others"
 
@@ -76,6 +77,11 @@ class Measures:
                                         section="subject")  # fmt: skip
     ankle_width_m: float | None = option(None, "float", f"a = |MM - LM| in metres ({_ABSENT})",
                                          section="subject")  # fmt: skip
+    pelvis_width_m: float | None = option(None, "float", "the distance between the anterior "
+                                          "superior iliac spines in metres: the hip centres "
+                                          "0.72 of it apart (Bell 1989; default: not measured, "
+                                          "the template's hips scaled with height)",
+                                          section="subject")  # fmt: skip
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sex", normalize_sex(self.sex))

@@ -19,14 +19,20 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.model.anthropometry import LandmarkPositions, RegressionTable, predict_landmarks
 from pipeline.model.builder import build_urdf
-from pipeline.model.geometry import SubjectGeometry
+from pipeline.model.geometry import (
+    TEMPLATE_HEIGHT_M,
+    TEMPLATE_HIP_OFFSET,
+    SubjectGeometry,
+    mirror_point,
+)
 from pipeline.model.measures import Measures
 from pipeline.model.resources import models_file
 from pipeline.rotations import normalize
 
 KNEE_AOR_FILE = "wang2023_knee_aor.csv"
 
-__all__ = ["PopulationKneeAxis", "geometry_from_measures", "population_knee_axis", "scale_model"]
+__all__ = ["HIP_SHARE_OF_PELVIS_WIDTH", "PopulationKneeAxis", "geometry_from_measures",
+           "hip_centre", "population_knee_axis", "scale_model"]
 
 
 @dataclass(frozen=True)
@@ -87,6 +93,7 @@ def geometry_from_measures(
     """
     landmarks = predict_landmarks(measures, table=table)
     aor = population_knee_axis(measures.sex)
+    right_hip = hip_centre(measures)
     geometry = SubjectGeometry(
         sex=measures.sex,
         height_m=measures.height_m,
@@ -96,8 +103,28 @@ def geometry_from_measures(
         knee_axis_tibia=aor.tibia_axis if knee_axis_tibia is None else knee_axis_tibia,
         body_mass_kg=body_mass_kg,
         foot_length_m=foot_length_m,
+        right_hip=right_hip,
+        left_hip=None if right_hip is None else mirror_point(right_hip),
     )
     return geometry, landmarks
+
+
+#: The hip centre's distance from the midline as a share of the inter-ASIS distance: Bell et al.
+#: 1989 (Hum Mov Sci 8:3-16) place it 14 % of that distance medial of each ASIS.
+HIP_SHARE_OF_PELVIS_WIDTH = 0.5 - 0.14
+
+
+def hip_centre(measures: Measures) -> np.ndarray | None:
+    """The right hip centre in the pelvis frame when the pelvis width is measured: the
+    template's, scaled with height, moved laterally to :data:`HIP_SHARE_OF_PELVIS_WIDTH` of the
+    width; None when it is not (:class:`~pipeline.model.geometry.SubjectGeometry` then scales
+    the template's)."""
+    width = getattr(measures, "pelvis_width_m", None)  # the reproduction's samples have none
+    if width is None:
+        return None
+    p = TEMPLATE_HIP_OFFSET * (measures.height_m / TEMPLATE_HEIGHT_M)
+    p[2] = HIP_SHARE_OF_PELVIS_WIDTH * width
+    return p
 
 
 def scale_model(

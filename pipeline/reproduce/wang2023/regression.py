@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +40,7 @@ from pipeline.model.anthropometry import (
     RegressionEquation,
     RegressionTable,
 )
-from pipeline.model.measures import Measures
+from pipeline.model.measures import FIELD_OF_INPUT, Measures
 
 __all__ = [
     "FitResult",
@@ -71,7 +71,7 @@ class SubjectSample:
     lm: np.ndarray
 
     def __post_init__(self) -> None:
-        names = [f.name for f in fields(Measures)]
+        names = ["sex", *FIELD_OF_INPUT.values()]  # the regression's inputs
         try:
             for n in names:
                 if getattr(self, n) is None:
