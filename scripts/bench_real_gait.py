@@ -27,6 +27,7 @@ Usage: ``python scripts/bench_real_gait.py [--data ../shared/data/gaittoolbox_s0
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import time
 from pathlib import Path
@@ -55,9 +56,11 @@ INPUTS = {"vendor": "the vendor's orientations", "vqf9": "VQF with magnetometers
 #: The options varied, each value besides the default one at a time.
 OPTIONS = (("correction", ("none", "aor", "functional")), ("knee", ("free", "hinge")),
            ("posture", ("measured", "neutral")), ("drift", ("auto", "joints", "none")))  # fmt: skip
-#: Option sets: the defaults, then (label, changes) for each other value.
+#: Option sets: the defaults, then (label, changes) for each other value; last, the subject's
+#: measured pelvis width (``--pelvis-width-m``, from the Vicon ASIS markers: asis_width).
 VARIANTS = (("defaults", {}), *((f"{name} {v}", {name: v}) for name, values in OPTIONS
-                                for v in values if v != getattr(IKOptions(), name)))  # fmt: skip
+                                for v in values if v != getattr(IKOptions(), name)),
+            ("pelvis width measured", {"pelvis_width_m": "measured"}))  # fmt: skip
 #: Issue 23's targets (deg, mm): the median of the six sagittal RMSEs per input, each knee's and
 #: ankle's RMSE, the hip ab/adduction's r, the knee and ankle centres' RMS error.
 MEDIAN_TARGET = {"vendor": 3.5, "vqf9": 3.5, "vqf6": 4.0, "pi6": 4.0}
@@ -233,10 +236,21 @@ def centre_errors(ours: dict, truth: dict) -> dict[str, float]:
             for k in truth}  # fmt: skip
 
 
+def asis_width(data: Path) -> float:
+    """The distance (m) between the Vicon ASIS markers, median over the standing samples: what a
+    lab measures for ``--pelvis-width-m``."""
+    d = vicon_mat(data)
+    left, right = (np.asarray(d[m], float)[STANDING, :3] for m in ("LASI", "RASI"))
+    return float(np.nanmedian(np.linalg.norm(left - right, axis=1))) / 1000.0
+
+
 def run_one(data: Path, path: str, changes: dict, refs: dict):
     rec, base = recording(data, path)
+    subject, changes = SUBJECT, dict(changes)
+    if changes.pop("pelvis_width_m", None):
+        subject = dataclasses.replace(SUBJECT, pelvis_width_m=asis_width(data))
     t0 = time.perf_counter()
-    run = process_recording(rec, SUBJECT, **base, **changes)
+    run = process_recording(rec, subject, **base, **changes)
     seconds = time.perf_counter() - t0
     cols = mot_columns(run)
     scores = {ref: {c: angle_scores(cols[c], table.columns[c]) for c in SAGITTAL + FRONTAL}
