@@ -38,6 +38,7 @@ shanks' 10-15: a change of the movement, which the rule keeps from being taken f
 from __future__ import annotations
 
 import dataclasses
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +48,7 @@ from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 
-__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "slip_step"]
+__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "leg_slips", "slip_step"]
 
 #: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
 #: docstring), under the 19-33 deg a 30 deg slip gives.
@@ -149,39 +150,55 @@ def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
     return d_axis, d_g
 
 
-def _views(rec: Recording, names, strides, rests) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Sensor -> its ``(C_k, g_k)`` over the strides, for the sensors with raw signals (the
-    first, ``names[0]``, always; the others only when every sample is finite: a sensor with a
-    dropout is excluded by its own check)."""
+def _finite(s) -> bool:
+    return bool(np.isfinite(s.gyr).all() and np.isfinite(s.acc).all())
+
+
+def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Slip:
+    """The split with the largest ``max(d_axis, d_g)`` (eq 1, 2)."""
+    best = None
+    for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
+        step = Slip(*_step_at(C, g, m), float(time[strides[m][0]]), m, len(strides) - m)
+        if best is None or step.deg > best.deg:
+            best = step
+    return best
+
+
+def leg_slips(rec: Recording, side: str) -> dict[str, Slip]:
+    """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
+    signals, with the leg's other sensors' steps at the same split (those with every sample
+    finite: a sensor with a dropout is excluded by its own check); empty for a leg with too few
+    strides. The leg's events and each sensor's view are computed once."""
+    strides, rests = _strides(rec, side)
+    if len(strides) < 2 * MIN_SIDE:
+        return {}
+    names = (SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot"))
+    leg = {n: rec.sensors[n] for n in names if n in rec.sensors
+           and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}  # fmt: skip
+    views = {n: _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides,
+                            rests) for n, s in leg.items()}  # fmt: skip
     out = {}
-    for i, n in enumerate(names):
-        s = rec.sensors.get(n)
-        if s is None or s.gyr is None or s.acc is None:
-            continue
-        if i == 0 or (np.isfinite(s.gyr).all() and np.isfinite(s.acc).all()):
-            out[n] = _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz,
-                                 strides, rests)  # fmt: skip
+    for name, (C, g) in views.items():
+        best = _largest_step(C, g, strides, rec.time)
+        others = [np.nanmax(_step_at(*views[n], best.before)) for n in views
+                  if n != name and _finite(leg[n])]  # fmt: skip
+        out[name] = dataclasses.replace(best, others_deg=float(max(others, default=0.0)))
     return out
 
 
+#: The last recording's legs (a weak reference to it, side -> :func:`leg_slips`): the sensor
+#: check asks for each sensor of a leg in turn, and the leg is computed once.
+_LAST: dict[str, tuple[weakref.ref, dict[str, Slip]]] = {}
+
+
 def slip_step(name: str, rec: Recording) -> Slip | None:
-    """The largest step (module docstring) of sensor ``name`` over its leg's strides, with the
-    leg's other sensors' steps at the same split; None for a pelvis or torso sensor, one without
-    raw signals, or a leg with too few strides."""
+    """Sensor ``name``'s entry of :func:`leg_slips`; None for a pelvis or torso sensor, one
+    without raw signals, or a leg with too few strides."""
     s, segment = rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
     if s.gyr is None or s.acc is None or not segment.startswith(("right_", "left_")):
         return None
     side = segment.split("_", 1)[0]
-    strides, rests = _strides(rec, side)
-    if len(strides) < 2 * MIN_SIDE:
-        return None
-    leg = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
-    views = _views(rec, [name] + [n for n in leg if n != name], strides, rests)
-    best = None
-    for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
-        step = Slip(*_step_at(*views[name], m), float(rec.time[strides[m][0]]), m,
-                    len(strides) - m)  # fmt: skip
-        if best is None or step.deg > best.deg:
-            best = step
-    others = [np.nanmax(_step_at(C, g, best.before)) for n, (C, g) in views.items() if n != name]
-    return dataclasses.replace(best, others_deg=float(max(others, default=0.0)))
+    cached = _LAST.get(side)
+    if cached is None or cached[0]() is not rec:
+        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side))
+    return cached[1].get(name)
