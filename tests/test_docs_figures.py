@@ -52,6 +52,14 @@ FIGURES = [
      rf"xsens_walking_orientations.sto \| 2432 \| ours \| anatomical \| hinge .* {NUM}x "),
     ("README.md", rf"IK runs [\d]+-{NUM}× faster", "results/bench_opensense.txt",
      rf"quaternions_4_ik.sto \| 1401 \| ours \| anatomical \| hinge .* {NUM}x "),
+    ("docs/results.md", rf"Remounting moved no sagittal angle by more than {NUM}° on S02",
+     "results/bench_sensor_sets.txt", rf"by more than {NUM} deg on S02"),
+    ("docs/results.md", rf"and {NUM}° on the x-IMU3 walk", "results/bench_sensor_sets.txt",
+     rf"and {NUM} deg on the x-IMU3 walk"),
+    ("docs/results.md", rf"standing lean \({NUM}° on S02", "results/bench_sensor_sets.txt",
+     rf"{NUM} deg without the feet's sensors"),
+    ("docs/results.md", rf"remaining joints by at most {NUM}°", "results/bench_sensor_sets.txt",
+     rf"up to {NUM} deg on S02, and"),
 ]  # fmt: skip
 
 

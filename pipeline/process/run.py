@@ -194,14 +194,14 @@ def process_recording(
     method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
     align = sensors_to_align(opts.drift, list(rotations), oriented.shared)
     pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
-
     gravity = still_gravity(trial, rotations)
 
     def read_pose(rotations, notes) -> CalibrationPose:
         return read_calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs,
                                      notes, gravity)  # fmt: skip
 
-    cal = read_pose(rotations, notes)
+    pose_notes: list[str] = []  # the pose read again after the headings' alignment says its own
+    cal = read_pose(rotations, pose_notes)
     knee_axes = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
                  for s in legs if sensors.observes(s, "knee")}  # fmt: skip
     knee_cal = []
@@ -213,8 +213,9 @@ def process_recording(
     if align:
         rotations, drifts = align_headings(trial, rotations, legs, align, knee_cal, method, notes)
         if drifts:  # the calibration pose read again from the aligned orientations
-            cal = read_pose(rotations, None)
+            cal = read_pose(rotations, pose_notes := [])
             knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    notes += pose_notes
     posture = None
     if opts.posture == "measured" and opts.calibration_pose == "standing":
         posture = _measured_posture(trial, rotations, cal, geometry, legs, notes)
