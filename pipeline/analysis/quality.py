@@ -16,7 +16,9 @@
 * **Calibration pose:** a lying or seated calibration pose given for a recording in which the
   subject walks (``strides`` found), whose first seconds are then standing.
 * **Heading:** the hip and knee flexion axes disagree (see
-  :func:`pipeline.calibration.heading.anatomical_right`).
+  :func:`pipeline.calibration.heading.anatomical_right`), or a thigh's heading could not be put
+  in the pelvis's (6-D, neither its hip nor the other thigh could align it:
+  :mod:`pipeline.process.heading_alignment`).
 """
 
 from __future__ import annotations
@@ -91,5 +93,5 @@ def quality_flags(
             + "; likely a mis-mounted or mis-mapped sensor, a wrong heading, or a knee model "
             "that cannot follow the data (try --knee free)"
         )  # fmt: skip
-    flags += [n for n in notes if "disagree" in n]
+    flags += [n for n in notes if "disagree" in n or "keeps its thigh sensor's heading" in n]
     return flags

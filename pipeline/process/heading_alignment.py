@@ -175,7 +175,9 @@ def _align_by_other_thigh(trial, out, side, align, axes, drifts, notes) -> None:
         drift = _flexion(trial, out[o], out[femur], {**axes[other], **axes[side]}, o, femur)
         _check_residual(drift)
     except InputError as e:
-        notes.append(f"{side} hip: the {side} leg keeps its thigh sensor's heading: {e.message}")
+        notes.append(f"{side} hip: the {side} leg keeps its thigh sensor's heading ({e.message}): "
+                     f"the {side} hip's angles depend on how that sensor sits, unreliable; its "
+                     "magnetometer or the vendor's orientations would give it the pelvis's")
         return
     turned = {femur}
     for joint, (prox, dist) in JOINT_SEGMENTS.items():  # the leg below, where aligned to it
