@@ -60,6 +60,10 @@ FIGURES = [
      rf"{NUM} deg without the feet's sensors"),
     ("docs/results.md", rf"remaining joints by at most {NUM}°", "results/bench_sensor_sets.txt",
      rf"up to {NUM} deg on S02, and"),
+    ("README.md", rf"more than {NUM}° on S02 and", "results/bench_sensor_sets.txt",
+     rf"by more than {NUM} deg on S02"),
+    ("README.md", rf"and {NUM}° on the shipped x-IMU3", "results/bench_sensor_sets.txt",
+     rf"and {NUM} deg on the x-IMU3 walk"),
 ]  # fmt: skip
 
 
