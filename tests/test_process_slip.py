@@ -54,9 +54,8 @@ def _slipped(rec: Recording, name: str, axis: int, at: int, deg: float = 30.0) -
 
 def test_sensors_that_stay_put_do_not_step(walk):
     steps = {n: slip_step(n, walk) for n in walk.sensors}
-    assert steps["pelvis_imu"] is None  # not checked
-    legs = {n: s for n, s in steps.items() if n != "pelvis_imu"}
-    assert len(legs) == 6 and all(s.deg < SLIP_DEG / 1.5 for s in legs.values()), legs
+    assert len(steps) == 7 and all(s.deg < SLIP_DEG / 1.5 for s in steps.values()), steps
+    assert np.isnan(steps["pelvis_imu"].axis_deg)  # the pelvis: gravity alone
     assert not [f for f in check_sensors(walk)[1] if f.check == "slipped"]
 
 
@@ -69,6 +68,27 @@ def test_a_30_deg_slip_about_any_axis_is_found_where_it_happened(walk, name, axi
     stride = 1.4  # s, about; the stride the slip happened in goes to either side
     assert abs(step.time_s - walk.time[at]) <= stride, (step.time_s, walk.time[at])
     assert step.before >= 2 and step.after >= 2
+
+
+def _horizontal_axes(rec: Recording, name: str) -> tuple[list[int], int]:
+    """The sensor's two axes most nearly horizontal at the standing start, and the vertical one."""
+    g = np.abs(np.mean(rec.sensors[name].acc[:100], axis=0))
+    order = [int(i) for i in np.argsort(g)]
+    return order[:2], order[2]
+
+
+def test_the_pelvis_tipping_on_its_belt_is_found_but_not_a_turn_about_the_vertical(walk):
+    """The pelvis is checked by gravity at mid-stance alone (module docstring): a 30 deg slip
+    about either of its sensor's horizontal axes is found, alone (the right leg's sensors step
+    little at that split); one about the vertical axis leaves gravity where it was and is not."""
+    at = _mid_walk(walk)
+    horizontal, vertical = _horizontal_axes(walk, "pelvis_imu")
+    for axis in horizontal:
+        step = slip_step("pelvis_imu", _slipped(walk, "pelvis_imu", axis, at))
+        assert step.slipped and step.gravity_deg > 20.0 and step.others_deg < 5.0, (axis, step)
+        assert "gravity at mid-stance turned by" in step.evidence()
+        assert "flexion axis" not in step.evidence()
+    assert not slip_step("pelvis_imu", _slipped(walk, "pelvis_imu", vertical, at)).slipped
 
 
 def test_a_step_the_whole_leg_takes_is_not_a_slip(walk):
@@ -103,8 +123,9 @@ def test_the_slipped_sensor_is_excluded_and_named_and_the_run_goes_on(walk):
 
 @pytest.mark.dataset
 def test_s02_no_sensor_steps_and_a_mid_walk_slip_is_found():
-    """The real walk (4-7 strides a side, a turn): every leg sensor's step under the limit; a
-    30 deg slip of the right shank, thigh or foot halfway through the walk found."""
+    """The real walk (4-7 strides a side, a turn): every sensor's step under the limit; a
+    30 deg slip of the right shank, thigh or foot halfway through the walk found, and of the
+    pelvis about either horizontal axis of its sensor."""
     if not S02.exists():
         pytest.skip("../shared/data/gaittoolbox_s02 not present")
     import sys
@@ -121,6 +142,8 @@ def test_s02_no_sensor_steps_and_a_mid_walk_slip_is_found():
     at = _mid_walk(rec)
     for name in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu"):
         assert slip_step(name, _slipped(rec, name, 0, at)).slipped, name
+    for axis in _horizontal_axes(rec, "pelvis_imu")[0]:
+        assert slip_step("pelvis_imu", _slipped(rec, "pelvis_imu", axis, at)).slipped, axis
 
 
 def test_a_neighbour_with_missing_samples_is_left_out_of_the_comparison(walk):

@@ -23,8 +23,15 @@ slip: up to 7 deg on the real walk gaittoolbox_s02 (4-6 strides a side, a turn),
 recording, 8 on the simulated walk with soft tissue (its first strides from standing differ); a
 30 deg slip about any of the sensor's axes, of a thigh, shank or foot sensor halfway through the
 walk: 19-33 deg on S02, 25-32 on the simulated walk (``tests/test_process_slip.py``,
-``scripts/bench_faults.py``). The pelvis is not checked (it barely flexes in walking: no axis),
-nor a leg with fewer than ``2 MIN_SIDE`` strides (no walk to compare).
+``scripts/bench_faults.py``). A leg with fewer than ``2 MIN_SIDE`` strides is not checked (no
+walk to compare).
+
+The pelvis barely flexes in walking (no axis), and the principal axis of its horizontal
+acceleration, tried instead, stepped 24-29 deg between S02's strides without a slip; so it is
+checked by gravity at mid-stance alone (eq 2, on the right foot's strides, else the left's):
+without a slip 1-3 deg (S02, the x-IMU3 walk, the simulated walk), a 30 deg slip about a
+horizontal axis of the sensor 25-32 deg; a slip about the vertical (a belt turning around the
+waist) is not seen.
 
 A slip moves one sensor; a change of the walk itself (stairs, a slope, gait initiation's first
 strides) turns every sensor of the leg. So a step is a slip only while the leg's other sensors
@@ -84,7 +91,8 @@ class Slip:
 
     @property
     def deg(self) -> float:
-        return float(np.nanmax([self.axis_deg, self.gravity_deg]))
+        return max((d for d in (self.axis_deg, self.gravity_deg) if np.isfinite(d)),
+                   default=float("nan"))  # fmt: skip
 
     @property
     def slipped(self) -> bool:
@@ -93,9 +101,10 @@ class Slip:
 
     def evidence(self) -> str:
         """What turned, where, for a finding."""
-        turned = f"its segment's flexion axis turned by {self.axis_deg:.0f} deg"
-        if np.isfinite(self.gravity_deg):
-            turned += f" and gravity at mid-stance by {self.gravity_deg:.0f} deg"
+        turned = " and ".join(
+            f"{what} by {deg:.0f} deg" for what, deg in
+            (("its segment's flexion axis turned", self.axis_deg),
+             ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))  # fmt: skip
         return (f"in its own frame {turned} between the {self.before} strides before t = "
                 f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
                 f"other sensors by {self.others_deg:.0f} at most: it slipped on its segment (a "
@@ -143,8 +152,11 @@ def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarr
 
 
 def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
-    """Eq (1) and (2) at split ``m``; ``d_g`` NaN without rests on both sides."""
-    d_axis = _angle(_principal(C[:m].sum(0)), _principal(C[m:].sum(0)), signed=False)
+    """Eq (1) and (2) at split ``m``; ``d_axis`` NaN without an axis (the pelvis: ``C`` zero),
+    ``d_g`` NaN without rests on both sides."""
+    C_0, C_1 = C[:m].sum(0), C[m:].sum(0)
+    d_axis = _angle(_principal(C_0), _principal(C_1), signed=False) if C_0.any() and C_1.any() \
+        else np.nan
     before, after = g[:m][np.isfinite(g[:m, 0])], g[m:][np.isfinite(g[m:, 0])]
     d_g = _angle(before.mean(0), after.mean(0)) if len(before) and len(after) else np.nan
     return d_axis, d_g
@@ -164,24 +176,30 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
     return best
 
 
-def leg_slips(rec: Recording, side: str) -> dict[str, Slip]:
+def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip]:
     """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
     signals, with the leg's other sensors' steps at the same split (those with every sample
     finite: a sensor with a dropout is excluded by its own check); empty for a leg with too few
-    strides. The leg's events and each sensor's view are computed once."""
+    strides. ``pelvis``: the pelvis's sensor too, by gravity alone on this leg's strides (when
+    the foot's rests give them), the leg's sensors its others. The leg's events and each
+    sensor's view are computed once."""
     strides, rests = _strides(rec, side)
     if len(strides) < 2 * MIN_SIDE:
         return {}
-    names = (SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot"))
+    names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
+    pelvis_name = SEGMENT_SENSOR["pelvis"]
+    names += [pelvis_name] if pelvis and len(rests) else []
     leg = {n: rec.sensors[n] for n in names if n in rec.sensors
            and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}  # fmt: skip
     views = {n: _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides,
                             rests) for n, s in leg.items()}  # fmt: skip
+    if pelvis_name in views:  # no axis: gravity alone
+        views[pelvis_name] = (np.zeros_like(views[pelvis_name][0]), views[pelvis_name][1])
     out = {}
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
         others = [np.nanmax(_step_at(*views[n], best.before)) for n in views
-                  if n != name and _finite(leg[n])]  # fmt: skip
+                  if n not in (name, pelvis_name) and _finite(leg[n])]  # fmt: skip
         out[name] = dataclasses.replace(best, others_deg=float(max(others, default=0.0)))
     return out
 
@@ -192,13 +210,22 @@ _LAST: dict[str, tuple[weakref.ref, dict[str, Slip]]] = {}
 
 
 def slip_step(name: str, rec: Recording) -> Slip | None:
-    """Sensor ``name``'s entry of :func:`leg_slips`; None for a pelvis or torso sensor, one
-    without raw signals, or a leg with too few strides."""
+    """Sensor ``name``'s entry of :func:`leg_slips` (the pelvis's: on the right leg's strides,
+    else the left's); None for a torso sensor, one without raw signals, or too few strides."""
     s, segment = rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
-    if s.gyr is None or s.acc is None or not segment.startswith(("right_", "left_")):
+    if s.gyr is None or s.acc is None:
         return None
-    side = segment.split("_", 1)[0]
+    if segment == "pelvis":
+        return next((found for side in ("right", "left")
+                     if (found := _leg(rec, side).get(name)) is not None), None)  # fmt: skip
+    if not segment.startswith(("right_", "left_")):
+        return None
+    return _leg(rec, segment.split("_", 1)[0]).get(name)
+
+
+def _leg(rec: Recording, side: str) -> dict[str, Slip]:
+    """:func:`leg_slips` with the pelvis, kept for the last recording per side."""
     cached = _LAST.get(side)
     if cached is None or cached[0]() is not rec:
-        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side))
-    return cached[1].get(name)
+        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side, pelvis=True))
+    return cached[1]
