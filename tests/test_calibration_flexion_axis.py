@@ -4,7 +4,12 @@ down the leg, on the simulator's truth."""
 import numpy as np
 import pytest
 
-from pipeline.calibration.flexion_axis import flexion_axis, leg_flexion_axes
+from pipeline.calibration.flexion_axis import (
+    flexion_axis,
+    leg_flexion_axes,
+    pelvis_lateral_line,
+    stride_frequency,
+)
 from pipeline.errors import InputError
 from pipeline.rotations import exp3
 from pipeline.simulate.model import simulate_trial
@@ -61,3 +66,44 @@ def test_a_segment_that_does_not_walk_has_no_axis():
     n = 500
     with pytest.raises(InputError, match="does it walk"):
         flexion_axis(np.zeros((n, 3)), np.tile([0.0, 0.0, 1.0], (n, 1)), 100.0)
+
+
+def _walking_pelvis(f: float, mounting: np.ndarray, seconds: float = 30.0, rate: float = 100.0):
+    """A pelvis sensor's gyroscope and vertical: list +-5 deg about the antero-posterior axis
+    (x) once per stride, tilt +-2.5 deg about the medio-lateral axis (z) twice, rotation +-4 deg
+    about the vertical (y) once, in the segment's frame; the sensor turned by ``mounting``."""
+    t = np.arange(int(seconds * rate)) / rate
+    w = 2 * np.pi * f
+    rates = np.stack([np.radians(5) * w * np.cos(w * t), np.radians(4) * w * np.cos(w * t + 1),
+                      np.radians(2.5) * 2 * w * np.cos(2 * w * t + 0.3)], axis=1)  # fmt: skip
+    up = np.tile([0.0, 1.0, 0.0], (len(t), 1))
+    return rates @ mounting, up @ mounting, rate
+
+
+def test_the_pelvis_line_is_its_medio_lateral_axis_whatever_the_mounting():
+    """The list at the stride frequency dominates the band: its axis is antero-posterior, and
+    up x it the medio-lateral line (sign free), in the sensor's frame."""
+    for seed in range(3):
+        M = exp3(np.random.default_rng(seed).normal(size=3))
+        gyr, up, rate = _walking_pelvis(0.9, M)
+        line = pelvis_lateral_line(gyr, up, rate, stride_hz=0.9)
+        truth = np.array([0.0, 0.0, 1.0]) @ M
+        assert abs(line.axis @ truth) > np.cos(np.radians(1.0)), seed
+        assert line.share > 0.8
+
+
+def test_the_stride_frequency_is_the_thighs_swing():
+    t = np.arange(3000) / 100.0
+    rate = 3.0 * np.cos(2 * np.pi * 0.85 * t) + 1.0 * np.cos(2 * np.pi * 1.7 * t + 0.5)
+    assert abs(stride_frequency(rate, 100.0) - 0.85) < 0.04  # the spectrum's bins: 1/30 Hz
+    with pytest.raises(InputError, match="does not swing"):
+        stride_frequency(np.zeros(3000), 100.0)
+    slow = np.cos(2 * np.pi * 0.25 * t)  # a supine hip flexion: nothing in the walking band
+    with pytest.raises(InputError, match="does not swing once per stride"):
+        stride_frequency(slow, 100.0)
+
+
+def test_a_pelvis_that_does_not_list_has_no_line():
+    gyr, up, rate = _walking_pelvis(0.9, np.eye(3))
+    with pytest.raises(InputError, match="does not list"):
+        pelvis_lateral_line(0.005 * gyr, up, rate, stride_hz=0.9)

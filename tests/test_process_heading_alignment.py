@@ -123,10 +123,12 @@ def test_the_real_ximu3_recording_without_its_magnetometers():
     """Real data, 6-D (the magnetometers and the device's quaternions dropped), the device's own
     orientations as the reference (with its shanks' and feet's disturbed magnetometers aligned by
     the joints, as the default does): the knees and ankles hold their constraints well enough to
-    be aligned (residual <= MAX_RESIDUAL_DEG), a hip whose windows never agree is refused with the
-    reason; the aligned joint angles are closer to the reference than without the alignment
-    (median RMS difference measured 4.8 against 5.4 deg; the reference's right thigh, its
-    magnetometer disturbed, is aligned by the left thigh's flexion axis)."""
+    be aligned (residual <= MAX_RESIDUAL_DEG); neither hip's windows ever agree (the note says
+    so), so the right thigh is put on the pelvis's medio-lateral line and the left on the right
+    thigh's flexion axis; the joint angles come out near the reference (median RMS difference
+    measured 1.3 deg; 5.4 without the alignment, 4.8 while the thighs kept their own headings;
+    the reference's right thigh, its magnetometer disturbed, is aligned by the left thigh's
+    flexion axis)."""
     from pathlib import Path
 
     from pipeline.io.formats import read_recording
@@ -150,7 +152,10 @@ def test_the_real_ximu3_recording_without_its_magnetometers():
         return np.median([np.sqrt(np.nanmean(np.degrees(run.joint_angles[k] - v) ** 2))
                           for k, v in ref.joint_angles.items() if not k.startswith("pelvis")])
 
-    assert median_rms(runs["auto"]) < 0.9 * median_rms(runs["none"])
+    assert median_rms(runs["auto"]) < min(2.5, 0.5 * median_rms(runs["none"]))
+    turned = "femur sensor turned into the pelvis sensor's heading by the"
+    assert f"right hip: {turned} pelvis's medio-lateral line" in notes
+    assert f"left hip: {turned} right thigh's flexion axis" in notes
 
 
 def test_a_still_leg_lying_supine_without_magnetometers():
@@ -250,3 +255,64 @@ def test_a_hip_that_does_not_align_takes_the_other_thighs_heading(walk, monkeypa
     for key in ("right_hip_flexion", "right_hip_adduction", "right_knee_flexion",
                 "right_knee_adduction", "right_ankle_flexion"):  # fmt: skip
         assert rms(run, key) < min(rms(normal, key) + 1.0, rms(own, key)), key
+
+
+def test_both_hips_refused_the_pelvis_line_puts_the_thighs_in_its_heading():
+    """The simulated walk with its soft tissue, 6-D: neither hip's centre constraint holds in any
+    window (as on the real x-IMU3 walk), so the right thigh goes onto the pelvis's medio-lateral
+    line and the left onto the right thigh's flexion axis. The joint angles are then near the
+    truth and no longer depend on how the sensors sit: every sensor turned by a random rotation
+    moves the median errors by 0.4 deg at most (measured; 24.8 deg while the thighs kept the
+    headings the 6-D filter took from their mountings, results/bench_sensor_sets.txt)."""
+    from scipy.spatial.transform import Rotation
+
+    from pipeline.analysis.joint_angles import joint_angles
+    from pipeline.simulate.artefacts import Artefacts
+
+    geometry, _ = geometry_from_measures(SUBJECT)
+    sk = Skeleton.build(geometry, knee="free", root="freeflyer")
+    trial = simulate_trial(sk, "walk", duration_s=20.0, seed=0, standing_s=3.0,
+                           artefacts=Artefacts())  # fmt: skip
+    raw = trial.raw_recording(magnetometers=False)
+    rng = np.random.default_rng(1)
+    turned = {}
+    for name in sorted(raw.sensors):
+        s, R = raw.sensors[name], Rotation.random(random_state=rng).as_matrix()
+        turned[name] = s.replace(gyr=s.gyr @ R, acc=s.acc @ R)
+    truth = joint_angles(trial.skeleton, trial.q)
+    medians = []
+    for rec in (raw, raw.with_sensors(turned)):
+        run = process_recording(rec, SUBJECT, filter="vqf")
+        notes = " ".join(run.notes)
+        assert "right hip: femur sensor's heading not aligned" in notes
+        assert "right hip: femur sensor turned into the pelvis sensor's heading by the pelvis's " \
+            "medio-lateral line" in notes
+        assert not run.flags, run.flags
+        rms = {k: np.sqrt(np.mean(np.degrees(run.joint_angles[k] - truth[k])[300:] ** 2))
+               for k in truth if k in run.joint_angles and not k.startswith("pelvis")}  # fmt: skip
+        sagittal = np.median([v for k, v in rms.items() if k.endswith("flexion")])
+        other = np.median([v for k, v in rms.items() if not k.endswith("flexion")])
+        assert sagittal < 2.5 and other < 3.5, (sagittal, other)
+        medians.append((sagittal, other))
+    assert np.max(np.abs(np.subtract(*medians))) < 1.0, medians
+
+
+def test_without_a_pelvis_sensor_the_legs_share_one_heading(walk):
+    """No pelvis sensor, 6-D: each leg's sensors are aligned to its thigh, and the left thigh
+    (its heading its own) is turned into the right one's by the two thighs' flexion axes, so
+    that the subject's heading (from both knees' cues) is read in one world: every knee and ankle
+    angle as close to the truth as with the pelvis (within 1 deg RMS)."""
+    from pipeline.analysis.joint_angles import joint_angles
+
+    trial, raw, normal = walk
+    legs = raw.with_sensors({n: s for n, s in raw.sensors.items() if n != "pelvis_imu"})
+    run = process_recording(legs, SUBJECT, filter="vqf")
+    assert any(n.startswith("left thigh: femur sensor turned into the right femur sensor's "
+                            "heading by the right thigh's flexion axis") for n in run.notes)
+    assert "left_thigh" in run.heading_drifts
+    truth = joint_angles(trial.skeleton, trial.q)
+    for key in truth:
+        if "_knee_" in key or "_ankle_" in key:
+            e = np.degrees(run.joint_angles[key] - truth[key])[300:]
+            e0 = np.degrees(normal.joint_angles[key] - truth[key])[300:]
+            assert np.sqrt(np.mean(e**2)) < np.sqrt(np.mean(e0**2)) + 1.0, key

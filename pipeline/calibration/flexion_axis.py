@@ -32,6 +32,16 @@ most of the stride: its axis takes the sign that correlates its angular rate wit
 signed by its swing: the swing forward of the distal end (positive about the subject's right in
 ISB: ``+z`` turns ``x`` towards ``y``), its fastest rotation in real gait, gives ``w_h . j`` a
 positive skew (not the simulator's sinusoidal gait, whose skew is near zero).
+
+**The pelvis** barely flexes, but in walking it lists (obliquity, a few degrees) once per stride
+about its antero-posterior axis and tilts twice per stride about its medio-lateral one (Perry &
+Burnfield 2010, Gait Analysis, ch. 8). Kept to a band around the stride frequency (the thigh's
+flexion rate's spectral peak, :func:`stride_frequency`), the horizontal angular velocity's
+principal axis is the antero-posterior line (:func:`pelvis_lateral_line`: 1-5 deg from the
+truth on the simulated walk, 5 deg from the calibrated 9-D pelvis frame on S02, 13 on the x-IMU3
+walk; twice the stride frequency, the tilt's, gave a line 30 deg off on S02), and ``up x`` it the
+medio-lateral line, its sign free: :mod:`pipeline.process.heading_alignment` signs it by the hip
+centres.
 """
 
 from __future__ import annotations
@@ -43,8 +53,9 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 
-__all__ = ["CUTOFF_HZ", "MIN_SPEED", "FlexionAxis", "flexion_axis", "knee_signs",
-           "leg_flexion_axes"]
+__all__ = ["CUTOFF_HZ", "MIN_LIST_RATE", "MIN_SPEED", "MIN_STRIDE_SHARE", "STRIDE_BAND_HZ",
+           "FlexionAxis", "flexion_axis", "knee_signs", "leg_flexion_axes", "pelvis_lateral_line",
+           "stride_frequency"]
 
 #: Low-pass cut-off of the angular velocity (Hz): gait's rotations, not the soft tissue's.
 CUTOFF_HZ = 3.0
@@ -137,3 +148,63 @@ def leg_flexion_axes(
                  for seg in ("tibia", "foot")]  # fmt: skip
         axes["foot"] = _flip(axes["foot"], float(np.sign(np.corrcoef(*rates)[0, 1])) or 1.0)
     return axes
+
+
+#: Where a stride frequency is looked for (Hz): slow to brisk walking.
+STRIDE_BAND_HZ = (0.4, 1.6)
+#: A walking thigh's flexion rate has at least this share of its power within 0.6-1.4 times
+#: the stride frequency (0.70-0.86 on S02, the x-IMU3 walk and the simulated walks; a supine
+#: hip flexion 0.11).
+MIN_STRIDE_SHARE = 0.5
+#: A walking pelvis lists at least this fast (RMS rad/s within the band; 0.10-0.28 walking,
+#: 0.002-0.006 lying or seated).
+MIN_LIST_RATE = 0.03
+
+
+def _band(freq: np.ndarray, stride_hz: float) -> np.ndarray:
+    return (freq >= 0.6 * stride_hz) & (freq <= 1.4 * stride_hz)
+
+
+def stride_frequency(rate: np.ndarray, rate_hz: float) -> float:
+    """The stride frequency (Hz): the spectral peak within :data:`STRIDE_BAND_HZ` of a thigh's
+    flexion rate ``rate`` (N,) rad/s (its angular velocity along its flexion axis): a thigh
+    swings once per stride. Refused unless the band around it holds
+    :data:`MIN_STRIDE_SHARE` of the power (not walking)."""
+    x = lowpass(np.asarray(rate, dtype=float), rate_hz, CUTOFF_HZ)
+    x = (x - x.mean()) * np.hanning(len(x))
+    power = np.abs(np.fft.rfft(x)) ** 2
+    freq = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
+    search = (freq >= STRIDE_BAND_HZ[0]) & (freq <= STRIDE_BAND_HZ[1])
+    if not search.any() or not np.any(power[search] > 0):
+        raise InputError("the thigh does not swing: no stride frequency", field="gyr")
+    f = float(freq[search][np.argmax(power[search])])
+    share = power[_band(freq, f)].sum() / power[1:].sum()
+    if share < MIN_STRIDE_SHARE:
+        raise InputError(f"the thigh does not swing once per stride ({share:.2f} of its flexion "
+                         f"rate's power near {f:.2f} Hz, walking: >= {MIN_STRIDE_SHARE:g})",
+                         field="gyr")  # fmt: skip
+    return f
+
+
+def pelvis_lateral_line(
+    gyr: np.ndarray, up: np.ndarray, rate_hz: float, stride_hz: float
+) -> FlexionAxis:
+    """The pelvis's medio-lateral line in its sensor's frame (module docstring), its sign free:
+    ``gyr`` (N, 3) rad/s and ``up`` (N, 3) the world's vertical in the sensor's frame; the
+    horizontal angular velocity kept between 0.6 and 1.4 ``stride_hz`` (its Fourier transform's
+    other bins set to zero: the tilt at twice the stride frequency is as fast as the list), its
+    principal axis ``a`` (antero-posterior), and ``mean(up) x a``. ``share``: the band's
+    horizontal power along ``a``."""
+    g, u = np.asarray(gyr, dtype=float), np.asarray(up, dtype=float)
+    w_h = g - np.sum(g * u, axis=1, keepdims=True) * u
+    spectrum = np.fft.rfft(w_h - w_h.mean(axis=0), axis=0)
+    freq = np.fft.rfftfreq(len(w_h), 1.0 / rate_hz)
+    spectrum[~_band(freq, stride_hz)] = 0.0
+    w_h = np.fft.irfft(spectrum, n=len(w_h), axis=0)
+    speed = float(np.sqrt(np.mean(np.sum(w_h**2, axis=1))))
+    if not speed >= MIN_LIST_RATE:
+        raise InputError(f"the pelvis does not list ({speed:.3f} rad/s at the stride frequency, "
+                         f"walking: >= {MIN_LIST_RATE:g})", field="gyr")  # fmt: skip
+    _, S, Vt = np.linalg.svd(w_h, full_matrices=False)
+    line = np.cross(u.mean(axis=0), Vt[0])
+    return FlexionAxis(line / np.linalg.norm(line), float(S[0] ** 2 / np.sum(S**2)), 1.0)

@@ -28,15 +28,25 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
   in walking the thigh and the shank turn about the same medio-lateral direction, so
   ``R_1 j_1`` and ``R_2 j_2`` are one line in the world.
 
-* **a hip that does not align** (its windows never agree: the real x-IMU3 walk's right hip; both
-  of the simulated walk's hips under its soft tissue): its thigh, with the leg's sensors aligned
-  to it, is turned into the other thigh's heading where that one is the pelvis's, by the two
-  thighs' flexion axes: in walking both swing about the body's medio-lateral line (Vicon's
-  thighs on S02: lines 3-7 deg apart). Before, such a thigh kept its sensor's own heading, and
-  the x-IMU3 walk's angles changed by up to 20 deg with how its sensors were strapped on
-  (``results/bench_sensor_sets.txt``; now 0.2). On S02 without magnetometers, one hip refused
-  on purpose and aligned so instead: every sagittal RMSE within 0.8 deg of the run whose hips
-  both aligned (measured once by hand).
+* **a hip that does not align** (its windows never agree: the real x-IMU3 walk's hips without
+  magnetometers; both of the simulated walk's under its soft tissue): its thigh, with the leg's
+  sensors aligned to it, is turned into the other thigh's heading where that one is the
+  pelvis's, by the two thighs' flexion axes (in walking both swing about the body's
+  medio-lateral line; Vicon's thighs on S02: lines 3-7 deg apart); else onto the pelvis's
+  medio-lateral line, which the pelvis's list at the stride frequency shows in its sensor's
+  frame (:func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip
+  centres (the right one on the right, :data:`MIN_SIDE_MARGIN`). Before, such a thigh kept its
+  sensor's own heading, which a 6-D filter takes from how the sensor sits: the x-IMU3 walk's
+  angles changed by up to 20 deg with the mounting, the simulated walk's 6-D median error by up
+  to 25 deg (``results/bench_sensor_sets.txt``). On S02 without magnetometers, with one hip
+  refused on purpose, every sagittal RMSE within 0.8 deg of the run whose hips both aligned;
+  with both refused, the median within 0.1 deg and the hips' ab/adduction r 0.86 / 0.92 instead
+  of 0.75 / 0.86 (measured once by hand). A thigh that neither aligns keeps its own heading, and
+  the quality gate flags its hip;
+* **no pelvis sensor**: a thigh whose heading is its own is turned, with its leg, into the other
+  thigh's by the two thighs' flexion axes, so that both legs share one heading (the x-IMU3 walk
+  without its pelvis's sensor: the remaining joints within 0.5-0.9 deg of the run with it,
+  3.9-5.0 before).
 
 Windows of :data:`WINDOW_S` hold several whole strides, over which a real knee's rotation and
 ab/adduction, the hip's rotation and the soft tissue average out; a window whose samples do not
@@ -54,7 +64,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.calibration.flexion_axis import FlexionAxis, knee_signs, leg_flexion_axes
+from pipeline.calibration.flexion_axis import (
+    FlexionAxis,
+    knee_signs,
+    leg_flexion_axes,
+    pelvis_lateral_line,
+    stride_frequency,
+)
 from pipeline.calibration.heading_offset import (
     MIN_ACCELERATION,
     HeadingDrift,
@@ -69,8 +85,8 @@ from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.conventions import JOINT_SEGMENTS
 from pipeline.process.functional import KneeCalibration
 
-__all__ = ["CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG", "WINDOW_S", "align_headings",
-           "sensors_to_align"]
+__all__ = ["CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG", "MIN_SIDE_MARGIN", "WINDOW_S",
+           "align_headings", "sensors_to_align"]
 
 _UP = np.array([0.0, 1.0, 0.0])
 #: Window of eq (1) (s): several whole strides (a stride takes ~1-1.3 s).
@@ -88,6 +104,10 @@ MAX_RESIDUAL_DEG = 20.0
 #: the knee is not one (the simulator's free knee with soft tissue: 18.7 deg, and 150 deg off) and
 #: the knee centre or the flexion axes take over.
 MAX_HINGE_RESIDUAL_DEG = 10.0
+#: The hip centres sign the pelvis's medio-lateral line when the cosine between it and the
+#: vector from the left hip centre to the right (or one centre's lateral side) is at least this:
+#: 0.08-0.72 on the simulated walk, S02 and the x-IMU3 walk (all signed right).
+MIN_SIDE_MARGIN = 0.05
 
 
 def sensors_to_align(mode: str, segments: list[str], shared: frozenset[str]) -> set[str]:
@@ -142,7 +162,8 @@ def align_headings(
             drifts[f"{side}_{joint}"] = drift
             notes.append(_turned(name, dist, prox, how, drift))
     for side in adrift:
-        _align_by_other_thigh(trial, out, side, align, axes, drifts, notes)
+        _align_adrift_thigh(trial, out, side, align, axes, drifts, notes)
+    _legs_in_one_heading(trial, out, align, axes, drifts, notes)
     return out, drifts
 
 
@@ -159,36 +180,111 @@ def _turned(name: str, dist: str, prox: str, how: str, drift: HeadingDrift) -> s
             "constant heading)")
 
 
-def _align_by_other_thigh(trial, out, side, align, axes, drifts, notes) -> None:
+def _align_adrift_thigh(trial, out, side, align, axes, drifts, notes) -> None:
     """A thigh whose hip did not align (module docstring) turned, with the leg's sensors aligned
-    to it, into the other thigh's heading where that one is the pelvis's: in walking both thighs
-    flex about the body's medio-lateral line, so their flexion axes are one line in the world."""
-    other = "left" if side == "right" else "right"
-    femur, o = f"{side}_femur", f"{other}_femur"
-    try:
-        if o not in out or (o in align and f"{other}_hip" not in drifts):
-            raise InputError(f"the {other} thigh's sensor is not in the pelvis sensor's heading "
-                             "either")  # fmt: skip
-        why = next((a for a in (axes[other], axes[side]) if isinstance(a, str)), None)
-        if why is not None:
-            raise InputError(f"no flexion axes: {why}")
-        drift = _flexion(trial, out[o], out[femur], {**axes[other], **axes[side]}, o, femur)
-        _check_residual(drift)
-    except InputError as e:
-        notes.append(f"{side} hip: the {side} leg keeps its thigh sensor's heading ({e.message}): "
-                     f"the {side} hip's angles depend on how that sensor sits, unreliable; its "
-                     "magnetometer or the vendor's orientations would give it the pelvis's")
+    to it, into the pelvis's heading by the other thigh's flexion axis or else the pelvis's
+    medio-lateral line; else left in its own heading, which the note (a quality flag) says."""
+    reasons = []
+    for source in (_by_other_thigh, _by_pelvis_line):
+        try:
+            drift, how = source(trial, out, side, align, axes, drifts)
+            _check_residual(drift)
+            break
+        except InputError as e:
+            reasons.append(e.message)
+    else:
+        notes.append(f"{side} hip: the {side} leg keeps its thigh sensor's heading "
+                     f"({'; '.join(reasons)}): the {side} hip's angles depend on how that sensor "
+                     "sits, unreliable; its magnetometer or the vendor's orientations would give "
+                     "it the pelvis's")  # fmt: skip
         return
-    turned = {femur}
-    for joint, (prox, dist) in JOINT_SEGMENTS.items():  # the leg below, where aligned to it
+    _turn_leg(out, side, drift, drifts)
+    drifts[f"{side}_hip"] = drift
+    notes.append(_turned(f"{side} hip", "femur", "pelvis", how, drift)
+                 + f"; with it the {side} leg's sensors aligned below")
+
+
+def _turn_leg(out, side: str, drift: HeadingDrift, drifts) -> None:
+    """The thigh's orientations turned by ``drift``, and each sensor below it aligned to it."""
+    turned = {f"{side}_femur"}
+    for joint, (prox, dist) in JOINT_SEGMENTS.items():
         seg = f"{side}_{dist}"
-        if seg in out and (seg == femur or (f"{side}_{joint}" in drifts
+        if seg in out and (seg in turned or (f"{side}_{joint}" in drifts
                                              and f"{side}_{prox}" in turned)):
             out[seg] = turn_about_vertical(out[seg], drift.psi, _UP)
             turned.add(seg)
-    drifts[f"{side}_hip"] = drift
-    notes.append(_turned(f"{side} hip", "femur", "pelvis", f"the {other} thigh's flexion axis",
-                         drift) + f"; with it the {side} leg's sensors aligned below")
+
+
+def _legs_in_one_heading(trial, out, align, axes, drifts, notes) -> None:
+    """Without a pelvis sensor each leg keeps its thigh's heading: a thigh whose heading is its
+    own (6-D, a distrusted magnetometer) is turned, with its leg, into the other thigh's by the
+    two thighs' flexion axes, so that both legs share one."""
+    side = next((s for s in ("left", "right") if f"{s}_femur" in align), None)
+    other = "right" if side == "left" else "left"
+    if side is None or "pelvis" in out or f"{other}_femur" not in out:
+        return
+    o, femur = f"{other}_femur", f"{side}_femur"
+    try:
+        both = {**_leg_axes_of(axes, other), **_leg_axes_of(axes, side)}
+        drift = _flexion(trial, out[o], out[femur], both, o, femur)
+        _check_residual(drift)
+    except InputError as e:
+        notes.append(f"the two legs keep their thighs' own headings ({e.message}): the angles "
+                     "between the legs and the subject's heading may be unreliable")  # fmt: skip
+        return
+    _turn_leg(out, side, drift, drifts)
+    drifts[f"{side}_thigh"] = drift
+    notes.append(_turned(f"{side} thigh", "femur", f"{other} femur", f"the {other} thigh's "
+                         "flexion axis (no pelvis sensor)", drift))  # fmt: skip
+
+
+def _leg_axes_of(axes, side: str) -> dict[str, FlexionAxis]:
+    if isinstance(axes.get(side), str):
+        raise InputError(f"no flexion axes: {axes[side]}")
+    if f"{side}_femur" not in axes.get(side, {}):
+        raise InputError("no flexion axis of the thigh: raw gyroscope signals are needed")
+    return axes[side]
+
+
+def _by_other_thigh(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift, str]:
+    """In walking both thighs flex about the body's medio-lateral line: their flexion axes are
+    one line in the world, where the other thigh is in the pelvis's heading."""
+    other = "left" if side == "right" else "right"
+    femur, o = f"{side}_femur", f"{other}_femur"
+    if o not in out or (o in align and f"{other}_hip" not in drifts):
+        raise InputError(f"the {other} thigh's sensor is not in the pelvis sensor's heading "
+                         "either")  # fmt: skip
+    both = {**_leg_axes_of(axes, other), **_leg_axes_of(axes, side)}
+    return _flexion(trial, out[o], out[femur], both, o, femur), f"the {other} thigh's flexion axis"
+
+
+def _by_pelvis_line(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift, str]:
+    """The thigh's flexion axis on the pelvis's medio-lateral line (its list at the stride
+    frequency, :func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip
+    centres: the right one lies on the right."""
+    from pipeline.process.functional import fit_joint
+
+    femur = f"{side}_femur"
+    thigh = _leg_axes_of(axes, side)[femur]
+    pelvis, s_f = _signals(trial, "pelvis"), _signals(trial, femur)
+    stride_hz = stride_frequency(lowpass(s_f.gyr, trial.rate_hz, 3.0) @ thigh.axis, trial.rate_hz)
+    up = np.einsum("nji,j->ni", out["pelvis"], _UP)
+    line = pelvis_lateral_line(pelvis.gyr, up, trial.rate_hz, stride_hz).axis
+    rightward = np.zeros(3)  # the hip centres in the pelvis sensor's frame, right minus left
+    for s, sign in (("right", 1.0), ("left", -1.0)):
+        thigh_sensor = trial.sensors.get(SEGMENT_SENSOR[f"{s}_femur"])
+        if thigh_sensor is not None and thigh_sensor.gyr is not None:
+            fit = fit_joint(trial.time, pelvis, thigh_sensor, slice(None), "ipopt",
+                            shared_world=False, joint="spherical", verify_start=False)
+            rightward += sign * fit.position_1_m
+    margin = float(rightward @ line) / max(float(np.linalg.norm(rightward)), 1e-9)
+    if abs(margin) < MIN_SIDE_MARGIN:
+        raise InputError(f"the hip centres do not say which way the pelvis's medio-lateral line "
+                         f"points (cosine {margin:.2f})")  # fmt: skip
+    line = line if margin > 0 else -line
+    drift = hinge_heading(out["pelvis"], out[femur], line, thigh.axis, trial.rate_hz, up=_UP,
+                          window_s=WINDOW_S)  # fmt: skip
+    return drift, "the pelvis's medio-lateral line (its list at the stride frequency)"
 
 
 def _signals(trial: Recording, segment: str):
