@@ -162,7 +162,7 @@ def align_headings(
             drifts[f"{side}_{joint}"] = drift
             notes.append(_turned(name, dist, prox, how, drift))
     for side in adrift:
-        _align_adrift_thigh(trial, out, side, align, axes, drifts, notes)
+        _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes)
     _legs_in_one_heading(trial, out, align, axes, drifts, notes)
     return out, drifts
 
@@ -180,14 +180,14 @@ def _turned(name: str, dist: str, prox: str, how: str, drift: HeadingDrift) -> s
             "constant heading)")
 
 
-def _align_adrift_thigh(trial, out, side, align, axes, drifts, notes) -> None:
+def _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes) -> None:
     """A thigh whose hip did not align (module docstring) turned, with the leg's sensors aligned
     to it, into the pelvis's heading by the other thigh's flexion axis or else the pelvis's
     medio-lateral line; else left in its own heading, which the note (a quality flag) says."""
     reasons = []
     for source in (_by_other_thigh, _by_pelvis_line):
         try:
-            drift, how = source(trial, out, side, align, axes, drifts)
+            drift, how = source(trial, out, side, align, axes, drifts, method)
             _check_residual(drift)
             break
         except InputError as e:
@@ -246,7 +246,7 @@ def _leg_axes_of(axes, side: str) -> dict[str, FlexionAxis]:
     return axes[side]
 
 
-def _by_other_thigh(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift, str]:
+def _by_other_thigh(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
     """In walking both thighs flex about the body's medio-lateral line: their flexion axes are
     one line in the world, where the other thigh is in the pelvis's heading."""
     other = "left" if side == "right" else "right"
@@ -258,7 +258,7 @@ def _by_other_thigh(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift
     return _flexion(trial, out[o], out[femur], both, o, femur), f"the {other} thigh's flexion axis"
 
 
-def _by_pelvis_line(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift, str]:
+def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
     """The thigh's flexion axis on the pelvis's medio-lateral line (its list at the stride
     frequency, :func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip
     centres: the right one lies on the right."""
@@ -267,16 +267,16 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift
     femur = f"{side}_femur"
     thigh = _leg_axes_of(axes, side)[femur]
     pelvis, s_f = _signals(trial, "pelvis"), _signals(trial, femur)
-    stride_hz = stride_frequency(lowpass(s_f.gyr, trial.rate_hz, 3.0) @ thigh.axis, trial.rate_hz)
+    stride_hz = stride_frequency(s_f.gyr @ thigh.axis, trial.rate_hz)
     up = np.einsum("nji,j->ni", out["pelvis"], _UP)
     line = pelvis_lateral_line(pelvis.gyr, up, trial.rate_hz, stride_hz).axis
     rightward = np.zeros(3)  # the hip centres in the pelvis sensor's frame, right minus left
     for s, sign in (("right", 1.0), ("left", -1.0)):
-        thigh_sensor = trial.sensors.get(SEGMENT_SENSOR[f"{s}_femur"])
-        if thigh_sensor is not None and thigh_sensor.gyr is not None:
-            fit = fit_joint(trial.time, pelvis, thigh_sensor, slice(None), "ipopt",
-                            shared_world=False, joint="spherical", verify_start=False)
-            rightward += sign * fit.position_1_m
+        if f"{s}_femur" not in out or not _has_signals(trial, f"{s}_femur"):
+            continue
+        fit = fit_joint(trial.time, pelvis, _signals(trial, f"{s}_femur"), slice(None), method,
+                        shared_world=False, joint="spherical", verify_start=False)
+        rightward += sign * fit.position_1_m
     margin = float(rightward @ line) / max(float(np.linalg.norm(rightward)), 1e-9)
     if abs(margin) < MIN_SIDE_MARGIN:
         raise InputError(f"the hip centres do not say which way the pelvis's medio-lateral line "
@@ -287,11 +287,15 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts) -> tuple[HeadingDrift
     return drift, "the pelvis's medio-lateral line (its list at the stride frequency)"
 
 
-def _signals(trial: Recording, segment: str):
+def _has_signals(trial: Recording, segment: str) -> bool:
     s = trial.sensors.get(SEGMENT_SENSOR[segment])
-    if s is None or s.gyr is None or s.acc is None:
+    return s is not None and s.gyr is not None and s.acc is not None
+
+
+def _signals(trial: Recording, segment: str):
+    if not _has_signals(trial, segment):
         raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
-    return s
+    return trial.sensors[SEGMENT_SENSOR[segment]]
 
 
 def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[HeadingDrift, str]:
