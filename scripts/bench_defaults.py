@@ -12,7 +12,9 @@ the default and each alternative, one at a time, on three sources of evidence:
   artefacts of :class:`pipeline.simulate.artefacts.Artefacts`: soft tissue, wandering bias, the
   floor's field; three seeds; and the ideal simulator without them): the median over the seeds
   and inputs (the sensors' orientations, VQF 9-D, VQF 6-D) of the median sagittal RMSE against
-  the truth, and of the other axes' (ab/adduction, rotation);
+  the truth, and of the other axes' (ab/adduction, rotation); and the same for the realistic
+  ``walk`` motion with the artefacts (its gait events, pelvis list and turns as a walk has them,
+  where the sinusoidal gait's thighs swing about lines 31 deg apart);
 * **OpenSense's walking file** (``../shared/data/opensim/xsens_walking_orientations.sto``,
   orientations only: the posture and the heading alignment need raw signals and do not apply):
   the median RMS difference of hip and knee angles from OpenSense's own result (run here, with
@@ -26,7 +28,7 @@ apart the AoR corrections (eq 9-12) of the two halves of the walk are, against
 :data:`pipeline.process.knee_correction.MAX_SPREAD_DEG` (the support test of ``--correction aor``).
 Written: ``results/bench_defaults.txt``.
 
-Usage: ``python scripts/bench_defaults.py`` (~4 min; run alone).
+Usage: ``python scripts/bench_defaults.py`` (~5 min; run alone).
 """
 
 from __future__ import annotations
@@ -101,10 +103,10 @@ def note_halves(source: str, changes: dict, run) -> None:
 
 
 # ---- simulator ---------------------------------------------------------------------------------
-def sim_inputs(seed: int, artefacts: Artefacts | None):
+def sim_inputs(seed: int, artefacts: Artefacts | None, motion: str = "gait"):
     geometry, _ = geometry_from_measures(SIM_SUBJECT)
     sk = Skeleton.build(geometry, knee="free", root="freeflyer")
-    trial = simulate_trial(sk, "gait", duration_s=20.0, seed=seed, standing_s=3.0,
+    trial = simulate_trial(sk, motion, duration_s=20.0, seed=seed, standing_s=3.0,
                            artefacts=artefacts)  # fmt: skip
 
     def rec(**keep):
@@ -204,6 +206,7 @@ def main() -> None:
     cands = candidates()
     sims_real = [sim_inputs(s, Artefacts()) for s in SEEDS]
     sims_ideal = [sim_inputs(s, None) for s in SEEDS]
+    sims_walk = [sim_inputs(s, Artefacts(), "walk") for s in SEEDS]
     with tempfile.TemporaryDirectory() as tmp:
         os_ref = opensense_reference(Path(tmp))
         rows = []
@@ -211,8 +214,9 @@ def main() -> None:
             sv, sm = s02_scores(changes)
             rs, ro = sim_scores(changes, sims_real, "real")
             is_, io = sim_scores(changes, sims_ideal, "ideal")
+            ws, wo = sim_scores(changes, sims_walk, "walk")
             osd = opensense_score(changes, os_ref)
-            rows.append((label, [sv, sm, rs, ro, is_, io, osd]))
+            rows.append((label, [sv, sm, rs, ro, is_, io, ws, wo, osd]))
             print(f"{label:24s} " + " ".join(f"{x:5.2f}" for x in rows[-1][1]), flush=True)
     text = report(rows, os_ref is not None)
     (ROOT / "results" / "bench_defaults.txt").write_text(text)
@@ -220,7 +224,8 @@ def main() -> None:
 
 
 SCORES = ("S02 vs Vicon", "S02 vs markers", "sim real: sagittal", "sim real: other axes",
-          "sim ideal: sagittal", "sim ideal: other axes", "OpenSense walk: vs OpenSense")
+          "sim ideal: sagittal", "sim ideal: other axes", "sim walk: sagittal",
+          "sim walk: other axes", "OpenSense walk: vs OpenSense")
 
 
 def report(rows, with_opensense: bool) -> str:
@@ -229,7 +234,9 @@ def report(rows, with_opensense: bool) -> str:
     lines = ["# Defaults by evidence: `python scripts/bench_defaults.py`", "",
              "Median RMSE (deg): S02 the six sagittal angles' median, median over its four "
              "inputs; simulator (3 seeds, free knee) over the sensors' orientations, VQF 9-D and "
-             "6-D, realistic (soft tissue, wandering bias, the floor's field) and ideal; "
+             "6-D, realistic (soft tissue, wandering bias, the floor's field) and ideal, on the "
+             "sinusoidal gait; and the realistic walk (`sim walk`: the walk motion, its pelvis "
+             "listing, with the same artefacts); "
              "OpenSense's walking file the median RMS difference of hip and knee angles from "
              "OpenSense's own result (orientations only: posture and drift do not apply).", "",
              f"Defaults: correction {d.correction}, knee {d.knee}, posture {d.posture}, "
