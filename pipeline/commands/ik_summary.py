@@ -52,7 +52,8 @@ def summary_text(run: IKRun) -> str:
         lines += _correction_table(run)
     if run.heading_drifts:
         lines += ["", f"Sensor headings aligned by the joints (`--drift {o.drift}`; the distal "
-                  "sensor turned into the proximal one's heading, deg):", "",
+                  "sensor turned into the proximal one's heading, deg; a `thigh` row: without a "
+                  "pelvis sensor, into the other thigh's):", "",
                   "| joint | from | to | drift | constraint residual | with a constant heading |",
                   "|---|---|---|---|---|---|"]  # fmt: skip
         for key, d in run.heading_drifts.items():
