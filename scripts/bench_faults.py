@@ -59,10 +59,8 @@ def dead(rec: Recording) -> Recording:
 
 def turned(rec: Recording) -> Recording:
     """The sensor mounted turned by 90 deg about its x axis (for the whole trial)."""
-    R = exp3(np.array([np.pi / 2, 0.0, 0.0]))
-    s = rec.sensors[TARGET]
-    return _signals(rec, gyr=s.gyr @ R, acc=s.acc @ R,
-                    mag=None if s.mag is None else s.mag @ R)  # fmt: skip
+    turned = rec.sensors[TARGET].turned(exp3(np.array([np.pi / 2, 0.0, 0.0])))
+    return rec.with_sensors({**rec.sensors, TARGET: turned})
 
 
 def slipping(rec: Recording) -> Recording:

@@ -55,15 +55,8 @@ XIMU3_SUBJECT = Measures("m", 1.80)
 def remounted(rec: Recording, seed: int) -> Recording:
     """Every sensor turned on its segment by its own random rotation ``R`` (module docstring)."""
     rng = np.random.default_rng(seed)
-    out = {}
-    for name in sorted(rec.sensors):
-        s, R = rec.sensors[name], Rotation.random(random_state=rng).as_matrix()
-        turn = {k: getattr(s, k) @ R for k in ("gyr", "acc", "mag") if getattr(s, k) is not None}
-        if s.quat is not None:  # (w, x, y, z): q' = q R
-            q = Rotation.from_quat(s.quat[:, [1, 2, 3, 0]]) * Rotation.from_matrix(R)
-            turn["quat"] = q.as_quat()[:, [3, 0, 1, 2]]
-        out[name] = s.replace(**turn)
-    return rec.with_sensors(out)
+    return rec.with_sensors({name: rec.sensors[name].turned(
+        Rotation.random(random_state=rng).as_matrix()) for name in sorted(rec.sensors)})
 
 
 def without(rec: Recording, names: tuple[str, ...]) -> Recording:
@@ -180,6 +173,14 @@ def hip_methods(run) -> str:
     return " / ".join(found)
 
 
+def change_table(rows, head: str) -> list[str]:
+    """A Markdown table of ``(input, sensors, cells, largest change)`` rows."""
+    return [f"| input | sensors | {head} | largest change |",
+            "|---|---|" + "---|" * (len(real.SAGITTAL) + 1),
+            *(f"| {path} | {label} | " + " | ".join(cells) + f" | {moved:.1f} |"
+              for path, label, cells, moved in rows)]  # fmt: skip
+
+
 def report(s02, ximu3, sim) -> str:
     head = " | ".join(real._short(c) for c in real.SAGITTAL)
     lines = ["# Other mountings, other sensor sets, another recording: "
@@ -188,20 +189,12 @@ def report(s02, ximu3, sim) -> str:
              "not written (a sensor of it left out).", "",
              "## S02 (the real walk) against Vicon", "",
              "Each sagittal angle's RMSE over the walk (deg) and, in brackets, its RMS change from "
-             "the run as recorded.", "",
-             f"| input | sensors | {head} | largest change |",
-             "|---|---|" + "---|" * (len(real.SAGITTAL) + 1)]  # fmt: skip
-    for path, label, cells, moved in s02:
-        lines.append(f"| {path} | {label} | " + " | ".join(cells) + f" | {moved:.1f} |")
-    lines += ["", "## The x-IMU3 walk (shipped example; no optical truth)", "",
-              "Raw signals through VQF (the vendor's orientations left out) with its "
-              "magnetometers (`vqf9`, where trusted: the default) and without (`vqf6`), `--sex m "
-              "--height-m 1.8`: each sagittal angle's RMS change from the run as recorded, over "
-              "the whole recording (deg).", "",
-              f"| input | sensors | {head} | largest change |",
-              "|---|---|" + "---|" * (len(real.SAGITTAL) + 1)]  # fmt: skip
-    for path, label, cells, moved in ximu3:
-        lines.append(f"| {path} | {label} | " + " | ".join(cells) + f" | {moved:.1f} |")
+             "the run as recorded.", "", *change_table(s02, head),
+             "", "## The x-IMU3 walk (shipped example; no optical truth)", "",
+             "Raw signals through VQF (the vendor's orientations left out) with its "
+             "magnetometers (`vqf9`, where trusted: the default) and without (`vqf6`), `--sex m "
+             "--height-m 1.8`: each sagittal angle's RMS change from the run as recorded, over "
+             "the whole recording (deg).", "", *change_table(ximu3, head)]  # fmt: skip
     lines += ["", "## The simulated walk (known truth)", "",
               "Raw signals through VQF with (9-D) and without (6-D) magnetometers: the median RMSE "
               "(deg) over the sagittal angles and over the other joint angles against the truth, "

@@ -35,3 +35,22 @@ def test_readers_and_simulator_return_recordings(sim):
     pelvis = trial.imus["pelvis_imu"].recording
     np.testing.assert_array_equal(rec.sensors["pelvis_imu"].gyr, pelvis.gyr)
     assert isinstance(hinge_trial("rich", duration=1.0).imu_1, Recording)
+
+
+def test_a_sensor_turned_on_its_segment_measures_the_same_world_in_its_new_axes():
+    """``turned(R)``: the world-frame vectors and the orientation's action are unchanged, the
+    sensor-frame vectors are the old ones in the new axes (``R^T x``)."""
+    from pipeline.rotations import exp3, matrix_from_quat, quat_from_matrix
+
+    rng = np.random.default_rng(0)
+    R0 = exp3(rng.normal(size=(50, 3)))  # the sensor in the world
+    x = rng.normal(size=(50, 3))  # a measured vector, sensor frame
+    s = SensorSignals(quat=quat_from_matrix(R0), gyr=x, acc=2 * x, mag=None)
+    R = exp3(np.array([0.3, -1.2, 2.0]))
+    t = s.turned(R)
+    assert t.mag is None
+    np.testing.assert_allclose(t.gyr, np.einsum("ji,nj->ni", R, x), atol=1e-12)
+    world_before = np.einsum("nij,nj->ni", R0, x)
+    world_after = np.einsum("nij,nj->ni", matrix_from_quat(t.quat), t.gyr)
+    np.testing.assert_allclose(world_after, world_before, atol=1e-12)
+    np.testing.assert_allclose(matrix_from_quat(t.quat), R0 @ R, atol=1e-12)

@@ -495,10 +495,8 @@ def test_how_the_sensors_are_strapped_on_does_not_change_the_joint_angles():
     rec = pipeline.read_recording("example:ximu3_lower_body")
     rec = rec.with_sensors({n: s.replace(quat=None) for n, s in rec.sensors.items()})
     rng = np.random.default_rng(0)
-    turned = {}
-    for name in sorted(rec.sensors):
-        s, R = rec.sensors[name], Rotation.random(random_state=rng).as_matrix()
-        turned[name] = s.replace(gyr=s.gyr @ R, acc=s.acc @ R, mag=s.mag @ R)
+    turned = {name: rec.sensors[name].turned(Rotation.random(random_state=rng).as_matrix())
+              for name in sorted(rec.sensors)}  # fmt: skip
     m = Measures("m", 1.8)
     runs = [process_recording(r, m) for r in (rec, rec.with_sensors(turned))]
     for key, a in runs[0].joint_angles.items():

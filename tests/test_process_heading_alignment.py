@@ -281,10 +281,8 @@ def test_both_hips_refused_the_pelvis_line_puts_the_thighs_in_its_heading():
                            artefacts=Artefacts())  # fmt: skip
     raw = trial.raw_recording(magnetometers=False)
     rng = np.random.default_rng(1)
-    turned = {}
-    for name in sorted(raw.sensors):
-        s, R = raw.sensors[name], Rotation.random(random_state=rng).as_matrix()
-        turned[name] = s.replace(gyr=s.gyr @ R, acc=s.acc @ R)
+    turned = {name: raw.sensors[name].turned(Rotation.random(random_state=rng).as_matrix())
+              for name in sorted(raw.sensors)}  # fmt: skip
     truth = joint_angles(trial.skeleton, trial.q)
     medians = []
     for rec in (raw, raw.with_sensors(turned)):

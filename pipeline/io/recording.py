@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.rotations import matrix_from_quat, quat_from_matrix
 
 __all__ = ["WORLD", "Z_UP_WORLDS", "Recording", "SensorSignals", "world_of"]
 
@@ -60,6 +61,17 @@ class SensorSignals:
 
     def replace(self, **changes: np.ndarray | None) -> SensorSignals:
         return dataclasses.replace(self, **changes)
+
+    def turned(self, R: np.ndarray) -> SensorSignals:
+        """The same sensor mounted turned by ``R`` (3, 3) on its segment, its new axes ``R``'s
+        columns in the old frame: every vector it measures ``x' = R^T x`` (rows: ``x @ R``), its
+        orientation ``q' = q R``."""
+        R = np.asarray(R, dtype=float)
+        vectors = {k: getattr(self, k) @ R for k in ("gyr", "acc", "mag")
+                   if getattr(self, k) is not None}  # fmt: skip
+        if self.quat is not None:
+            vectors["quat"] = quat_from_matrix(matrix_from_quat(self.quat) @ R)
+        return self.replace(**vectors)
 
 
 @dataclass(frozen=True)
