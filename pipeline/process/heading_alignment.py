@@ -220,13 +220,11 @@ def _legs_in_one_heading(trial, out, align, axes, drifts, notes) -> None:
     own (6-D, a distrusted magnetometer) is turned, with its leg, into the other thigh's by the
     two thighs' flexion axes, so that both legs share one."""
     side = next((s for s in ("left", "right") if f"{s}_femur" in align), None)
-    other = "right" if side == "left" else "left"
-    if side is None or "pelvis" in out or f"{other}_femur" not in out:
+    if side is None or "pelvis" in out or f"{_other(side)}_femur" not in out:
         return
-    o, femur = f"{other}_femur", f"{side}_femur"
+    other = _other(side)
     try:
-        both = {**_leg_axes_of(axes, other), **_leg_axes_of(axes, side)}
-        drift = _flexion(trial, out[o], out[femur], both, o, femur)
+        drift = _thigh_on_thigh(trial, out, axes, side)
         _check_residual(drift)
     except InputError as e:
         notes.append(f"the two legs keep their thighs' own headings ({e.message}): the angles "
@@ -246,16 +244,26 @@ def _leg_axes_of(axes, side: str) -> dict[str, FlexionAxis]:
     return axes[side]
 
 
+def _other(side: str) -> str:
+    return "left" if side == "right" else "right"
+
+
+def _thigh_on_thigh(trial, out, axes, side: str) -> HeadingDrift:
+    """Eq (1) on the two thighs' flexion axes: ``side``'s thigh into the other's heading (in
+    walking both flex about the body's medio-lateral line: one line in the world)."""
+    o, femur = f"{_other(side)}_femur", f"{side}_femur"
+    both = {**_leg_axes_of(axes, _other(side)), **_leg_axes_of(axes, side)}
+    return _flexion(trial, out[o], out[femur], both, o, femur)
+
+
 def _by_other_thigh(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
-    """In walking both thighs flex about the body's medio-lateral line: their flexion axes are
-    one line in the world, where the other thigh is in the pelvis's heading."""
-    other = "left" if side == "right" else "right"
-    femur, o = f"{side}_femur", f"{other}_femur"
+    """:func:`_thigh_on_thigh`, where the other thigh is in the pelvis's heading."""
+    other = _other(side)
+    o = f"{other}_femur"
     if o not in out or (o in align and f"{other}_hip" not in drifts):
         raise InputError(f"the {other} thigh's sensor is not in the pelvis sensor's heading "
                          "either")  # fmt: skip
-    both = {**_leg_axes_of(axes, other), **_leg_axes_of(axes, side)}
-    return _flexion(trial, out[o], out[femur], both, o, femur), f"the {other} thigh's flexion axis"
+    return _thigh_on_thigh(trial, out, axes, side), f"the {other} thigh's flexion axis"
 
 
 def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
