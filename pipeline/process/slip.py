@@ -91,8 +91,7 @@ class Slip:
 
     @property
     def deg(self) -> float:
-        return max((d for d in (self.axis_deg, self.gravity_deg) if np.isfinite(d)),
-                   default=float("nan"))  # fmt: skip
+        return _larger(self.axis_deg, self.gravity_deg)
 
     @property
     def slipped(self) -> bool:
@@ -109,6 +108,11 @@ class Slip:
                 f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
                 f"other sensors by {self.others_deg:.0f} at most: it slipped on its segment (a "
                 "loose strap?)")
+
+
+def _larger(*steps: float) -> float:
+    """The larger of a sensor's steps (eq 1, 2) that were seen; NaN when neither was."""
+    return max((d for d in steps if np.isfinite(d)), default=float("nan"))
 
 
 def _angle(a: np.ndarray, b: np.ndarray, signed: bool = True) -> float:
@@ -198,9 +202,10 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
     out = {}
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
-        others = [np.nanmax(_step_at(*views[n], best.before)) for n in views
+        others = [_larger(*_step_at(*views[n], best.before)) for n in views
                   if n not in (name, pelvis_name) and _finite(leg[n])]  # fmt: skip
-        out[name] = dataclasses.replace(best, others_deg=float(max(others, default=0.0)))
+        seen = [d for d in others if np.isfinite(d)]
+        out[name] = dataclasses.replace(best, others_deg=float(max(seen, default=0.0)))
     return out
 
 
