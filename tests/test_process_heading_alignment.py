@@ -234,7 +234,7 @@ def test_a_hip_that_does_not_align_takes_the_other_thighs_heading(walk, monkeypa
     off), and far closer than with the thigh's own heading (3.9-6.5 deg). Not so on the
     sinusoidal ``gait`` motion: its hips' rotation, in a fixed phase with their flexion, turns
     each thigh's principal axis by 15 deg the other way; Vicon's thighs on the real S02 walk
-    swing about lines 3-7 deg apart."""
+    swing about lines 2.6 and 6.7 deg apart over its two halves."""
     import pipeline.process.heading_alignment as ha
     from pipeline.analysis.joint_angles import joint_angles
     from pipeline.errors import InputError
