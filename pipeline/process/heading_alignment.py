@@ -34,9 +34,9 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
   pelvis's, by the two thighs' flexion axes (in walking both swing about the body's
   medio-lateral line; Vicon's thighs on S02: 2.6 and 6.7 deg apart over the walk's two
   halves); else onto the pelvis's medio-lateral line, which the pelvis's list at the stride
-  frequency shows in its sensor's
-  frame (:func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip
-  centres (the right one on the right, :data:`MIN_SIDE_MARGIN`). Before, such a thigh kept its
+  frequency shows in its sensor's frame
+  (:func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip centres
+  (the right one on the right, :data:`MIN_SIDE_MARGIN`). Before, such a thigh kept its
   sensor's own heading, which a 6-D filter takes from how the sensor sits: the x-IMU3 walk's
   angles changed by up to 20 deg with the mounting, the simulated walk's 6-D median error by up
   to 25 deg (``results/bench_sensor_sets.txt``). On S02 without magnetometers, with one hip
