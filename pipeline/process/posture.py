@@ -25,10 +25,13 @@ the simulated walk's knees 3-6 deg and ankles 4-14 deg (seeds 0-3; seed 5's cent
 along it); over seeds 0-5, 9-D and 6-D, the lean was off by 1.5 deg (median; at most 4.9) with
 that line kept and by 1.2 (at most 4.1) without it, the sagittal angles' median RMSE 1.33 and
 1.11 deg. The real walks' are
-not hinge-like: S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and 49-52 (their turns
-and the knee's own ab/adduction and rotation determine the axis's direction), so their leans do
-not change. The leg is taken straight, as in the neutral pose, leaning as its tibia does: the femur
-and the tibia turn by ``-lean`` about their medio-lateral axis (``+z``: a forward lean of the top
+not hinge-like: S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and 49-52, so their
+leans do not change (S02's shanks turn at up to 3.8 rad/s RMS about a second axis in its turn,
+0.7-1.2 walking straight; the simulated walk's knee is a hinge and it turns on a 3 m curve; a
+real walk without turns, on a treadmill say, may be hinge-like too: no such recording here).
+
+The leg is taken straight, as in the neutral pose, leaning as its tibia does: the femur and the
+tibia turn by ``-lean`` about their medio-lateral axis (``+z``: a forward lean of the top
 turns ``y`` towards ``-x``), so the pose has hip flexion ``-lean``, knee flexion 0 and ankle
 dorsiflexion ``lean``, the foot flat. Why the tibia's lean for the whole leg and not the femur's
 own: the shank's sensor sits close to the bone and the knee and ankle move it in every stride, while
