@@ -44,7 +44,8 @@ def test_each_legs_lean_is_measured_and_the_standing_angles_follow(trial):
             rms = {r: np.sqrt(np.mean(np.degrees(run.joint_angles[key] - truth[key])[200:] ** 2))
                    for r, run in (("measured", measured), ("upright", upright))}  # fmt: skip
             assert rms["measured"] < 1.0 and rms["measured"] < 0.5 * rms["upright"], (key, rms)
-    assert any("standing posture from the knee and ankle centres" in n for n in measured.notes)
+    assert any("standing posture from the knee and ankle centres" in n and "hinge-like centre "
+               "fits" in n for n in measured.notes)  # the simulator's hinge knee
     assert upright.posture is None
 
 
@@ -104,7 +105,8 @@ def test_a_hinge_like_fit_leaves_its_axis_out_of_the_tibias_line():
     true = np.array([0.02, 0.40, 0.0])  # knee minus ankle: leaning forward in x
     knee = _centre([0, 0, 0], true + 0.08 * axis, [0, 0, 0], axis)  # slid 8 cm along its axis
     ankle = _centre([0, 0, 0], [0, 0, 0], -axis, [0, 0, 0])
-    v = _tibia_line(knee, ankle, ml)
+    v, hinged = _tibia_line(knee, ankle, ml)
+    assert hinged
     raw = knee.o_2 - ankle.o_1
     lean = {k: np.degrees(np.arctan2(x[0], x[1])) for k, x in (("true", true), ("raw", raw),
                                                                ("line", v))}  # fmt: skip
@@ -113,5 +115,6 @@ def test_a_hinge_like_fit_leaves_its_axis_out_of_the_tibias_line():
     far = np.array([np.sin(np.radians(HINGE_LIKE_DEG + 20)), 0.0,
                     np.cos(np.radians(HINGE_LIKE_DEG + 20))])  # fmt: skip
     real = _centre([0, 0, 0], true, [0, 0, 0], far)  # a determined fit (a real knee's)
-    np.testing.assert_allclose(_tibia_line(real, _centre([0, 0, 0], [0, 0, 0], far, [0, 0, 0]),
-                                           ml), true)  # fmt: skip
+    v, hinged = _tibia_line(real, _centre([0, 0, 0], [0, 0, 0], far, [0, 0, 0]), ml)
+    np.testing.assert_allclose(v, true)
+    assert not hinged

@@ -115,12 +115,12 @@ def _hinge_axis(knee: JointCentre, ankle: JointCentre, ml: np.ndarray) -> np.nda
     return normalize(np.sum(near, axis=0)) if near else None
 
 
-def _tibia_line(knee: JointCentre, ankle: JointCentre, ml: np.ndarray) -> np.ndarray:
+def _tibia_line(knee: JointCentre, ankle: JointCentre, ml: np.ndarray) -> tuple[np.ndarray, bool]:
     """``o_knee - o_ankle`` in the tibia's sensor frame, without its part along a hinge-like
-    fit's undetermined axis (module docstring)."""
+    fit's undetermined axis (module docstring), and whether that part was left out."""
     v = knee.o_2 - ankle.o_1
     axis = _hinge_axis(knee, ankle, ml)
-    return v if axis is None else v - (v @ axis) * axis
+    return (v, False) if axis is None else (v - (v @ axis) * axis, True)
 
 
 def standing_posture(
@@ -143,6 +143,7 @@ def standing_posture(
     length: dict[str, float] = {}
     residual: dict[str, float] = {}
     unmeasured: dict[str, str] = {}  # leg -> why its lean was not measured
+    hinged: dict[str, bool] = {}  # leg -> a hinge-like fit's axis left out of its tibia's line
     for side in legs:
         femur, tibia, foot = (f"{side}_{s}" for s in ("femur", "tibia", "foot"))
         missing = [s for s in (femur, tibia, foot) if s not in rotations]
@@ -155,7 +156,8 @@ def standing_posture(
         except InputError as e:
             unmeasured[side] = e.message
             continue
-        v_s = _tibia_line(knee, ankle, at_pose[tibia].T @ pose[tibia] @ np.array([0, 0, 1.0]))
+        ml = at_pose[tibia].T @ pose[tibia] @ np.array([0.0, 0.0, 1.0])
+        v_s, hinged[side] = _tibia_line(knee, ankle, ml)
         L, res = float(np.linalg.norm(v_s)), max(knee.residual, ankle.residual)
         v = at_pose[tibia] @ v_s
         model = pose[tibia] @ np.array([0.0, 1.0, 0.0])  # the model's tibia line in the pose
@@ -175,6 +177,8 @@ def standing_posture(
     if lean:
         notes.append("standing posture from the knee and ankle centres: " + ", ".join(
             f"{side} leg leans {np.degrees(lean[f'{side}_tibia']):+.1f} deg"
+            + (" (hinge-like centre fits: their place along the axis left out)"
+               if hinged.get(side) else "")
             for side in legs if f"{side}_tibia" in lean))  # fmt: skip
     for side, why in unmeasured.items():
         notes.append(f"{side} leg: standing lean not measured ({why}); "
