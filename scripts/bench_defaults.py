@@ -130,11 +130,19 @@ def sim_scores(changes: dict, sims, kind: str) -> tuple[float, float]:
                 continue
             run = process_recording(rec, SIM_SUBJECT, **{**base, **changes})
             note_halves(f"sim {kind} seed {seed} {name}", changes, run)
-            rms = {k: float(np.sqrt(np.mean(np.degrees(run.joint_angles[k] - truth[k])[400:] ** 2)))
-                   for k in run.joint_angles if k in truth}  # fmt: skip
-            sag.append(np.median([v for k, v in rms.items() if k.endswith(SAGITTAL)]))
-            other.append(np.median([v for k, v in rms.items() if not k.endswith(SAGITTAL)]))
+            s, o = median_errors(run, truth, 400)
+            sag.append(s)
+            other.append(o)
     return float(np.median(sag)), float(np.median(other))
+
+
+def median_errors(run, truth: dict, start: int, skip: tuple[str, ...] = ()) -> tuple[float, float]:
+    """The median RMSE (deg) against the simulator's truth from sample ``start`` on, over the
+    sagittal angles and over the other axes (joints whose name starts with ``skip`` left out)."""
+    rms = {k: float(np.sqrt(np.mean(np.degrees(run.joint_angles[k] - truth[k])[start:] ** 2)))
+           for k in run.joint_angles if k in truth and not k.startswith(skip)}  # fmt: skip
+    return (float(np.median([v for k, v in rms.items() if k.endswith(SAGITTAL)])),
+            float(np.median([v for k, v in rms.items() if not k.endswith(SAGITTAL)])))
 
 
 # ---- S02 ---------------------------------------------------------------------------------------

@@ -129,6 +129,8 @@ SIM_SUBJECT = Measures("m", 1.75)
 def sim_rows() -> list[tuple[int, str, str, float, float, str]]:
     """(seed, input, change, sagittal median RMSE, other axes' median RMSE, hip flag) on the
     simulated walk, as recorded and remounted."""
+    from bench_defaults import median_errors
+
     from pipeline.analysis.joint_angles import joint_angles
     from pipeline.model.scaling import geometry_from_measures
     from pipeline.model.skeleton import Skeleton
@@ -146,11 +148,7 @@ def sim_rows() -> list[tuple[int, str, str, float, float, str]]:
             for label, r in {"as recorded": rec, **{f"remounted (seed {k})": remounted(rec, k)
                                                     for k in SEEDS}}.items():  # fmt: skip
                 run = process_recording(r, SIM_SUBJECT, filter="vqf")
-                rms = {k: float(np.degrees(np.sqrt(np.mean((run.joint_angles[k] - truth[k])[300:]
-                                                           ** 2)))) for k in truth
-                       if k in run.joint_angles and not k.startswith("pelvis")}  # fmt: skip
-                sag = np.median([v for k, v in rms.items() if k.endswith("flexion")])
-                other = np.median([v for k, v in rms.items() if not k.endswith("flexion")])
+                sag, other = median_errors(run, truth, 300, skip=("pelvis",))
                 hips = hip_methods(run)
                 rows.append((seed, path, label, float(sag), float(other), hips))
                 print(f"sim {seed} {path} {label:20s} {sag:.1f} {other:.1f} {hips}", flush=True)

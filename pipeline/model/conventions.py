@@ -10,7 +10,7 @@ about the knee AoR).
 from __future__ import annotations
 
 __all__ = ["DEFAULT_KNEE", "JOINT_SEGMENTS", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT",
-           "SEGMENTS"]
+           "SEGMENTS", "other_side"]
 
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
@@ -24,3 +24,8 @@ LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femu
 #: Joint -> (proximal, distal) segment of one leg (the pelvis has no side), from the pelvis down.
 JOINT_SEGMENTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"),
                   "ankle": ("tibia", "foot")}  # fmt: skip
+
+
+def other_side(side: str) -> str:
+    """The other leg's side: ``'left'`` for ``'right'`` and back."""
+    return "left" if side == "right" else "right"

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.model.conventions import other_side
 from pipeline.rotations import angle_between
 
 __all__ = [
@@ -244,7 +245,7 @@ class SubjectGeometry:
         """
         return replace(
             self,
-            side="left" if self.side == "right" else "right",
+            side=other_side(self.side),
             femur_landmarks={k: mirror_point(v) for k, v in self.femur_landmarks.items()},
             tibia_landmarks={k: mirror_point(v) for k, v in self.tibia_landmarks.items()},
             knee_axis_femur=mirror_axis(self.knee_axis_femur),

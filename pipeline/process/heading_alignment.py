@@ -83,7 +83,7 @@ from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
-from pipeline.model.conventions import JOINT_SEGMENTS
+from pipeline.model.conventions import JOINT_SEGMENTS, other_side
 from pipeline.process.functional import KneeCalibration
 
 __all__ = ["CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG", "MIN_SIDE_MARGIN", "WINDOW_S",
@@ -221,9 +221,9 @@ def _legs_in_one_heading(trial, out, align, axes, drifts, notes) -> None:
     own (6-D, a distrusted magnetometer) is turned, with its leg, into the other thigh's by the
     two thighs' flexion axes, so that both legs share one."""
     side = next((s for s in ("left", "right") if f"{s}_femur" in align), None)
-    if side is None or "pelvis" in out or f"{_other(side)}_femur" not in out:
+    if side is None or "pelvis" in out or f"{other_side(side)}_femur" not in out:
         return
-    other = _other(side)
+    other = other_side(side)
     try:
         drift = _thigh_on_thigh(trial, out, axes, side)
         _check_residual(drift)
@@ -245,21 +245,17 @@ def _leg_axes_of(axes, side: str) -> dict[str, FlexionAxis]:
     return axes[side]
 
 
-def _other(side: str) -> str:
-    return "left" if side == "right" else "right"
-
-
 def _thigh_on_thigh(trial, out, axes, side: str) -> HeadingDrift:
     """Eq (1) on the two thighs' flexion axes: ``side``'s thigh into the other's heading (in
     walking both flex about the body's medio-lateral line: one line in the world)."""
-    o, femur = f"{_other(side)}_femur", f"{side}_femur"
-    both = {**_leg_axes_of(axes, _other(side)), **_leg_axes_of(axes, side)}
+    o, femur = f"{other_side(side)}_femur", f"{side}_femur"
+    both = {**_leg_axes_of(axes, other_side(side)), **_leg_axes_of(axes, side)}
     return _flexion(trial, out[o], out[femur], both, o, femur)
 
 
 def _by_other_thigh(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
     """:func:`_thigh_on_thigh`, where the other thigh is in the pelvis's heading."""
-    other = _other(side)
+    other = other_side(side)
     o = f"{other}_femur"
     if o not in out or (o in align and f"{other}_hip" not in drifts):
         raise InputError(f"the {other} thigh's sensor is not in the pelvis sensor's heading "

@@ -60,6 +60,7 @@ from pipeline.calibration.joint_centres import JointCentre, joint_centre
 from pipeline.errors import InputError
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
+from pipeline.model.conventions import other_side
 from pipeline.rotations import normalize, rot_z
 
 __all__ = ["HINGE_LIKE_DEG", "LENGTH_TOL", "MAX_LEAN_DEG", "MAX_RESIDUAL", "Posture",
@@ -189,7 +190,7 @@ def standing_posture(
 def _borrow_other_legs_lean(lean: dict[str, float], side: str) -> str:
     """Give ``side``'s femur and tibia the other leg's measured lean (module docstring), in
     place; what was done, for the note."""
-    other = "left" if side == "right" else "right"
+    other = other_side(side)
     if f"{other}_tibia" not in lean or f"{other}_femur" not in lean:
         return "taken upright"
     lean[f"{side}_femur"] = lean[f"{side}_tibia"] = lean[f"{other}_tibia"]
