@@ -14,20 +14,19 @@ segment frames from the same centres), and at the calibration pose its forward l
     lean = atan2(v . x_H, v . y),  v = R_s (o_knee - o_ankle)                      (1)
 
 with ``x_H`` the subject's forward direction (the heading) and ``y`` the vertical. A joint that
-turns like a hinge does not determine where its centre lies along its axis (Seel et al. 2012:
-the centre may slide along the hinge axis): the fit's weakest direction
-(:class:`~pipeline.calibration.joint_centres.JointCentre`) is then the axis, close to the
-tibia's medio-lateral one, and the error along it reaches the forward direction by the axis's
-tilt. A weakest direction within :data:`HINGE_LIKE_DEG` of the tibia's medio-lateral axis (the
-model's, in the sensor's frame at the pose) is left out of ``o_knee - o_ankle`` (the knee's and
-the ankle's averaged when both are). Measured, weakest direction from the medio-lateral axis:
-the simulated walk's knees 3-6 deg and ankles 4-14 deg (seeds 0-3; seed 5's centres 3-9 cm off
-along it); over seeds 0-5, 9-D and 6-D, the lean was off by 1.5 deg (median; at most 4.9) with
-that line kept and by 1.2 (at most 4.1) without it, the sagittal angles' median RMSE 1.33 and
-1.11 deg. The real walks' are
-not hinge-like: S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and 49-52, so their
-leans do not change (S02's shanks turn at up to 3.8 rad/s RMS about a second axis in its turn,
-0.7-1.2 walking straight; the simulated walk's knee is a hinge and it turns on a 3 m curve; a
+turns like a hinge does not determine where its centre lies along its axis (Seel et al. 2012: the
+centre may slide along the hinge axis): the fit's weakest direction
+(:class:`~pipeline.calibration.joint_centres.JointCentre`) is then the axis, close to the tibia's
+medio-lateral one, and the error along it reaches the forward direction by the axis's tilt. A
+weakest direction within :data:`HINGE_LIKE_DEG` of the tibia's medio-lateral axis (the model's, in
+the sensor's frame at the pose) is left out of ``o_knee - o_ankle`` (the knee's and the ankle's
+averaged when both are). Measured once by hand, weakest direction from the medio-lateral axis: the
+simulated walk's knees 3-6 deg and ankles 4-14 deg (seeds 0-3; seed 5's centres 3-9 cm off along
+it); over seeds 0-5, 9-D and 6-D, the lean was off by 1.5 deg (median; at most 4.9) with that line
+kept and by 1.2 (at most 4.1) without it, the sagittal angles' median RMSE 1.33 and 1.11 deg. The
+real walks' are not hinge-like: S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and 49-52,
+so their leans do not change (S02's shanks turn at up to 3.8 rad/s RMS about a second axis in its
+turn, 0.7-1.2 walking straight; the simulated walk's knee is a hinge and it turns on a 3 m curve; a
 real walk without turns, on a treadmill say, may be hinge-like too: no such recording here).
 
 The leg is taken straight, as in the neutral pose, leaning as its tibia does: the femur and the
