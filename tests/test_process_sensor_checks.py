@@ -227,8 +227,8 @@ def test_the_registry_names_every_check():
 
 @pytest.mark.dataset
 def test_the_real_recordings():
-    """S02 (Xsens MTw): both shanks' gyroscopes are held at ~300 deg/s on one axis for 30 ms
-    (0.12% of the samples: noted, not excluded); x-IMU3: nothing."""
+    """S02 (Xsens MTw) and x-IMU3: nothing (S02's shank gyroscopes peak at ~300 deg/s on one
+    axis with rounded tops, 0.6 % over 40 ms: a smooth peak, not a range's limit)."""
     from pipeline.io.formats import read_recording
 
     s02, ximu3 = DATA / "gaittoolbox_s02" / "imu", DATA / "ximu3_lower_body"
@@ -238,6 +238,5 @@ def test_the_real_recordings():
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
            "calcn_r_imu": "00B40C48"}  # fmt: skip
     _, findings = check_sensors(read_recording(s02, ids))
-    assert {(f.sensor, f.check, f.action) for f in findings} == {
-        ("tibia_l_imu", "saturation", "noted"), ("tibia_r_imu", "saturation", "noted")}
+    assert findings == []
     assert [f for f in check_sensors(read_recording(ximu3))[1] if f.flagged] == []

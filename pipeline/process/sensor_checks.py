@@ -76,10 +76,12 @@ __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MI
 
 #: A plateau: at least this many consecutive samples, lasting at least PLATEAU_S, within
 #: PLATEAU_TOL (relative) of a channel's largest magnitude. A smooth peak of human motion stays
-#: within 0.5 % of its top for ~3 % of its period (~10 ms of a 0.3 s swing).
+#: within 0.1 % of its top for ~1.4 % of its period (14 ms of a 1 s wave); at 0.5 % (~3 %) the
+#: rounded tops of real shank gyroscopes (S02: ~300 deg/s, 0.6 % over 40 ms) and of the simulated
+#: walk's shank accelerometer (2.3 g, 0.2 % over 30 ms) passed for a range's limit.
 PLATEAU_SAMPLES = 3
 PLATEAU_S = 0.03
-PLATEAU_TOL = 0.005
+PLATEAU_TOL = 0.001
 #: Angular speed (deg/s) beyond any human segment's in walking or running (feet peak at ~800-1000).
 MAX_HUMAN_GYRO_DPS = 1500.0
 #: Share of saturated samples beyond which a sensor is excluded.

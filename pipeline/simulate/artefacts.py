@@ -26,7 +26,8 @@ orientation stay consistent with one another:
   thighs' hardly.
 
 A knee that is not a hinge is a free-knee skeleton (knee ab/adduction and rotation move with the
-stride, :mod:`pipeline.simulate.motions`).
+stride, :mod:`pipeline.simulate.motions`; in the walk, with flexion and the stride,
+:mod:`pipeline.simulate.knee`).
 """
 
 from __future__ import annotations

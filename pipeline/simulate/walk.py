@@ -9,10 +9,17 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   exp(-tau / c)`` (at rest at ``tau = 0``, then at the walking speed ``v = L / T``; ``c = 0.35 T``
   lets the first step be half a stride), heading ``psi(s)`` turning by ``turn_deg`` on a quintic
   smoothstep over :data:`TURN_LENGTH_M`, on the motion clock ``tau`` of
-  :func:`pipeline.simulate.motions.ramp` (standing still first). The pelvis rises and falls by
-  :data:`BOUNCE_M` twice per stride (highest at each mid-stance) and turns with the stride as a
-  walking pelvis does (:data:`PELVIS_TURN_DEG`): about the vertical and forward axes once per
-  stride, about the lateral axis twice.
+  :func:`pipeline.simulate.motions.ramp` (standing still first). It sways about that path
+  (:data:`PELVIS_SWAY_M`: toward the stance foot, and behind and ahead of its mean walk, slowest
+  at each mid-stance) and comes down from its standing height by a smooth upper envelope of what
+  the feet ask (:data:`REACH`: no ankle farther from its hip than 99.5 % of the leg, the knee
+  then flexed ~9 deg; a moving maximum over +-:data:`SMOOTHING_S` then a Gaussian), so that it is
+  lowest in double support and the stance knee nearly straight at mid-stance, as in gait
+  (measured once by hand, 1st-99th percentiles over two seeds' walks: knees 12-54 deg, hips
+  -14-35 deg, the pelvis 3-4 cm up and down; the real walk S02's Vicon knees -6-63 deg, hips
+  -17-34 deg; a constant drop, before, kept the knees above 26 deg).
+  The pelvis turns with the stride as a walking pelvis does (:data:`PELVIS_TURN_DEG`): about the
+  vertical and forward axes once per stride, about the lateral axis twice.
 * **Feet** (per stride ``T`` from an initial contact IC, as
   :mod:`pipeline.simulate.foot_walk`): the foot turns about its lateral axis in raised-cosine
   lobes (loading ``+20 deg`` -> flat in ``[0, 0.1 T]``, push-off ``-40 deg`` in
@@ -24,9 +31,10 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   pelvis passes at mid-stance, turned to the path's heading. The right foot pushes off first;
   the left stays flat on its standing footprint until half a stride later.
 * **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF) solve the foot's pose
-  exactly (Newton on ``log6``, Pinocchio's frame Jacobian; a free knee's ab/adduction and
-  rotation stay zero). ``v`` and ``a`` are five-point central differences on a grid four times
-  finer than the trial's (errors ``O(dt^4)``), the root's as
+  exactly (Newton on ``log6``, Pinocchio's frame Jacobian); a free knee is not a hinge: its
+  adduction and rotation follow its flexion and the stride (:mod:`pipeline.simulate.knee`), a
+  hinge knee stays a hinge. ``v`` and ``a`` are five-point central differences on a grid four
+  times finer than the trial's (errors ``O(dt^4)``), the root's as
   :func:`pipeline.simulate.motions.joint_trajectories` defines them.
 
 :func:`walk_plan` gives the truth the gait analysis must recover (events, footprints).
@@ -39,21 +47,31 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from scipy.interpolate import CubicSpline
+from scipy.ndimage import maximum_filter1d
 
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x, rot_y, rot_z
 from pipeline.simulate.chain import UPRIGHT
 from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
+from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching
 from pipeline.simulate.motions import ramp, standing_height
 
-__all__ = ["BOUNCE_M", "CLEARANCE_M", "PELVIS_TURN_DEG", "TURN_LENGTH_M", "WalkPlan", "walk_plan",
-           "walk_trajectories"]
+__all__ = ["CLEARANCE_M", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH", "SMOOTHING_S",
+           "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
 
 #: Where the foot lies flat in a stride from its IC (shares of the stride; the lobes between).
 FLAT, PUSH_OFF = LOBES[0][1], LOBES[1][0]
 CLEARANCE_M = 0.05
-BOUNCE_M = 0.025
+#: The hip-to-ankle distance at most, a share of the leg's length (the knee flexed ~9 deg), and
+#: the half-width (s) of the pelvis height's envelope (module docstring).
+REACH, SMOOTHING_S = 0.995, 0.1
+#: The pelvis's sway about its path (m): toward the stance foot (once per stride) and behind and
+#: ahead of its mean walk (twice per stride, its speed +-8 %), as in gait (Perry & Burnfield,
+#: Gait Analysis, 2010, ch. 10: about 4 cm from side to side).
+PELVIS_SWAY_M = (0.02, 0.01)
+#: The right foot's mid-stance in the stride from its push-off (motion clock, strides).
+MID_STANCE = 0.85
 #: Amplitudes (deg) of the walking pelvis's rotation (about the vertical), obliquity (about the
 #: forward axis) and anterior tilt (about the lateral axis, twice per stride), as normal gait's
 #: pelvis turns (about +-4, +-4 and +-2 deg; Perry & Burnfield, Gait Analysis, 2010, ch. 10): its
@@ -133,7 +151,7 @@ def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
     for side, first in (("right", 0.0), ("left", 0.5 * T)):
         po = first + T * np.arange(n_strides)
         ic = po[:-1] + (1 - PUSH_OFF) * T  # the IC after each push-off
-        s = _arc(T, L / T, ic + 0.3 * T)  # the pelvis above the foot at mid-stance
+        s = _arc(T, L / T, ic + (MID_STANCE - 1 + PUSH_OFF) * T)  # the foot's mid-stance
         psi = heading(s)
         lateral = np.stack([np.sin(psi), -np.cos(psi), 0 * psi], 1) * (1 if side == "right" else -1)
         xy = np.concatenate([path(s), np.zeros((s.size, 1))], axis=1) + half * lateral
@@ -192,40 +210,21 @@ def _five_point(x: np.ndarray, h: float) -> np.ndarray:
     return d
 
 
-def _reach_coefficients(skeleton: Skeleton, side: str, knee: int) -> tuple[float, float, float]:
-    """``P, A, B`` of the hip-to-ankle distance ``d^2 = P + A cos k + B sin k`` over the knee's
-    flexion ``k`` (a turn about a fixed axis: exact), from three configurations."""
-    q = skeleton.neutral()
-    d2 = []
-    for k in (0.0, np.pi / 2, np.pi):
-        q[knee] = k
-        d2.append(float(np.sum(skeleton.relative_pose(f"{side}_AJC", f"{side}_HJC", q)[:3, 3]
-                               ** 2)))  # fmt: skip
-    P = 0.5 * (d2[0] + d2[2])
-    return P, d2[0] - P, d2[1] - P
-
-
 def _solve_leg(
-    skeleton: Skeleton, q: np.ndarray, side: str, target: pin.SE3, free: list[int], knee: int,
-    reach: tuple[float, float, float],
+    skeleton: Skeleton, q: np.ndarray, side: str, target: pin.SE3, free: list[int], knee: Knee,
+    extra: np.ndarray,
 ) -> np.ndarray:
-    """The leg's joints that put its foot frame at ``target``: the knee's flexion (q index
-    ``knee``) from the hip centre's distance to the ankle's (:func:`_reach_coefficients`), then
-    the hip's three and the ankle's two angles (v indices ``free``) by Newton steps on the pose's
-    ``log6`` error (six equations, five unknowns, consistent once the knee is set)."""
+    """The leg's joints that put its foot frame at ``target``: the knee (flexion and the angles
+    coupled to it, ``extra`` the stride's terms; :func:`pipeline.simulate.knee.flexion_reaching`)
+    from the hip centre's distance to the ankle's, then the hip's three and the ankle's two
+    angles (v indices ``free``) by Newton steps on the pose's ``log6`` error (six equations, five
+    unknowns, consistent once the knee is set)."""
     model, data = skeleton.model, skeleton.data
     fid, hip = skeleton.frame_id(f"{side}_foot"), skeleton.frame_id(f"{side}_HJC")
     pin.framesForwardKinematics(model, data, q)
     d2 = float(np.sum((target.translation - data.oMf[hip].translation) ** 2))
-    P, A, B = reach
-    cosine = (d2 - P) / np.hypot(A, B)
-    if cosine > 1 + 1e-9:
-        raise InputError(f"the {side} leg cannot reach its foot's pose in the simulated walk",
-                         field="motion")  # fmt: skip
-    base, half = np.arctan2(B, A), np.arccos(np.clip(cosine, -1.0, 1.0))
-    bent = [k for k in (base + half, base - half) if k > -1e-9] or [base + half]  # flexed
     q = q.copy()
-    q[knee] = min(bent, key=lambda k: abs(k - q[knee]))  # the root nearest the last sample's
+    flexion_reaching(skeleton, knee, q, d2, extra, side)
     for _ in range(12):
         pin.framesForwardKinematics(model, data, q)
         err = pin.log6(data.oMf[fid].actInv(target)).vector
@@ -270,20 +269,21 @@ def walk_trajectories(
     poses = {x: foot_poses(plan, x, tau, heel, toe) for x in skeleton.legs}
     sp = _arc(plan.T, plan.speed, tau)
     R = rot_z(plan.heading(sp)) @ UPRIGHT @ _pelvis_turns(tau / plan.T, s, rng)
-    p = np.concatenate([plan.path(sp), np.full((tf.size, 1), z0)], axis=1)
-    p[:, 2] += s**2 * _height_change(skeleton, plan, p, R, poses, s**2, tau)
-    knee = {x: skeleton.q_index(skeleton.leg_joints(x, "knee")[0]) for x in skeleton.legs}
+    p = np.concatenate([plan.path(sp) + s[:, None] ** 2 * _sway(plan, tau, sp),
+                        np.full((tf.size, 1), z0)], axis=1)  # fmt: skip
+    p[:, 2] -= _pelvis_drop(skeleton, p, R, poses, s, dt)
+    knee = {x: draw_knee(skeleton, x, rng) for x in skeleton.legs}
+    extra = {x: knee[x].stride_angles(2 * np.pi * tau / plan.T, s) for x in skeleton.legs}
     free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
         *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle"))]
         for x in skeleton.legs}  # fmt: skip
-    reach = {x: _reach_coefficients(skeleton, x, knee[x]) for x in skeleton.legs}
     Q = np.empty((tf.size, model.nq))
     qk = q0.copy()
     for k in range(tf.size):
         qk[:3], qk[3:7] = p[k], quat_xyzw_from_matrix(R[k])
         for x in skeleton.legs:
             qk = _solve_leg(skeleton, qk, x, pin.SE3(poses[x][0][k], poses[x][1][k]), free[x],
-                            knee[x], reach[x])
+                            knee[x], extra[x][k])
         Q[k] = qk
     return (*_derivatives(Q, p, R, dt), plan)
 
@@ -298,24 +298,41 @@ def _pelvis_turns(phase: np.ndarray, s: np.ndarray, rng) -> np.ndarray:
             @ rot_z(tilt * ramp * np.sin(2 * theta)))
 
 
-def _height_change(skeleton, plan, p, R, poses, s, tau) -> np.ndarray:
-    """The pelvis's height relative to standing: a constant drop, the lowest that keeps every
-    ankle within 98.5 % of the leg's length of its hip, plus the bounce (module docstring)."""
+def _sway(plan: WalkPlan, tau: np.ndarray, sp: np.ndarray) -> np.ndarray:
+    """(N, 2) the pelvis's horizontal sway about its path (module docstring,
+    :data:`PELVIS_SWAY_M`): toward each foot at its mid-stance, behind and ahead twice per
+    stride (slowest at each mid-stance)."""
+    side_m, forward_m = PELVIS_SWAY_M
+    psi = plan.heading(sp)
+    phase = 2 * np.pi * (tau / plan.T - MID_STANCE)  # the right foot's mid-stance at 0
+    right = np.stack([np.sin(psi), -np.cos(psi)], axis=1)
+    ahead = np.stack([np.cos(psi), np.sin(psi)], axis=1)
+    return (side_m * np.cos(phase)[:, None] * right
+            - forward_m * np.sin(2 * phase)[:, None] * ahead)
+
+
+def _pelvis_drop(skeleton, p, R, poses, s, dt) -> np.ndarray:
+    """How far the pelvis comes down from standing (m, per sample): ``s`` times a smooth upper
+    envelope of what each sample needs divided by ``s`` (a moving maximum over
+    +-:data:`SMOOTHING_S`, then a Gaussian of that support, which cannot fall below it), where
+    a sample needs the least drop that keeps every ankle within ``(1 - (1 - REACH) s)`` of the
+    leg's length from its hip (module docstring). Zero standing (``s = 0``)."""
     q = skeleton.neutral()
     leg = _leg_length(skeleton)
-    bounce = BOUNCE_M * np.cos(4 * np.pi * (tau - 0.85 * plan.T) / plan.T)
-    drop = 0.0
+    need = np.zeros(s.size)
     for x in skeleton.legs:
         hjc = skeleton.relative_pose(f"{x}_HJC", "pelvis", q)[:3, 3]
-        hip = p + R @ hjc
-        d = poses[x][1] - hip
-        reach = ((1 - 0.015 * s) * leg) ** 2 - d[:, 0] ** 2 - d[:, 1] ** 2
-        if np.any(reach <= 0):
+        d = poses[x][1] - (p + R @ hjc)
+        room = ((1 - (1 - REACH) * s) * leg) ** 2 - d[:, 0] ** 2 - d[:, 1] ** 2
+        if np.any(room <= 0):
             raise InputError("the simulated walk's steps are longer than the legs", field="motion")
-        room = -d[:, 2] - np.sqrt(reach)  # how far the hip must come down (<= 0: none)
-        moving = s > 0.04
-        drop = max(drop, float(np.max((room[moving] + s[moving] * bounce[moving]) / s[moving])))
-    return -drop + bounce
+        need = np.maximum(need, -d[:, 2] - np.sqrt(room))  # <= 0: none
+    moving = s > 1e-6
+    per_s = np.where(moving, need / np.where(moving, s, 1.0), 0.0).clip(min=0.0)
+    h = max(int(round(SMOOTHING_S / dt)), 1)
+    kernel = np.exp(-0.5 * (np.arange(-h, h + 1) / (0.5 * h)) ** 2)
+    padded = np.pad(maximum_filter1d(per_s, 2 * h + 1, mode="nearest"), h, mode="edge")
+    return s * np.convolve(padded, kernel / kernel.sum(), mode="valid")
 
 
 def _derivatives(Q: np.ndarray, p: np.ndarray, R: np.ndarray, dt: float):
