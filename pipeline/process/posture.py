@@ -20,14 +20,17 @@ centre may slide along the hinge axis): the fit's weakest direction
 medio-lateral one, and the error along it reaches the forward direction by the axis's tilt. A
 weakest direction within :data:`HINGE_LIKE_DEG` of the tibia's medio-lateral axis (the model's, in
 the sensor's frame at the pose) is left out of ``o_knee - o_ankle`` (the knee's and the ankle's
-averaged when both are). Measured once by hand, weakest direction from the medio-lateral axis: the
-simulated walk's knees 3-6 deg and ankles 4-14 deg (seeds 0-3; seed 5's centres 3-9 cm off along
-it); over seeds 0-5, 9-D and 6-D, the lean was off by 1.5 deg (median; at most 4.9) with that line
-kept and by 1.2 (at most 4.1) without it, the sagittal angles' median RMSE 1.33 and 1.11 deg. The
-real walks' are not hinge-like: S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and 49-52,
-so their leans do not change (S02's shanks turn at up to 3.8 rad/s RMS about a second axis in its
-turn, 0.7-1.2 walking straight; the simulated walk's knee is a hinge and it turns on a 3 m curve; a
-real walk without turns, on a treadmill say, may be hinge-like too: no such recording here).
+averaged when both are). Measured once by hand over seeds 0-5, 9-D and 6-D: on the simulated walk
+with a hinge knee, weakest directions 3-6 deg (knees) and 4-14 deg (ankles) from the medio-lateral
+axis, the lean off by 1.5 deg (median; at most 4.9) with that line kept and 1.2 (at most 4.1)
+without it, sagittal median RMSE 1.33 and 1.11 deg; on the walk whose knee is not a hinge
+(:mod:`pipeline.simulate.knee`; its fits still hinge-like: knees 4-14 deg, ankles 3-30, seeds 0-3),
+2.3 (at most 4.2) kept and 2.7 (at most 4.4) without, sagittal 2.12 and 2.15: no gain there. The
+real walks' fits are not hinge-like (S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and
+49-52), so their leans do not change; what makes them so is not in the simulator (the knee's
+biplane-sized rotations raise an ideal knee fit's conditioning from 0.01-0.02 to 0.05, the thigh
+sensor's wobble to 0.15-0.16; S02's are 0.30-0.34); a real walk without turns, on a treadmill say,
+may be hinge-like: no such recording here.
 
 The leg is taken straight, as in the neutral pose, leaning as its tibia does: the femur and the
 tibia turn by ``-lean`` about their medio-lateral axis (``+z``: a forward lean of the top
