@@ -1,5 +1,6 @@
-"""Fault injection: one fault at a time in one sensor's raw signals, on the simulator and on the
-real S02 walk; was it detected and named, what was done, and how far did the joint angles move.
+"""Fault injection: one fault at a time in one sensor's raw signals (the right shank's; with the
+thigh's for the slipping pair and the swap), on the simulator and on the real S02 walk; was it
+detected and named, what was done, and how far did the joint angles move.
 
     python scripts/bench_faults.py [--data ../shared/data] [--out results/bench_faults.txt]
 
@@ -63,16 +64,16 @@ def turned(rec: Recording) -> Recording:
     return rec.with_sensors({**rec.sensors, TARGET: turned})
 
 
-def slipping(rec: Recording) -> Recording:
-    """Halfway through the walk (between the leg's first and last initial contact), the sensor
-    slips by 30 deg about its x axis and stays so. Not halfway through the recording: S02
-    stands for 11 of its 25 s, so that would be its first stride, with no walk before the slip to
-    tell it from a sensor mounted so from the start."""
+def _slip(rec: Recording, names: tuple[str, ...]) -> Recording:
+    """Halfway through the walk (between the leg's first and last initial contact), the sensors
+    ``names`` slip by 30 deg about their x axis and stay so. Not halfway through the recording:
+    S02 stands for 11 of its 25 s, so that would be its first stride, with no walk before the
+    slip to tell it from a sensor mounted so from the start."""
     from pipeline.process.gait import gait_of
 
     ic = gait_of(rec, []).events["right"].ic
     R = exp3(np.array([np.radians(30.0), 0.0, 0.0]))
-    s, half = rec.sensors[TARGET], int(round((ic[0] + ic[-1]) / 2))
+    half = int(round((ic[0] + ic[-1]) / 2))
 
     def slip(x):
         if x is None:
@@ -81,7 +82,20 @@ def slipping(rec: Recording) -> Recording:
         x[half:] = x[half:] @ R
         return x
 
-    return _signals(rec, gyr=slip(s.gyr), acc=slip(s.acc), mag=slip(s.mag))
+    return rec.with_sensors({**rec.sensors, **{n: rec.sensors[n].replace(
+        gyr=slip(rec.sensors[n].gyr), acc=slip(rec.sensors[n].acc),
+        mag=slip(rec.sensors[n].mag)) for n in names}})  # fmt: skip
+
+
+def slipping(rec: Recording) -> Recording:
+    """The shank's sensor slipping 30 deg halfway (:func:`_slip`)."""
+    return _slip(rec, (TARGET,))
+
+
+def slipping_together(rec: Recording) -> Recording:
+    """The thigh's and the shank's sensors slipping 30 deg together halfway (one strap over
+    both; :func:`_slip`)."""
+    return _slip(rec, ("femur_r_imu", TARGET))
 
 
 def dropout(rec: Recording) -> Recording:
@@ -109,8 +123,9 @@ def swapped(rec: Recording) -> Recording:
 FAULTS = {"saturated gyroscope (+-250 deg/s)": saturated,
           "magnetometer hard-iron offset (60 % of the field)": hard_iron,
           "dead gyroscope axis": dead, "mounting turned by 90 deg": turned,
-          "sensor slipping 30 deg halfway": slipping, "5 s dropout": dropout,
-          "thigh and shank sensors swapped": swapped}  # fmt: skip
+          "sensor slipping 30 deg halfway": slipping,
+          "thigh and shank sensors slipping 30 deg together": slipping_together,
+          "5 s dropout": dropout, "thigh and shank sensors swapped": swapped}  # fmt: skip
 
 
 def _named(run, base) -> str:
@@ -165,13 +180,14 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
         lines.append(f"| {name} | {verdict} | {text} | {untouched:.2f} | {touched:.2f} |")
     rows = [r for r in lines[4:] if "not applicable" not in r]
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
-    moved = [float(r.split(" | ")[3]) for r in rows  # the swap touches the thigh too
-             if r.split(" | ")[3] not in ("-", "nan") and "swapped" not in r]
+    moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
+             if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r]
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
-              f"(all but the swap) moved by up to {max(moved):.2f} deg (target 0.5): without the "
-              "shank its leg's standing lean (measured from the knee and ankle centres) is not "
-              "measured and the leg takes the other leg's, which moves that hip's flexion by the "
+              f"(all but the thigh's faults) moved by up to {max(moved):.2f} deg (target 0.5): "
+              "without the shank its leg's standing lean (measured from the knee and ankle "
+              "centres) is not measured and the leg takes the other leg's, which moves that hip's "
+              "flexion by the "
               f"difference (the undisturbed run measured {_leans(base)}); the anatomical heading "
               "loses that knee's axis."]
     return lines + [""]

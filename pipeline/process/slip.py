@@ -34,12 +34,17 @@ horizontal axis of the sensor 25-32 deg; a slip about the vertical (a belt turni
 waist) is not seen.
 
 A slip moves one sensor; a change of the walk itself (stairs, a slope, gait initiation's first
-strides) turns every sensor of the leg. So a step is a slip only while the leg's other sensors
-step less than :data:`ALONE_DEG` at the same split: with a 30 deg slip they step 2-4 deg (S02,
-the simulated walk); without one, the early splits where a sensor steps most are common to the
-leg (others at 6-8 deg: the first strides from standing), and on the qmt full-body recording,
-whose movement changes at 67-70 s, the thighs' mid-stance gravity steps 21-29 deg with the
-shanks' 10-15: a change of the movement, which the rule keeps from being taken for two slips.
+strides) turns every sensor of the leg, and both legs. So a step is a slip only while the leg's
+other sensors step less than :data:`ALONE_DEG` at the same split, or, where they step too, while
+the other leg's sensor on the same segment does (at its split nearest in time): with a 30 deg
+slip the leg's other sensors step 2-4 deg (S02, the simulated walk); without one, the early
+splits where a sensor steps most are common to the leg (others at 6-8 deg: the first strides from
+standing), and on the qmt full-body recording, whose movement changes at 67-70 s, the thighs'
+mid-stance gravity steps 21-29 deg with the shanks' 10-15 and the other thigh's 18-22: a change of
+the movement, which the rule keeps from being taken for slips. Two sensors of a leg slipping
+together (one strap over both) step 19-28 deg (S02) and 29-32 (the simulated walk) while the other
+leg's step 5-6 and 2-4: both are named. Without a slip the other leg's same sensor steps 1.5-5.6
+deg at the split (S02, the simulated walk).
 """
 
 from __future__ import annotations
@@ -54,6 +59,7 @@ from pipeline.analysis.gait_events import gait_events
 from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
+from pipeline.model.conventions import other_side
 
 __all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "leg_slips", "slip_step"]
 
@@ -80,7 +86,8 @@ class Slip:
     """The largest step of one sensor's view of its segment: ``axis_deg`` (eq 1) and
     ``gravity_deg`` (eq 2, NaN without foot rests) at the split ``time_s`` (the first stride
     after it starts there), with ``before`` and ``after`` strides; ``others_deg``: the largest
-    step of the leg's other sensors at that split (0 without any)."""
+    step of the leg's other sensors at that split (0 without any); ``mirror_deg``: the step of
+    the other leg's sensor on the same segment at its split nearest in time (NaN without)."""
 
     axis_deg: float
     gravity_deg: float
@@ -88,6 +95,7 @@ class Slip:
     before: int
     after: int
     others_deg: float = 0.0
+    mirror_deg: float = float("nan")
 
     @property
     def deg(self) -> float:
@@ -95,8 +103,10 @@ class Slip:
 
     @property
     def slipped(self) -> bool:
-        """Beyond :data:`SLIP_DEG`, and alone on its leg (:data:`ALONE_DEG`)."""
-        return self.deg > SLIP_DEG and self.others_deg < ALONE_DEG
+        """Beyond :data:`SLIP_DEG`, and alone on its leg or on its side of the body
+        (:data:`ALONE_DEG`; module docstring)."""
+        return self.deg > SLIP_DEG and (self.others_deg < ALONE_DEG
+                                        or self.mirror_deg < ALONE_DEG)  # fmt: skip
 
     def evidence(self) -> str:
         """What turned, where, for a finding."""
@@ -104,10 +114,12 @@ class Slip:
             f"{what} by {deg:.0f} deg" for what, deg in
             (("its segment's flexion axis turned", self.axis_deg),
              ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))  # fmt: skip
+        mirror = (f", the other leg's by {self.mirror_deg:.0f}" if np.isfinite(self.mirror_deg)
+                  else "")  # fmt: skip
         return (f"in its own frame {turned} between the {self.before} strides before t = "
                 f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
-                f"other sensors by {self.others_deg:.0f} at most: it slipped on its segment (a "
-                "loose strap?)")
+                f"other sensors by {self.others_deg:.0f} at most{mirror}: it slipped on its "
+                "segment (a loose strap?)")
 
 
 def _larger(*steps: float) -> float:
@@ -180,16 +192,13 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
     return best
 
 
-def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip]:
-    """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
-    signals, with the leg's other sensors' steps at the same split (those with every sample
-    finite: a sensor with a dropout is excluded by its own check); empty for a leg with too few
-    strides. ``pelvis``: the pelvis's sensor too, by gravity alone on this leg's strides (when
-    the foot's rests give them), the leg's sensors its others. The leg's events and each
-    sensor's view are computed once."""
+def _leg_views(rec: Recording, side: str, pelvis: bool):
+    """The leg's strides, its sensors with raw signals (the pelvis's too, by gravity alone, when
+    asked and the foot's rests give them) and each one's ``(C_k, g_k)``; None for a leg with
+    too few strides."""
     strides, rests = _strides(rec, side)
     if len(strides) < 2 * MIN_SIDE:
-        return {}
+        return None
     names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
     pelvis_name = SEGMENT_SENSOR["pelvis"]
     names += [pelvis_name] if pelvis and len(rests) else []
@@ -199,13 +208,46 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
                             rests) for n, s in leg.items()}  # fmt: skip
     if pelvis_name in views:  # no axis: gravity alone
         views[pelvis_name] = (np.zeros_like(views[pelvis_name][0]), views[pelvis_name][1])
+    return strides, leg, views
+
+
+def _mirror_step(other, name: str, time_s: float, time: np.ndarray) -> float:
+    """The step of the other leg's sensor on ``name``'s segment at its split nearest
+    ``time_s`` (NaN without that sensor or enough strides)."""
+    segment = SENSOR_TO_SEGMENT.get(name, "")
+    if other is None or not segment.startswith(("right_", "left_")):
+        return float("nan")
+    strides, leg, views = other
+    mirror = SEGMENT_SENSOR[f"{other_side(segment.split('_', 1)[0])}_{segment.split('_', 1)[1]}"]
+    if mirror not in views or not _finite(leg[mirror]):
+        return float("nan")
+    starts = time[[a for a, _ in strides]]
+    m = int(np.clip(np.argmin(np.abs(starts - time_s)), MIN_SIDE, len(strides) - MIN_SIDE))
+    return _larger(*_step_at(*views[mirror], m))
+
+
+def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip]:
+    """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
+    signals, with the leg's other sensors' steps at the same split (those with every sample
+    finite: a sensor with a dropout is excluded by its own check) and the other leg's same
+    sensor's; empty for a leg with too few strides. ``pelvis``: the pelvis's sensor too, by
+    gravity alone on this leg's strides (when the foot's rests give them), the leg's sensors its
+    others. The leg's events and each sensor's view are computed once."""
+    this = _leg_views(rec, side, pelvis)
+    if this is None:
+        return {}
+    strides, leg, views = this
+    other = _leg_views(rec, other_side(side), False)
+    pelvis_name = SEGMENT_SENSOR["pelvis"]
     out = {}
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
         others = [_larger(*_step_at(*views[n], best.before)) for n in views
                   if n not in (name, pelvis_name) and _finite(leg[n])]  # fmt: skip
         seen = [d for d in others if np.isfinite(d)]
-        out[name] = dataclasses.replace(best, others_deg=float(max(seen, default=0.0)))
+        out[name] = dataclasses.replace(best, others_deg=float(max(seen, default=0.0)),
+                                        mirror_deg=_mirror_step(other, name, best.time_s,
+                                                                rec.time))  # fmt: skip
     return out
 
 
