@@ -129,6 +129,10 @@ def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
         gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
     assert slip_step("tibia_r_imu", short) is None
+    listed = {f.sensor: f for f in check_sensors(short)[1] if f.check == "slipped"}
+    assert {"femur_r_imu", "tibia_r_imu", "calcn_r_imu"} <= set(listed), listed
+    assert not any(f.flagged for f in listed.values())
+    assert "not checked for a slip: its leg walked" in listed["tibia_r_imu"].evidence
 
 
 def test_the_slipped_sensor_is_excluded_and_named_and_the_run_goes_on(walk):

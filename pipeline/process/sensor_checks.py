@@ -44,7 +44,8 @@ done about it:
 * ``slipped`` (:mod:`pipeline.process.slip`): a leg sensor whose own view of its segment (the
   flexion axis, gravity at mid-stance) turns between the strides before and after some stride by
   more than :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is
-  wrong from then on: **excluded**. Checked in walking (four strides or more on its leg).
+  wrong from then on: **excluded**. Checked in walking (four strides or more on its leg); a leg
+  that walked fewer has its sensors **listed** as not checked (not a flag).
 
 * ``read``: what the reader of the sensor's own file repaired or noticed (in a folder of
   one-sensor files: dropped samples or packets filled, an irregular clock kept as recorded;
@@ -68,7 +69,7 @@ from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.process.signals import gravity_in_world
-from pipeline.process.slip import slip_step
+from pipeline.process.slip import slip_step, unchecked
 
 __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
            "ORDER_RATIO", "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors",
@@ -337,7 +338,10 @@ def _repaired_on_reading(name: str, s: SensorSignals, rec: Recording) -> Finding
 
 def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     step = slip_step(name, rec)
-    if step is None or not step.slipped:
+    if step is None:
+        why = unchecked(name, rec)
+        return None if why is None else Finding(name, "slipped", "listed", why)
+    if not step.slipped:
         return None
     return Finding(name, "slipped", "excluded", step.evidence())
 

@@ -61,7 +61,8 @@ from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
 
-__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "leg_slips", "slip_step"]
+__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "leg_slips", "slip_step",
+           "unchecked"]
 
 #: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
 #: docstring), under the 19-33 deg a 30 deg slip gives.
@@ -251,9 +252,10 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
     return out
 
 
-#: The last recording's legs (a weak reference to it, side -> :func:`leg_slips`): the sensor
-#: check asks for each sensor of a leg in turn, and the leg is computed once.
-_LAST: dict[str, tuple[weakref.ref, dict[str, Slip]]] = {}
+#: The last recording's legs (a weak reference to it, side -> :func:`leg_slips` and the leg's
+#: stride count): the sensor check asks for each sensor of a leg in turn, and the leg is computed
+#: once.
+_LAST: dict[str, tuple[weakref.ref, dict[str, Slip], int]] = {}
 
 
 def slip_step(name: str, rec: Recording) -> Slip | None:
@@ -270,9 +272,35 @@ def slip_step(name: str, rec: Recording) -> Slip | None:
     return _leg(rec, segment.split("_", 1)[0]).get(name)
 
 
+def unchecked(name: str, rec: Recording) -> str | None:
+    """Why sensor ``name`` was not checked although its leg walked: the leg has some strides but
+    fewer than ``2 MIN_SIDE`` (one stride a side is too few: without a slip S02's left shank
+    stepped 15.3 deg and the x-IMU3 walk's left foot 15.9 between single strides); None when it
+    was checked or its leg did not walk."""
+    segment, s = SENSOR_TO_SEGMENT.get(name, ""), rec.sensors[name]
+    sides = ("right", "left") if segment == "pelvis" else (segment.split("_", 1)[0],)
+    if s.gyr is None or s.acc is None or sides[0] not in ("right", "left") \
+            or slip_step(name, rec) is not None:
+        return None
+    counts = [_leg_strides(rec, side) for side in sides]
+    if not 0 < max(counts) < 2 * MIN_SIDE:
+        return None
+    return (f"not checked for a slip: its leg walked {max(counts)} stride(s), "
+            f"{2 * MIN_SIDE} are needed to compare before and after")
+
+
 def _leg(rec: Recording, side: str) -> dict[str, Slip]:
     """:func:`leg_slips` with the pelvis, kept for the last recording per side."""
+    return _cached(rec, side)[0]
+
+
+def _leg_strides(rec: Recording, side: str) -> int:
+    return _cached(rec, side)[1]
+
+
+def _cached(rec: Recording, side: str) -> tuple[dict[str, Slip], int]:
     cached = _LAST.get(side)
     if cached is None or cached[0]() is not rec:
-        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side, pelvis=True))
-    return cached[1]
+        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side, pelvis=True),
+                                len(_strides(rec, side)[0]))  # fmt: skip
+    return cached[1], cached[2]
