@@ -132,7 +132,7 @@ def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     listed = {f.sensor: f for f in check_sensors(short)[1] if f.check == "slipped"}
     assert {"femur_r_imu", "tibia_r_imu", "calcn_r_imu"} <= set(listed), listed
     assert not any(f.flagged for f in listed.values())
-    assert "not checked for a slip: its leg walked" in listed["tibia_r_imu"].evidence
+    assert "not checked for a slip: " in listed["tibia_r_imu"].evidence
 
 
 def test_the_slipped_sensor_is_excluded_and_named_and_the_run_goes_on(walk):

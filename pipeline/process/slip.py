@@ -273,20 +273,22 @@ def slip_step(name: str, rec: Recording) -> Slip | None:
 
 
 def unchecked(name: str, rec: Recording) -> str | None:
-    """Why sensor ``name`` was not checked although its leg walked: the leg has some strides but
-    fewer than ``2 MIN_SIDE`` (one stride a side is too few: without a slip S02's left shank
-    stepped 15.3 deg and the x-IMU3 walk's left foot 15.9 between single strides); None when it
-    was checked or its leg did not walk."""
+    """Why sensor ``name`` was not checked although the recording walks: its leg has fewer than
+    ``2 MIN_SIDE`` strides (one stride a side is too few: without a slip S02's left shank
+    stepped 15.3 deg and the x-IMU3 walk's left foot 15.9 between single strides; the x-IMU3
+    walk's right foot gives no stride at all, its swings turning either way); None when it was
+    checked or neither leg walked."""
     segment, s = SENSOR_TO_SEGMENT.get(name, ""), rec.sensors[name]
     sides = ("right", "left") if segment == "pelvis" else (segment.split("_", 1)[0],)
     if s.gyr is None or s.acc is None or sides[0] not in ("right", "left") \
             or slip_step(name, rec) is not None:
         return None
-    counts = [_leg_strides(rec, side) for side in sides]
-    if not 0 < max(counts) < 2 * MIN_SIDE:
+    found = max(_leg_strides(rec, side) for side in sides)
+    walked = max(_leg_strides(rec, side) for side in ("right", "left"))
+    if walked == 0 or found >= 2 * MIN_SIDE:
         return None
-    return (f"not checked for a slip: its leg walked {max(counts)} stride(s), "
-            f"{2 * MIN_SIDE} are needed to compare before and after")
+    return (f"not checked for a slip: {found} stride(s) found on its leg (the other leg: "
+            f"{walked}), {2 * MIN_SIDE} are needed to compare before and after")
 
 
 def _leg(rec: Recording, side: str) -> dict[str, Slip]:
