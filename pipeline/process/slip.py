@@ -195,11 +195,11 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
 
 def _leg_views(rec: Recording, side: str, pelvis: bool):
     """The leg's strides, its sensors with raw signals (the pelvis's too, by gravity alone, when
-    asked and the foot's rests give them) and each one's ``(C_k, g_k)``; None for a leg with
-    too few strides."""
+    asked and the foot's rests give them) and each one's ``(C_k, g_k)``; no sensors for a leg
+    with too few strides."""
     strides, rests = _strides(rec, side)
     if len(strides) < 2 * MIN_SIDE:
-        return None
+        return strides, {}, {}
     names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
     pelvis_name = SEGMENT_SENSOR["pelvis"]
     names += [pelvis_name] if pelvis and len(rests) else []
@@ -213,13 +213,14 @@ def _leg_views(rec: Recording, side: str, pelvis: bool):
 
 
 def _mirror_step(other, name: str, time_s: float, time: np.ndarray) -> float:
-    """The step of the other leg's sensor on ``name``'s segment at its split nearest
-    ``time_s`` (NaN without that sensor or enough strides)."""
-    segment = SENSOR_TO_SEGMENT.get(name, "")
-    if other is None or not segment.startswith(("right_", "left_")):
+    """The step of the other leg's sensor on ``name``'s segment (``other``: that leg's
+    :func:`_leg_views`) at its split nearest ``time_s`` (NaN without that sensor or enough
+    strides)."""
+    side, _, segment = SENSOR_TO_SEGMENT.get(name, "").partition("_")
+    if side not in ("right", "left"):
         return float("nan")
     strides, leg, views = other
-    mirror = SEGMENT_SENSOR[f"{other_side(segment.split('_', 1)[0])}_{segment.split('_', 1)[1]}"]
+    mirror = SEGMENT_SENSOR[f"{other_side(side)}_{segment}"]
     if mirror not in views or not _finite(leg[mirror]):
         return float("nan")
     starts = time[[a for a, _ in strides]]
@@ -234,11 +235,12 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
     sensor's; empty for a leg with too few strides. ``pelvis``: the pelvis's sensor too, by
     gravity alone on this leg's strides (when the foot's rests give them), the leg's sensors its
     others. The leg's events and each sensor's view are computed once."""
-    this = _leg_views(rec, side, pelvis)
-    if this is None:
-        return {}
+    return _slips(rec, _leg_views(rec, side, pelvis), _leg_views(rec, other_side(side), False))
+
+
+def _slips(rec: Recording, this, other) -> dict[str, Slip]:
+    """:func:`leg_slips` from the two legs' :func:`_leg_views`."""
     strides, leg, views = this
-    other = _leg_views(rec, other_side(side), False)
     pelvis_name = SEGMENT_SENSOR["pelvis"]
     out = {}
     for name, (C, g) in views.items():
@@ -252,10 +254,10 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
     return out
 
 
-#: The last recording's legs (a weak reference to it, side -> :func:`leg_slips` and the leg's
-#: stride count): the sensor check asks for each sensor of a leg in turn, and the leg is computed
-#: once.
-_LAST: dict[str, tuple[weakref.ref, dict[str, Slip], int]] = {}
+#: The last recording's legs (a weak reference to it; side -> :func:`leg_slips` with the pelvis
+#: and the leg's stride count): the sensor check asks for each sensor in turn, and each leg's
+#: events and views are computed once, for its own check and the other leg's.
+_LAST: dict[str, tuple[weakref.ref, dict[str, tuple[dict[str, Slip], int]]]] = {}
 
 
 def slip_step(name: str, rec: Recording) -> Slip | None:
@@ -292,17 +294,19 @@ def unchecked(name: str, rec: Recording) -> str | None:
 
 
 def _leg(rec: Recording, side: str) -> dict[str, Slip]:
-    """:func:`leg_slips` with the pelvis, kept for the last recording per side."""
-    return _cached(rec, side)[0]
+    """:func:`leg_slips` with the pelvis, kept for the last recording."""
+    return _cached(rec)[side][0]
 
 
 def _leg_strides(rec: Recording, side: str) -> int:
-    return _cached(rec, side)[1]
+    return _cached(rec)[side][1]
 
 
-def _cached(rec: Recording, side: str) -> tuple[dict[str, Slip], int]:
-    cached = _LAST.get(side)
+def _cached(rec: Recording) -> dict[str, tuple[dict[str, Slip], int]]:
+    cached = _LAST.get("legs")
     if cached is None or cached[0]() is not rec:
-        cached = _LAST[side] = (weakref.ref(rec), leg_slips(rec, side, pelvis=True),
-                                len(_strides(rec, side)[0]))  # fmt: skip
-    return cached[1], cached[2]
+        views = {side: _leg_views(rec, side, pelvis=True) for side in ("right", "left")}
+        cached = _LAST["legs"] = (weakref.ref(rec), {
+            side: (_slips(rec, views[side], views[other_side(side)]), len(views[side][0]))
+            for side in views})  # fmt: skip
+    return cached[1]

@@ -54,7 +54,7 @@ from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x, rot_y, rot_z
 from pipeline.simulate.chain import UPRIGHT
 from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
-from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching
+from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching, hip_ankle_distance_sq
 from pipeline.simulate.motions import ramp, standing_height
 
 __all__ = ["CLEARANCE_M", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH", "SMOOTHING_S",
@@ -131,8 +131,7 @@ def _arc(plan_T: float, v: float, tau: np.ndarray) -> np.ndarray:
 
 
 def _leg_length(skeleton: Skeleton) -> float:
-    q = skeleton.neutral()
-    return float(np.linalg.norm(skeleton.relative_pose("right_AJC", "right_HJC", q)[:3, 3]))
+    return float(np.sqrt(hip_ankle_distance_sq(skeleton, skeleton.neutral(), "right")))
 
 
 def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
