@@ -6,8 +6,9 @@
 (Skog et al. 2010, IEEE TBME 57(11), the "angular rate energy" and "acceleration moving variance"
 tests), kept when it lasts :data:`MIN_REST_S`.
 
-**Contacts** from the sagittal angular velocity ``w`` (the gyroscope projected on its principal
-axis over the moving samples, the foot's flexion axis). Between two rests the foot turns one way
+**Contacts** from the sagittal angular velocity ``w`` (the gyroscope projected on the principal
+axis of its horizontal part over the moving samples, the foot's flexion axis: turns about the
+vertical left out, :func:`sagittal_rate`). Between two rests the foot turns one way
 in push-off (the heel rising), the other way through the swing, and back at the heel strike
 (foot flat): the swing is the lobe of ``w`` (a run of one sign) that turns the foot furthest, and
 ``w`` is signed so that it is positive. **Final contact** (FC, toe-off) is the fastest push-off
@@ -33,7 +34,7 @@ from pipeline.filtering import lowpass
 from pipeline.io.gaps import true_runs
 
 __all__ = ["SEGMENTS", "GaitEvents", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events",
-           "rest_periods", "sagittal_rate"]  # fmt: skip
+           "rest_periods", "rest_vertical", "sagittal_rate"]  # fmt: skip
 
 #: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
 #: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
@@ -91,15 +92,37 @@ def _swing_lobe(w: np.ndarray, a: int, b: int) -> tuple[int, int, float]:
     return max(runs, key=lambda r: abs(r[2]))
 
 
-def sagittal_rate(gyr: np.ndarray, rests: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(w, axis)``: the gyroscope on its principal axis over the samples out of rest, signed so
-    that the swings (the largest turn between two rests; without rests, the largest peak) are
-    positive."""
+def rest_vertical(acc: np.ndarray, rests: np.ndarray) -> np.ndarray:
+    """The world's vertical (unit, up) in the sensor frame: the specific force's mean direction
+    over the rests (the foot flat, the leg upright), else over the whole recording."""
+    still = np.zeros(len(acc), dtype=bool)
+    for a, b in rests:
+        still[a:b] = True
+    f = np.nan_to_num(acc[still] if still.any() else acc)
+    unit = f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
+    mean = unit.mean(axis=0)
+    return mean / max(float(np.linalg.norm(mean)), 1e-9)
+
+
+def sagittal_rate(gyr: np.ndarray, rests: np.ndarray,
+                  up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """``(w, axis)``: the gyroscope on the principal axis of its horizontal part over the samples
+    out of rest, signed so that the swings (the largest turn between two rests; without rests,
+    the largest peak) are positive.
+
+    The horizontal part ``w_h = w - (w . u) u``, with ``u`` the vertical at rest (``up``, else
+    :func:`rest_vertical` needs the accelerometer, so it is given by :func:`gait_events`), leaves
+    out the turns about the vertical: where a walk turns on the spot or shuffles, those outweigh
+    the flexion (the x-IMU3 walk's right foot: its plain principal axis is 5 deg from the
+    vertical). Aligning a foot sensor by gravity, then by the principal axis of its horizontal
+    angular velocity, is gaitmap's foot-frame alignment (Küderle et al. 2024)."""
     moving = np.ones(len(gyr), dtype=bool)
     for a, b in rests:
         moving[a:b] = False
     g = np.nan_to_num(gyr)
     sample = g[moving] if moving.sum() >= 10 else g
+    if up is not None:
+        sample = sample - np.outer(sample @ up, up)
     _, _, vt = np.linalg.svd(sample - sample.mean(axis=0), full_matrices=False)
     axis = vt[0]
     w = g @ axis
@@ -154,10 +177,10 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
         raise ValueError(f"segment {segment!r}: expected one of {SEGMENTS}")
     rests = rest_periods(gyr, acc, rate_hz)
     if segment == "shank":
-        w, axis = sagittal_rate(gyr, np.zeros((0, 2), int))
+        w, axis = sagittal_rate(gyr, np.zeros((0, 2), int), rest_vertical(acc, rests))
         swing, ic, fc = _shank_events(lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz)), rate_hz)
         return GaitEvents(rests, np.asarray(swing, int), ic, fc, axis)
-    w, axis = sagittal_rate(gyr, rests)
+    w, axis = sagittal_rate(gyr, rests, rest_vertical(acc, rests))
     w = lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
     swing, ic, fc = [], [], []
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
