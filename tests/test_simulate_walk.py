@@ -53,6 +53,21 @@ def test_feet_rest_flat_on_their_footprints(trial):
         assert np.ptp(ajc_z) < 0.005
 
 
+def test_feet_invert_in_push_off_and_land_flat(trial):
+    """The foot is not a sagittal hinge: its lateral axis tips down (the sole turned medially)
+    by up to the drawn inversion at the end of push-off (5-10 deg, less its pitch's share), and
+    lies level again while flat."""
+    from pipeline.simulate.walk import FOOT_INVERSION_DEG
+
+    up = np.array([0.0, 0.0, 1.0])
+    for side, sign in (("right", 1.0), ("left", -1.0)):
+        imu = trial.imus[f"{side}_foot_imu"]
+        R = imu.rotation @ imu.R_segment.T  # the foot segment in the world (z up)
+        lateral_down = -sign * np.degrees(np.arcsin(np.clip(R[:, :, 2] @ up, -1, 1)))
+        assert 0.5 * FOOT_INVERSION_DEG[1][0] < lateral_down.max() <= FOOT_INVERSION_DEG[1][1]
+        assert np.abs(lateral_down[_flat_samples(trial, side)]).max() < 0.5
+
+
 def test_the_pelvis_moves_through_the_room_and_turns(trial):
     p = trial.q[:, :3]
     walked = np.sum(np.linalg.norm(np.diff(p[:, :2], axis=0), axis=1))

@@ -27,9 +27,17 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   loading, rests flat on its footprint in ``[0.1 T, 0.45 T]``, pivots about its toe during
   push-off until the final contact FC ``= 0.6 T``, and swings to the next footprint on a
   minimum-jerk blend of the two pivots (Flash & Hogan 1985) lifted by ``64 u^3 (1 - u)^3``
-  :data:`CLEARANCE_M`. Footprints lie a hip's half-width either side of the path, where the
-  pelvis passes at mid-stance, turned to the path's heading. The right foot pushes off first;
-  the left stays flat on its standing footprint until half a stride later.
+  :data:`CLEARANCE_M`. The foot is not a sagittal hinge either: it lands inverted by a few
+  degrees, everts to flat in the same lobe as it pitches, inverts in push-off and swings back
+  (:data:`FOOT_INVERSION_DEG`). Measured once by hand (seed 0, 4 Hz low-pass, straight
+  walking): about the foot's long axis its sensor turns at 0.5-0.6 rad/s RMS (0.5 without the
+  inversion; the real S02 feet 0.5-0.7), its angular acceleration there 5-7 rad/s^2 (S02 9-10),
+  and one foot sensor's motion determines a point on it with conditioning 0.16-0.20 (0.14
+  without; S02 0.41-0.46): the real foot's rotations off the sagittal plane are quicker, not
+  larger, and the simulator does not have them yet. Footprints lie a hip's half-width either
+  side of the path, where the pelvis passes at mid-stance, turned to the path's heading. The
+  right foot pushes off first; the left stays flat on its standing footprint until half a
+  stride later.
 * **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF) solve the foot's pose
   exactly (Newton on ``log6``, Pinocchio's frame Jacobian); a free knee is not a hinge: its
   adduction and rotation follow its flexion and the stride (:mod:`pipeline.simulate.knee`), a
@@ -57,8 +65,8 @@ from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
 from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching, hip_ankle_distance_sq
 from pipeline.simulate.motions import ramp, standing_height
 
-__all__ = ["CLEARANCE_M", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH", "SMOOTHING_S",
-           "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
+__all__ = ["CLEARANCE_M", "FOOT_INVERSION_DEG", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH",
+           "SMOOTHING_S", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
 
 #: Where the foot lies flat in a stride from its IC (shares of the stride; the lobes between).
 FLAT, PUSH_OFF = LOBES[0][1], LOBES[1][0]
@@ -79,6 +87,13 @@ MID_STANCE = 0.85
 #: where the rotation alone gave 12, which a fallen-off sensor's check mistook for a still sensor.
 PELVIS_TURN_DEG = (4.0, 4.0, 2.0)
 TURN_LENGTH_M = 3.0
+#: The foot's inversion (deg, the sole turned medially) at initial contact and at the end of
+#: push-off, drawn per leg: it lands a little inverted and everts to flat in the loading
+#: response, then inverts as the heel rises about the oblique metatarsophalangeal line and the
+#: subtalar joint supinates
+#: (Bojsen-Moller 1979, Acta Orthop Scand 50:471; Leardini et al. 2007, Gait Posture 25:453-462:
+#: the rearfoot's frontal range in walking ~10 deg), and swings back.
+FOOT_INVERSION_DEG = ((2.0, 5.0), (5.0, 10.0))
 ANKLE_HEIGHT_M = 0.08  # the model's ankle centre above the floor (motions.standing_height)
 _FINE = 4  # the kinematics' grid, times finer than the trial's
 
@@ -161,21 +176,29 @@ def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
     return WalkPlan(T, L, turn, turn_at, push, prints, heads, path, heading)
 
 
-def _foot_frame(psi: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    return rot_z(psi) @ UPRIGHT @ rot_z(phi)
+def _foot_frame(psi: np.ndarray, phi: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
+    return rot_z(psi) @ UPRIGHT @ rot_z(phi) @ rot_x(roll)
 
 
-def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray):
-    """The foot frame's world rotation (N, 3, 3) and origin (N, 3) at clock times ``tau``."""
+def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray,
+               inversion: tuple[float, float] = (0.0, 0.0)):  # fmt: skip
+    """The foot frame's world rotation (N, 3, 3) and origin (N, 3) at clock times ``tau``;
+    ``inversion`` (rad) the foot's at initial contact and at toe-off (module docstring)."""
     T, po = plan.T, plan.push_off[side]
     F, H = plan.footprints[side], plan.headings[side]
-    phi = np.zeros_like(tau)
+    at_ic, at_toe_off = inversion
+    # per lobe (loading, push-off, swing): the pitch's turn and the inversion's
+    rolls = (-at_ic, at_toe_off, at_ic - at_toe_off)
+    phi, roll = np.zeros_like(tau), np.zeros_like(tau)
     for j, p in enumerate(po):
         ic = p - PUSH_OFF * T
-        for a, b, turn in LOBES:
+        for (a, b, turn), r in zip(LOBES, rolls, strict=True):
             if j == 0 and a == 0.0:
                 continue  # the standing footprint: no loading response
-            phi += np.deg2rad(turn) * bump_integral((tau - ic - a * T) / ((b - a) * T))
+            done = bump_integral((tau - ic - a * T) / ((b - a) * T))
+            phi += np.deg2rad(turn) * done
+            roll += r * done
+    roll *= 1.0 if side == "right" else -1.0  # the sole turned medially; z points right
     psi = np.zeros_like(tau)
     pos = np.repeat(F[:1], tau.size, axis=0)
     for j, p in enumerate(po[: len(F) - 1]):
@@ -186,8 +209,8 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
         psi += dpsi * m
         toe_j = F[j] + _foot_frame(H[j], 0.0) @ toe
         heel_n = F[j + 1] + _foot_frame(H[j + 1], 0.0) @ heel
-        a = toe_j - _foot_frame(np.full_like(tau, H[j]), phi) @ toe
-        b = heel_n - _foot_frame(np.full_like(tau, H[j + 1]), phi) @ heel
+        a = toe_j - _foot_frame(np.full_like(tau, H[j]), phi, roll) @ toe
+        b = heel_n - _foot_frame(np.full_like(tau, H[j + 1]), phi, roll) @ heel
         lift = 64 * CLEARANCE_M * np.clip(u, 0, 1) ** 3 * (1 - np.clip(u, 0, 1)) ** 3
         swing = (1 - m)[:, None] * a + m[:, None] * b + lift[:, None] * [0.0, 0.0, 1.0]
         pivot_toe = (tau >= p) & (tau < fc)
@@ -198,7 +221,7 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
         pos = np.where(in_swing[:, None], swing, pos)
         pos = np.where(pivot_heel[:, None], b, pos)
         pos = np.where(flat[:, None], F[j + 1], pos)
-    return _foot_frame(psi, phi), pos
+    return _foot_frame(psi, phi, roll), pos
 
 
 def _five_point(x: np.ndarray, h: float) -> np.ndarray:
@@ -265,13 +288,15 @@ def walk_trajectories(
     foot_len = 0.31 * _leg_length(skeleton)  # foot 0.152, leg 0.485 of the height
     heel = np.array([-0.25 * foot_len, -ANKLE_HEIGHT_M, 0.0])
     toe = np.array([0.55 * foot_len, -ANKLE_HEIGHT_M, 0.0])
-    poses = {x: foot_poses(plan, x, tau, heel, toe) for x in skeleton.legs}
     sp = _arc(plan.T, plan.speed, tau)
     R = rot_z(plan.heading(sp)) @ UPRIGHT @ _pelvis_turns(tau / plan.T, s, rng)
+    knee = {x: draw_knee(skeleton, x, rng) for x in skeleton.legs}
+    inversion = {x: np.deg2rad([rng.uniform(*r) for r in FOOT_INVERSION_DEG])
+                 for x in skeleton.legs}  # fmt: skip
+    poses = {x: foot_poses(plan, x, tau, heel, toe, inversion[x]) for x in skeleton.legs}
     p = np.concatenate([plan.path(sp) + s[:, None] ** 2 * _sway(plan, tau, sp),
                         np.full((tf.size, 1), z0)], axis=1)  # fmt: skip
     p[:, 2] -= _pelvis_drop(skeleton, p, R, poses, s, dt)
-    knee = {x: draw_knee(skeleton, x, rng) for x in skeleton.legs}
     extra = {x: knee[x].stride_angles(2 * np.pi * tau / plan.T, s) for x in skeleton.legs}
     free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
         *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle"))]
