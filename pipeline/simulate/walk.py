@@ -34,7 +34,14 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   inversion; the real S02 feet 0.5-0.7), its angular acceleration there 5-7 rad/s^2 (S02 9-10),
   and one foot sensor's motion determines a point on it with conditioning 0.16-0.20 (0.14
   without; S02 0.41-0.46): the real foot's rotations off the sagittal plane are quicker, not
-  larger, and the simulator does not have them yet. Footprints lie a hip's half-width either
+  larger, and the simulator does not have them yet. Per straight stride the real S02 tibia
+  turns about its long axis by 11-35 deg, the simulated one by 2-2.5 (the femur 19-33 and
+  13-14; the foot's sagittal range 80-97 and 58): a flat foot whose heading is prescribed, under
+  an ankle of two axes (flexion, inversion), keeps the tibia from turning on it (the subtalar
+  joint's coupling of eversion with the tibia's internal rotation is not modelled). A toe-out of
+  the swinging foot, tried (5-20 deg), raised the tibia's conditioning from 0.21-0.27 to
+  0.24-0.38 (S02 0.51-0.54) but turned the femur about its long axis more than S02's: the hip
+  took all of it; not kept. Footprints lie a hip's half-width either
   side of the path, where the pelvis passes at mid-stance, turned to the path's heading. The
   right foot pushes off first; the left stays flat on its standing footprint until half a
   stride later.
