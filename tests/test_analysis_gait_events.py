@@ -37,6 +37,21 @@ def test_turns_on_the_spot_do_not_take_the_sagittal_axis(seed):
     assert abs(ev.axis @ vertical) < np.sin(np.radians(1.0))  # horizontal
 
 
+@pytest.mark.parametrize("length_m, steps", [(0.4, 6), (0.05, 0)])
+def test_a_step_that_barely_pitches_the_foot_counts_when_the_foot_moved(monkeypatch, length_m,
+                                                                        steps):  # fmt: skip
+    """Feet pitched a quarter as much as in walking (swing peak 1.9 rad/s, below MIN_SWING_RATE,
+    as in a pivot turn): steps of 0.4 m are found, IC within 10 ms; shuffles of 5 cm are not."""
+    import pipeline.simulate.foot_walk as fw
+
+    monkeypatch.setattr(fw, "LOBES", tuple((a, b, turn / 4) for a, b, turn in fw.LOBES))
+    w = foot_walk(strides=6, seed=1, length_m=length_m, clearance_m=0.02)
+    ev = gait_events(w.gyr, w.acc, w.rate_hz)
+    assert len(ev.ic) == steps
+    if steps:
+        assert np.abs(ev.ic / w.rate_hz - w.ic[1:]).max() < 0.010
+
+
 def test_the_sign_does_not_depend_on_the_mounting():
     """The same walk with the sensor upside down (its axes negated in pairs: a half turn)."""
     w = foot_walk(strides=4, seed=3)
@@ -118,3 +133,5 @@ def test_s02_initial_contacts_against_the_heel_markers():
         errors = [abs(k / 100.0 - ic[np.argmin(np.abs(ic - k / 100.0))]) for k in ev.ic]
         errors = [e for e in errors if e < 0.15]
         assert len(errors) >= 5 and np.median(errors) < 0.030, (side, errors)
+        if (side, segment) == ("right", "foot"):  # its pivot in the turn: peak 1.3 rad/s, 30 cm
+            assert np.abs(ev.ic / 100.0 - 15.48).min() < 0.020

@@ -241,8 +241,10 @@ def test_the_real_recordings():
     assert findings == []
     found = check_sensors(read_recording(ximu3))[1]
     assert [f for f in found if f.flagged] == []
-    # two short walks: 3 strides a leg, fewer than a slip check needs, so every sensor is listed
-    # as not checked (the pelvis too), none flagged
+    # two short walks, turns on the spot and shuffles: every leg sensor's view steps 20-86 deg
+    # with the leg's others and the other leg's, so each is listed as not checked (a slip would
+    # not be told from the movement's change), none flagged; the pelvis's gravity steps 4 deg
     listed = [f for f in found if f.check == "slipped"]
-    assert {f.sensor for f in listed} == set(read_recording(ximu3).sensors)
-    assert all("3 stride(s) found on its leg (the other leg: 3)" in f.evidence for f in listed)
+    legs = {n for n in read_recording(ximu3).sensors if n != "pelvis_imu"}
+    assert {f.sensor for f in listed} == legs
+    assert all("the movement itself changed" in f.evidence for f in listed)

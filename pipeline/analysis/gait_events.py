@@ -16,9 +16,12 @@ rotation, the minimum of ``w`` before the swing lobe (as Rampp et al. 2015, IEEE
 **initial contact** (IC) where the swing lobe ends (``w`` crosses zero downwards, interpolated
 between samples: the foot stops turning up as the heel lands). Measured on S02 against the
 Vicon heel and toe markers (Zeni et al. 2008's events): :file:`results/bench_gait.txt`. A
-movement between two rests counts as a swing
-only when its peak exceeds :data:`MIN_SWING_RATE`; standing still, shuffling or turning on the
-spot gives no event. A shank sensor never rests in stance: its swings are the peaks of ``w``
+movement between two rests counts as a swing when its peak exceeds :data:`MIN_SWING_RATE`, or when
+the foot moved :data:`MIN_STEP_M` or more between the two rests (its path by
+:func:`pipeline.analysis.foot_trajectory.foot_trajectory`): a pivot step in a turn barely pitches
+the foot (S02's right foot at its 180 deg turn: 30 cm with a peak of 1.3 rad/s, its IC 10 ms from
+Vicon's); standing still or shuffling gives no event (the largest such movements: 5 cm on the
+x-IMU3 walk, 1 cm on S02). A shank sensor never rests in stance: its swings are the peaks of ``w``
 (Salarian et al. 2004, IEEE TBME 51(8)), its FC the minimum within :data:`CONTACT_SEARCH_S`
 before each peak, its IC, as the foot's, where the swing's rotation ends (``w`` crosses zero
 downwards after the peak; else the minimum within :data:`CONTACT_SEARCH_S` after it).
@@ -30,11 +33,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pipeline.analysis.foot_trajectory import foot_trajectory
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import true_runs
 
-__all__ = ["SEGMENTS", "GaitEvents", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events",
-           "rest_periods", "rest_vertical", "sagittal_rate"]  # fmt: skip
+__all__ = ["SEGMENTS", "GaitEvents", "MIN_STEP_M", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO",
+           "gait_events", "rest_periods", "rest_vertical", "sagittal_rate"]  # fmt: skip
 
 #: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
 #: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
@@ -44,6 +48,8 @@ REST_WINDOW_S = 0.05
 MIN_REST_S = 0.05
 #: A swing's mid-swing peak of the sagittal rate (rad/s; feet reach 5-12 in walking).
 MIN_SWING_RATE = 2.0
+#: Or a step: the foot's horizontal move between two rests (m), twice the largest shuffle seen.
+MIN_STEP_M = 0.10
 G = 9.81
 
 
@@ -183,13 +189,19 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
     w, axis = sagittal_rate(gyr, rests, rest_vertical(acc, rests))
     w = lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
     swing, ic, fc = [], [], []
+    path = None
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
         if b - a < 3:
             continue
         start, stop, turn = _swing_lobe(w, a, b)
         peak = start + int(np.argmax(w[start:stop]))
-        if turn <= 0 or w[peak] < MIN_SWING_RATE or start == a or stop == b:
+        if turn <= 0 or start == a or stop == b:
             continue
+        if w[peak] < MIN_SWING_RATE:
+            if path is None:
+                path = foot_trajectory(gyr, acc, rate_hz, rests).position
+            if not np.linalg.norm(path[b, :2] - path[a - 1, :2]) >= MIN_STEP_M:
+                continue
         swing.append(peak)
         fc.append(float(a + np.argmin(w[a:start])))
         ic.append(_crossing(w, stop))

@@ -45,7 +45,9 @@ done about it:
   flexion axis, gravity at mid-stance) turns between the strides before and after some stride by
   more than :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is
   wrong from then on: **excluded**. Checked in walking (four strides or more on its leg); a leg
-  that walked fewer has its sensors **listed** as not checked (not a flag).
+  that walked fewer has its sensors **listed** as not checked (not a flag), and so has a sensor
+  whose step beyond the limit the leg's other sensors and the other leg's share (the movement
+  changed: turns on the spot, shuffles; the x-IMU3 walk's sensors step 20-86 deg so).
 
 * ``read``: what the reader of the sensor's own file repaired or noticed (in a folder of
   one-sensor files: dropped samples or packets filled, an irregular clock kept as recorded;
@@ -341,6 +343,8 @@ def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     if step is None:
         why = unchecked(name, rec)
         return None if why is None else Finding(name, "slipped", "listed", why)
+    if step.inconclusive:
+        return Finding(name, "slipped", "listed", step.evidence())
     if not step.slipped:
         return None
     return Finding(name, "slipped", "excluded", step.evidence())
