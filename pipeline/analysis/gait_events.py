@@ -116,11 +116,11 @@ def sagittal_rate(gyr: np.ndarray, rests: np.ndarray,
     out of rest, signed so that the swings (the largest turn between two rests; without rests,
     the largest peak) are positive.
 
-    The horizontal part ``w_h = w - (w . u) u``, with ``u`` the vertical at rest (``up``, else
-    :func:`rest_vertical` needs the accelerometer, so it is given by :func:`gait_events`), leaves
-    out the turns about the vertical: where a walk turns on the spot or shuffles, those outweigh
-    the flexion (the x-IMU3 walk's right foot: its plain principal axis is 5 deg from the
-    vertical). Aligning a foot sensor by gravity, then by the principal axis of its horizontal
+    The horizontal part ``w_h = w - (w . u) u``, with ``u`` the vertical at rest (``up``, from
+    :func:`rest_vertical` as :func:`gait_events` gives it; without it the plain principal axis),
+    leaves out the turns about the vertical: where a walk turns on the spot or shuffles, those
+    outweigh the flexion (the x-IMU3 walk's right foot: its plain principal axis is 5 deg from
+    the vertical). Aligning a foot sensor by gravity, then by the principal axis of its horizontal
     angular velocity, is gaitmap's foot-frame alignment (Küderle et al. 2024)."""
     moving = np.ones(len(gyr), dtype=bool)
     for a, b in rests:
