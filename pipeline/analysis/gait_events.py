@@ -21,7 +21,9 @@ the foot moved :data:`MIN_STEP_M` or more between the two rests (its path by
 :func:`pipeline.analysis.foot_trajectory.foot_trajectory`): a pivot step in a turn barely pitches
 the foot (S02's right foot at its 180 deg turn: 30 cm with a peak of 1.3 rad/s, its IC 10 ms from
 Vicon's); standing still or shuffling gives no event (the largest such movements: 5 cm on the
-x-IMU3 walk, 1 cm on S02). A shank sensor never rests in stance: its swings are the peaks of ``w``
+x-IMU3 walk, 1 cm on S02), nor does a movement whose largest lobe turns the foot backwards (the
+x-IMU3 walk's turns have two, of 22 and 40 cm: steps sideways or back, not found). A shank
+sensor never rests in stance: its swings are the peaks of ``w``
 (Salarian et al. 2004, IEEE TBME 51(8)), its FC the minimum within :data:`CONTACT_SEARCH_S`
 before each peak, its IC, as the foot's, where the swing's rotation ends (``w`` crosses zero
 downwards after the peak; else the minimum within :data:`CONTACT_SEARCH_S` after it).
