@@ -41,10 +41,10 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   joint's coupling of eversion with the tibia's internal rotation is not modelled). A toe-out of
   the swinging foot, tried (5-20 deg), raised the tibia's conditioning from 0.21-0.27 to
   0.24-0.38 (S02 0.51-0.54) but turned the femur about its long axis more than S02's: the hip
-  took all of it; not kept. Footprints lie a hip's half-width either
-  side of the path, where the pelvis passes at mid-stance, turned to the path's heading. The
-  right foot pushes off first; the left stays flat on its standing footprint until half a
-  stride later.
+  took all of it; not kept.
+  Footprints lie a hip's half-width either side of the path, where the pelvis passes at
+  mid-stance, turned to the path's heading. The right foot pushes off first; the left stays flat
+  on its standing footprint until half a stride later.
 * **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF) solve the foot's pose
   exactly (Newton on ``log6``, Pinocchio's frame Jacobian); a free knee is not a hinge: its
   adduction and rotation follow its flexion and the stride (:mod:`pipeline.simulate.knee`), a
@@ -97,9 +97,8 @@ TURN_LENGTH_M = 3.0
 #: The foot's inversion (deg, the sole turned medially) at initial contact and at the end of
 #: push-off, drawn per leg: it lands a little inverted and everts to flat in the loading
 #: response, then inverts as the heel rises about the oblique metatarsophalangeal line and the
-#: subtalar joint supinates
-#: (Bojsen-Moller 1979, Acta Orthop Scand 50:471; Leardini et al. 2007, Gait Posture 25:453-462:
-#: the rearfoot's frontal range in walking ~10 deg), and swings back.
+#: subtalar joint supinates (Bojsen-Moller 1979, Acta Orthop Scand 50:471; Leardini et al. 2007,
+#: Gait Posture 25:453-462: the rearfoot's frontal range in walking ~10 deg), and swings back.
 FOOT_INVERSION_DEG = ((2.0, 5.0), (5.0, 10.0))
 ANKLE_HEIGHT_M = 0.08  # the model's ankle centre above the floor (motions.standing_height)
 _FINE = 4  # the kinematics' grid, times finer than the trial's
@@ -190,7 +189,8 @@ def _foot_frame(psi: np.ndarray, phi: np.ndarray, roll: np.ndarray | float = 0.0
 def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray,
                inversion: tuple[float, float] = (0.0, 0.0)):  # fmt: skip
     """The foot frame's world rotation (N, 3, 3) and origin (N, 3) at clock times ``tau``;
-    ``inversion`` (rad) the foot's at initial contact and at toe-off (module docstring)."""
+    ``inversion`` (rad) the foot's at initial contact and at the end of push-off (module
+    docstring)."""
     T, po = plan.T, plan.push_off[side]
     F, H = plan.footprints[side], plan.headings[side]
     at_ic, at_toe_off = inversion
