@@ -135,6 +135,22 @@ def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     assert "not checked for a slip: " in listed["tibia_r_imu"].evidence
 
 
+def test_a_short_walk_names_each_legs_own_stride_count(walk):
+    """Cut where the right leg has walked one stride more than the left (3 and 2): each leg's
+    sensors give their own count and the other leg's, not the larger twice."""
+    import re
+
+    n = int(round(gait_of(walk, []).events["right"].ic[3])) + 30
+    short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
+        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
+    said = {f.sensor: re.search(r"(\d+) stride\(s\) found on its leg \(the other leg: (\d+)\)",
+                                f.evidence) for f in check_sensors(short)[1]
+            if f.check == "slipped" and f.sensor != "pelvis_imu"}  # fmt: skip
+    right, left = said["tibia_r_imu"].groups(), said["tibia_l_imu"].groups()
+    assert right[0] != left[0]
+    assert (right[1], left[1]) == (left[0], right[0])
+
+
 def test_the_slipped_sensor_is_excluded_and_named_and_the_run_goes_on(walk):
     """Its knee is not written, the other leg's is."""
     run = process_recording(_slipped(walk, "tibia_r_imu", 0, _mid_walk(walk)), M, filter="vqf")

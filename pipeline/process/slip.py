@@ -301,8 +301,10 @@ def unchecked(name: str, rec: Recording) -> str | None:
     walked = max(_leg_strides(rec, side) for side in ("right", "left"))
     if walked == 0 or found >= 2 * MIN_SIDE:
         return None
-    return (f"not checked for a slip: {found} stride(s) found on its leg (the other leg: "
-            f"{walked}), {2 * MIN_SIDE} are needed to compare before and after")
+    where = ("on either leg" if len(sides) == 2 else
+             f"on its leg (the other leg: {_leg_strides(rec, other_side(sides[0]))})")
+    return (f"not checked for a slip: {found} stride(s) found {where}, {2 * MIN_SIDE} are needed "
+            "to compare before and after")
 
 
 def _leg(rec: Recording, side: str) -> dict[str, Slip]:
