@@ -92,10 +92,14 @@ def s02(data: Path) -> list[str]:
              "length error (cm) | straight stride length error (%) | strides (straight) |",
              "|---|---|---|---|---|---|---|"]  # fmt: skip
     all_len, all_pct, all_ic, all_t, turning = [], [], [], [], []
+    fc_early, fc_late = [], []
     for side in ("right", "left"):
         ev, tr = gait.events[side], truth[side]
         ic_err = _nearest(ev.ic / RATE, tr["ic"])
         fc_err = _nearest(ev.fc / RATE, tr["fc"])
+        fc_early.append(1000 * np.median(-fc_err[fc_err < 0]))
+        fc_late += [f"{side} {1000 * e:+.0f} ms at {t:.1f} s"
+                    for e, t in zip(fc_err, ev.fc / RATE, strict=True) if e > 0]  # fmt: skip
         strides = [s for s in gait.strides if s.side == side]
         t_err, l_err, pct = [], [], []
         for s in strides:
@@ -139,11 +143,12 @@ def s02(data: Path) -> list[str]:
               "theta moves a point r from the heel by up to 2 r sin(theta / 2) more or less than "
               "the heel, ~15 cm for r = 10 cm and 100 deg):", "",
               *[f"- {t}" for t in turning], "",
-              "FC: the fastest push-off rotation (Rampp 2015) comes 45-65 ms before Zeni's toe "
-              "marker event (median per foot; the toe's largest distance behind the sacrum, which "
-              "lags the toe's lift-off); stance shares are therefore ~4 points below a "
-              "marker-based one. The right foot's pivot at the turn barely pitches the foot (no "
-              "push-off): its FC comes 120 ms after Zeni's.", "",
+              "FC: the fastest push-off rotation (Rampp 2015) comes "
+              f"{min(fc_early):.0f}-{max(fc_early):.0f} ms before Zeni's toe marker event (median "
+              "per foot over the FCs before it; the toe's largest distance behind the sacrum, "
+              "which lags the toe's lift-off); stance shares are therefore ~4 points below a "
+              "marker-based one. After it: " + ("; ".join(fc_late) or "none") + " (a step that "
+              "barely pitches the foot, as a pivot in a turn, has no push-off).", "",
               *pelvis_path(data)]  # fmt: skip
     return lines
 
