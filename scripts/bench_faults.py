@@ -1,6 +1,7 @@
 """Fault injection: one fault at a time in one sensor's raw signals (the right shank's; with the
-thigh's for the slipping pair and the swap), on the simulator and on the real S02 walk; was it
-detected and named, what was done, and how far did the joint angles move.
+thigh's for the slipping pair and the swap; the pelvis's for its belt turning around the waist),
+on the simulator and on the real S02 walk; was it detected and named, what was done, and how far
+did the joint angles move.
 
     python scripts/bench_faults.py [--data ../shared/data] [--out results/bench_faults.txt]
 
@@ -29,6 +30,8 @@ from pipeline.rotations import exp3
 TARGET = "tibia_r_imu"
 #: The joints the target observes (the others are "untouched").
 TOUCHED = ("right_knee", "right_ankle")
+#: The pelvis's sensor and the joints it observes (its belt fault).
+PELVIS, PELVIS_TOUCHED = "pelvis_imu", ("right_hip", "left_hip", "pelvis")
 #: A fault that moves no joint angle by this much (deg) needs no detection.
 HARMLESS_DEG = 0.5
 
@@ -64,15 +67,15 @@ def turned(rec: Recording) -> Recording:
     return rec.with_sensors({**rec.sensors, TARGET: turned})
 
 
-def _slip(rec: Recording, names: tuple[str, ...]) -> Recording:
+def _slip(rec: Recording, names: tuple[str, ...], axis: np.ndarray | None = None) -> Recording:
     """Halfway through the walk (between the leg's first and last initial contact), the sensors
-    ``names`` slip by 30 deg about their x axis and stay so. Not halfway through the recording:
-    S02 stands for 11 of its 25 s, so that would be its first stride, with no walk before the
-    slip to tell it from a sensor mounted so from the start."""
+    ``names`` slip by 30 deg about their x axis (or ``axis``, in the sensor's frame) and stay so.
+    Not halfway through the recording: S02 stands for 11 of its 25 s, so that would be its first
+    stride, with no walk before the slip to tell it from a sensor mounted so from the start."""
     from pipeline.process.gait import gait_of
 
     ic = gait_of(rec, []).events["right"].ic
-    R = exp3(np.array([np.radians(30.0), 0.0, 0.0]))
+    R = exp3(np.radians(30.0) * (np.array([1.0, 0.0, 0.0]) if axis is None else axis))
     half = int(round((ic[0] + ic[-1]) / 2))
 
     def slip(x):
@@ -96,6 +99,13 @@ def slipping_together(rec: Recording) -> Recording:
     """The thigh's and the shank's sensors slipping 30 deg together halfway (one strap over
     both; :func:`_slip`)."""
     return _slip(rec, ("femur_r_imu", TARGET))
+
+
+def belt_turning(rec: Recording) -> Recording:
+    """The pelvis's sensor turning 30 deg around the waist halfway (:func:`_slip`), about the
+    vertical in its frame (the accelerometer's direction over the first second, standing)."""
+    acc = rec.sensors[PELVIS].acc[: int(rec.rate_hz)].mean(axis=0)
+    return _slip(rec, (PELVIS,), acc / np.linalg.norm(acc))
 
 
 def dropout(rec: Recording) -> Recording:
@@ -125,27 +135,29 @@ FAULTS = {"saturated gyroscope (+-250 deg/s)": saturated,
           "dead gyroscope axis": dead, "mounting turned by 90 deg": turned,
           "sensor slipping 30 deg halfway": slipping,
           "thigh and shank sensors slipping 30 deg together": slipping_together,
-          "5 s dropout": dropout, "thigh and shank sensors swapped": swapped}  # fmt: skip
+          "5 s dropout": dropout, "thigh and shank sensors swapped": swapped,
+          "pelvis belt turning 30 deg around the waist halfway": belt_turning}  # fmt: skip
 
 
-def _named(run, base) -> str:
+def _named(run, base, sensor: str) -> str:
     """The fault as the run named it: its flags (sensor-check findings and quality flags) and
-    magnetometer verdicts that the undisturbed run did not give. Other notes (a heading aligned
-    differently) are not a detection."""
+    the faulty ``sensor``'s magnetometer verdicts that the undisturbed run did not give. Other
+    notes (a heading aligned differently) are not a detection."""
     said = [f for f in run.flags if f not in base.flags]
-    said += [n for n in run.notes if n not in base.notes and n.startswith(TARGET)
+    said += [n for n in run.notes if n not in base.notes and n.startswith(sensor)
              and "magnetometer not trusted" in n]  # fmt: skip
     return "; ".join(said)
 
 
-def _change(run, base) -> tuple[float, float]:
-    """RMS change (deg) of the untouched and of the touched joint angles, the largest of each
-    (NaN where none is written); a joint no longer written counts as touched."""
+def _change(run, base, joints: tuple[str, ...]) -> tuple[float, float]:
+    """RMS change (deg) of the untouched and of the touched joint angles (``joints``: their
+    prefixes), the largest of each (NaN where none is written); a joint no longer written counts
+    as touched."""
     untouched, touched = [np.nan], [np.nan]
     for key, y in base.joint_angles.items():
         other = run.joint_angles.get(key)
         d = np.inf if other is None else float(np.degrees(np.sqrt(np.nanmean((other - y) ** 2))))
-        (touched if key.startswith(TOUCHED) else untouched).append(d)
+        (touched if key.startswith(joints) else untouched).append(d)
     return float(np.nanmax(untouched)), float(np.nanmax(touched))
 
 
@@ -171,25 +183,36 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
         except InputError as exc:
             lines.append(f"| {name} | yes | refused: {exc} | - | - |")
             continue
-        said = _named(run, base)
-        untouched, touched = _change(run, base)
+        sensor, joints = (PELVIS, PELVIS_TOUCHED) if inject is belt_turning else (TARGET, TOUCHED)
+        said = _named(run, base, sensor)
+        untouched, touched = _change(run, base, joints)
         text = said.replace("|", "/") if said else "nothing"
         verdict = "yes" if said else "**no**"
         if not said and max(untouched, touched) < HARMLESS_DEG:
             verdict = "no: harmless (the calibration absorbs it)"
         lines.append(f"| {name} | {verdict} | {text} | {untouched:.2f} | {touched:.2f} |")
+        if inject is belt_turning:
+            turned = np.degrees(np.arccos(np.clip(run.heading_right @ base.heading_right, -1, 1)))
     rows = [r for r in lines[4:] if "not applicable" not in r]
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
     moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
-             if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r]
+             if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r
+             and "| pelvis" not in r]  # fmt: skip
+    belt = [r.split(" | ")[3] for r in rows if r.startswith("| pelvis belt")]
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
-              f"(all but the thigh's faults) moved by up to {max(moved):.2f} deg (target 0.5): "
+              f"(the shank's faults) moved by up to {max(moved):.2f} deg (target 0.5): "
               "without the shank its leg's standing lean (measured from the knee and ankle "
               "centres) is not measured and the leg takes the other leg's, which moves that hip's "
               "flexion by the "
               f"difference (the undisturbed run measured {_leans(base)}); the anatomical heading "
               "loses that knee's axis."]
+    if belt:
+        lines[-1] += (f" With the pelvis's sensor excluded (its belt) the hips and the pelvis are "
+                      f"not written and the legs' joints move by up to {belt[0]} deg: the "
+                      "subject's anatomical heading is found without the hips' flexion axes "
+                      f"(it turned by {turned:.1f} deg), which mixes some knee flexion into the "
+                      "knees' ab/adduction.")
     return lines + [""]
 
 

@@ -74,6 +74,14 @@ FIGURES = [
      "results/bench_sensor_sets.txt", rf"the 6-D runs' by {NUM} and"),
     ("docs/results.md", rf"\(sagittal\) and {NUM}° \(other axes\) at\s+most",
      "results/bench_sensor_sets.txt", rf"the 6-D runs' by [\d.]+ and {NUM} deg"),
+    ("docs/results.md", rf"knees' ab/adduction moves by up to {NUM}° on S02",
+     "results/bench_faults.txt", rf"## S02[\s\S]*?the legs' joints move by up to {NUM} deg"),
+    ("docs/results.md", rf"on S02 \({NUM}° on the simulator\)", "results/bench_faults.txt",
+     rf"the legs' joints move by up to {NUM} deg"),
+    ("docs/results.md", rf"without the hips' flexion axes, turned by {NUM}°",
+     "results/bench_faults.txt", rf"## S02[\s\S]*?\(it turned by {NUM} deg\)"),
+    ("docs/results.md", rf"rocks about once a stride by {NUM}° on S02", "results/bench_faults.txt",
+     rf"## S02[\s\S]*?the axis it rocks about once a stride turned by {NUM} deg"),
 ]  # fmt: skip
 
 

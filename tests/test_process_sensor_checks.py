@@ -243,8 +243,8 @@ def test_the_real_recordings():
     assert [f for f in found if f.flagged] == []
     # two short walks, turns on the spot and shuffles: every leg sensor's view steps 20-86 deg
     # with the leg's others and the other leg's, so each is listed as not checked (a slip would
-    # not be told from the movement's change), none flagged; the pelvis's gravity steps 4 deg
+    # not be told from the movement's change), none flagged; so is the pelvis (its gravity steps
+    # 4 deg, the axis it rocks about 19 deg with the leg's others at 36)
     listed = [f for f in found if f.check == "slipped"]
-    legs = {n for n in read_recording(ximu3).sensors if n != "pelvis_imu"}
-    assert {f.sensor for f in listed} == legs
+    assert {f.sensor for f in listed} == set(read_recording(ximu3).sensors)
     assert all("the movement itself changed" in f.evidence for f in listed)

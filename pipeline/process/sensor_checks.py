@@ -41,10 +41,11 @@ done about it:
   read as x, y, z, w than as w, x, y, z are **refused** (median tilt: S02's vendor quaternions
   0.2-1.0 deg, 3.4-40 deg read the other way; the simulator's 0.3-8 deg, 7-88 deg).
 
-* ``slipped`` (:mod:`pipeline.process.slip`): a leg sensor whose own view of its segment (the
-  flexion axis, gravity at mid-stance) turns between the strides before and after some stride by
-  more than :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is
-  wrong from then on: **excluded**. Checked in walking (four strides or more on its leg); a leg
+* ``slipped`` (:mod:`pipeline.process.slip`): a leg or pelvis sensor whose own view of its
+  segment (the flexion axis or the pelvis's once-a-stride rocking axis, gravity at mid-stance)
+  turns between the strides before and after some stride by more than
+  :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is wrong from
+  then on: **excluded**. Checked in walking (four strides or more on its leg); a leg
   that walked fewer has its sensors **listed** as not checked (not a flag), and so has a sensor
   whose step beyond the limit the leg's other sensors and the other leg's share (the movement
   changed: turns on the spot, shuffles; the x-IMU3 walk's sensors step 20-86 deg so).

@@ -26,12 +26,26 @@ slip about any of the sensor's axes, of a thigh, shank or foot sensor halfway th
 (``tests/test_process_slip.py``, ``scripts/bench_faults.py``). A leg with fewer than
 ``2 MIN_SIDE`` strides is not checked (no walk to compare).
 
-The pelvis barely flexes in walking (no axis), and the principal axis of its horizontal
-acceleration, tried instead, stepped 24-29 deg between S02's strides without a slip; so it is
-checked by gravity at mid-stance alone (eq 2, on the right foot's strides, else the left's):
-without a slip 1-4 deg (S02, the x-IMU3 walk, the simulated walk), a 30 deg slip about a
-horizontal axis of the sensor 27-31 deg; a slip about the vertical (a belt turning around the
-waist) is not seen.
+The pelvis has no flexion axis, but it rocks once a stride about a forward axis (its obliquity,
+the hip of the swinging leg dropping) while it tilts twice a stride about its lateral axis and
+turns about the vertical. So its axis is taken from the stride rate alone: per stride ``k`` of
+``n_k`` samples, the first Fourier coefficient of the horizontal angular velocity and its scatter
+
+    c_k = 1/n_k sum_j w_h(j) exp(-2 pi i j / n_k),   C_k = Re c_k Re c_k^T + Im c_k Im c_k^T   (3)
+
+(no low-pass: the coefficient is one), whose principal axis goes into eq (1), with gravity at
+mid-stance (eq 2), on the right foot's strides, else the left's. Only strides of a walk count
+(:func:`walking_strides`: joined to a neighbour, within :data:`STRIDE_TOL` of the median
+duration):
+a lone step, or two strides joined by a missed contact, rock at another rate (on the qmt
+recording such strides put the axis 74-84 deg away). Measured without a slip (the largest step
+of eq 1 for the pelvis): S02 8.0 deg on the right leg's strides (4.7 on the left's), the
+simulated walk 0.7-2.1 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
+belt turning around the waist) 22 deg on S02 and 27-30 on the simulated walk, found; a turn
+about a horizontal axis turns gravity (27-31 deg). The principal axis of the low-passed (3 Hz)
+horizontal angular velocity, tried first, mixes the rocking with the tilt (principal ratio
+1.2-3.3 against the harmonic's 6-8 on S02 and hundreds on the simulated walk) and stepped 11-15
+deg without a slip on S02 and on seed 3; that of the horizontal acceleration 24-29 deg.
 
 A slip moves one sensor; a change of the walk itself (stairs, a slope, gait initiation's first
 strides) turns every sensor of the leg, and both legs. So a step is a slip only while the leg's
@@ -47,7 +61,7 @@ leg's step 2-4: both are named. Without a slip the other leg's same sensor steps
 the split (S02, the simulated walk's seeds 0, 1, 5). A step beyond the limit that the leg's
 others and the other leg's share (:attr:`Slip.inconclusive`) cannot be told from such a change:
 the sensor is listed as not checked (the x-IMU3 walk, two short walks with turns on the spot and
-shuffles: every leg sensor steps 20-86 deg with the others; qmt's thighs).
+shuffles: every leg sensor steps 20-86 deg with the others, the pelvis 19; qmt's thighs).
 """
 
 from __future__ import annotations
@@ -64,8 +78,8 @@ from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
 
-__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "SLIP_DEG", "Slip", "leg_slips", "slip_step",
-           "unchecked"]
+__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG", "STRIDE_TOL",
+           "Slip", "leg_slips", "slip_step", "unchecked", "walking_strides"]
 
 #: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
 #: docstring), under the 19-33 deg a 30 deg slip gives.
@@ -83,6 +97,11 @@ MAX_STRIDE_S = 4.0
 AXIS_CUTOFF_HZ = 3.0
 VERTICAL_CUTOFF_HZ = 0.5
 MIN_SPEED = 0.5
+#: A stride lasting longer or shorter than the leg's median by more than this share is not used
+#: for the pelvis's axis (eq 3).
+STRIDE_TOL = 0.25
+#: What the pelvis's axis (eq 3) is called in a finding.
+ROCKING_AXIS = "the axis it rocks about once a stride"
 
 
 @dataclass(frozen=True)
@@ -100,6 +119,7 @@ class Slip:
     after: int
     others_deg: float = 0.0
     mirror_deg: float = float("nan")
+    axis_name: str = "its segment's flexion axis"
 
     @property
     def deg(self) -> float:
@@ -123,7 +143,7 @@ class Slip:
         of the movement (:attr:`inconclusive`)."""
         turned = " and ".join(
             f"{what} by {deg:.0f} deg" for what, deg in
-            (("its segment's flexion axis turned", self.axis_deg),
+            ((f"{self.axis_name} turned", self.axis_deg),
              ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))  # fmt: skip
         mirror = (f", the other leg's by {self.mirror_deg:.0f}" if np.isfinite(self.mirror_deg)
                   else "")  # fmt: skip
@@ -163,13 +183,17 @@ def _strides(rec: Recording, side: str) -> tuple[list[tuple[int, int]], np.ndarr
     return [], np.zeros((0, 2), int)
 
 
-def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarray]:
-    """``C_k`` (k, 3, 3) and ``g_k`` (k, 3), NaN for a stride without a foot rest."""
-    w = lowpass(gyr, rate_hz, AXIS_CUTOFF_HZ)
+def _horizontal(w: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray:
+    """``w`` less its part along the vertical ``u`` (the low-passed accelerometer's direction)."""
     u = lowpass(acc, rate_hz, VERTICAL_CUTOFF_HZ)
     norm = np.linalg.norm(u, axis=1, keepdims=True)
     u = np.divide(u, norm, out=np.zeros_like(u), where=norm > 0)
-    w_h = w - np.sum(w * u, axis=1, keepdims=True) * u
+    return w - np.sum(w * u, axis=1, keepdims=True) * u
+
+
+def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarray]:
+    """``C_k`` (k, 3, 3) and ``g_k`` (k, 3), NaN for a stride without a foot rest."""
+    w_h = _horizontal(lowpass(gyr, rate_hz, AXIS_CUTOFF_HZ), acc, rate_hz)
     w_h[np.linalg.norm(w_h, axis=1) < MIN_SPEED] = 0.0
     C = np.array([w_h[a:b].T @ w_h[a:b] for a, b in strides])
     g = np.full((len(strides), 3), np.nan)
@@ -181,9 +205,34 @@ def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarr
     return C, g
 
 
+def _rocking(gyr, acc, rate_hz, strides) -> np.ndarray:
+    """The pelvis's ``C_k`` (k, 3, 3), eq (3): the scatter of the stride-rate Fourier coefficient
+    of its horizontal angular velocity, whose principal axis is the one it rocks about once a
+    stride (its obliquity's, forward)."""
+    w_h = _horizontal(gyr, acc, rate_hz)
+    C = np.zeros((len(strides), 3, 3))
+    for k in walking_strides(strides):
+        a, b = strides[k]
+        c = np.exp(-2j * np.pi * np.arange(b - a) / (b - a)) @ w_h[a:b] / (b - a)
+        C[k] = np.outer(c.real, c.real) + np.outer(c.imag, c.imag)
+    return C
+
+
+def walking_strides(strides: list[tuple[int, int]]) -> list[int]:
+    """The strides that are one stride of a walk: joined to the one before or after and within
+    :data:`STRIDE_TOL` of the leg's median duration (not a lone step, nor two strides joined by
+    a missed contact, whose stride rate is not the walk's)."""
+    n = np.array([b - a for a, b in strides], float)
+    typical = np.median(n) if len(n) else 0.0
+    joined = [(k > 0 and strides[k - 1][1] == a) or (k + 1 < len(strides)
+              and strides[k + 1][0] == b) for k, (a, b) in enumerate(strides)]  # fmt: skip
+    return [k for k in range(len(strides))
+            if joined[k] and abs(n[k] - typical) <= STRIDE_TOL * typical]  # fmt: skip
+
+
 def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
-    """Eq (1) and (2) at split ``m``; ``d_axis`` NaN without an axis (the pelvis: ``C`` zero),
-    ``d_g`` NaN without rests on both sides."""
+    """Eq (1) and (2) at split ``m``; ``d_axis`` NaN without an axis on both sides (``C``
+    zero), ``d_g`` NaN without rests on both sides."""
     C_0, C_1 = C[:m].sum(0), C[m:].sum(0)
     d_axis = _angle(_principal(C_0), _principal(C_1), signed=False) if C_0.any() and C_1.any() \
         else np.nan
@@ -207,21 +256,22 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
 
 
 def _leg_views(rec: Recording, side: str, pelvis: bool):
-    """The leg's strides, its sensors with raw signals (the pelvis's too, by gravity alone, when
-    asked and the foot's rests give them) and each one's ``(C_k, g_k)``; no sensors for a leg
-    with too few strides."""
+    """The leg's strides, its sensors with raw signals (the pelvis's too when asked, its ``C_k``
+    by eq 3) and each one's ``(C_k, g_k)``; no sensors for a leg with too few strides."""
     strides, rests = _strides(rec, side)
     if len(strides) < 2 * MIN_SIDE:
         return strides, {}, {}
     names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
     pelvis_name = SEGMENT_SENSOR["pelvis"]
-    names += [pelvis_name] if pelvis and len(rests) else []
+    names += [pelvis_name] if pelvis else []
     leg = {n: rec.sensors[n] for n in names if n in rec.sensors
            and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}  # fmt: skip
     views = {n: _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides,
                             rests) for n, s in leg.items()}  # fmt: skip
-    if pelvis_name in views:  # no axis: gravity alone
-        views[pelvis_name] = (np.zeros_like(views[pelvis_name][0]), views[pelvis_name][1])
+    if pelvis_name in views:  # no flexion axis: the one it rocks about (eq 3)
+        s = leg[pelvis_name]
+        views[pelvis_name] = (_rocking(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz,
+                                       strides), views[pelvis_name][1])  # fmt: skip
     return strides, leg, views
 
 
@@ -245,9 +295,9 @@ def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip
     """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
     signals, with the leg's other sensors' steps at the same split (those with every sample
     finite: a sensor with a dropout is excluded by its own check) and the other leg's same
-    sensor's; empty for a leg with too few strides. ``pelvis``: the pelvis's sensor too, by
-    gravity alone on this leg's strides (when the foot's rests give them), the leg's sensors its
-    others. The leg's events and each sensor's view are computed once."""
+    sensor's; empty for a leg with too few strides. ``pelvis``: the pelvis's sensor too, on this
+    leg's strides (eq 2, 3), the leg's sensors its others. The leg's events and each sensor's
+    view are computed once."""
     return _slips(rec, _leg_views(rec, side, pelvis), _leg_views(rec, other_side(side), False))
 
 
@@ -261,9 +311,10 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
         others = [_larger(*_step_at(*views[n], best.before)) for n in views
                   if n not in (name, pelvis_name) and _finite(leg[n])]  # fmt: skip
         seen = [d for d in others if np.isfinite(d)]
-        out[name] = dataclasses.replace(best, others_deg=float(max(seen, default=0.0)),
-                                        mirror_deg=_mirror_step(other, name, best.time_s,
-                                                                rec.time))  # fmt: skip
+        out[name] = dataclasses.replace(
+            best, others_deg=float(max(seen, default=0.0)),
+            mirror_deg=_mirror_step(other, name, best.time_s, rec.time),
+            axis_name=ROCKING_AXIS if name == pelvis_name else best.axis_name)
     return out
 
 
