@@ -122,6 +122,8 @@ def test_builder_rejects_bad_options(tmp_path):
         build_urdf(g, tmp_path / "a.urdf", imu_placements={"right_femur_imu": np.ones((4, 4))})
     with pytest.raises(InputError):
         build_urdf(g, tmp_path / "a.urdf", imu_placements={"head_imu": np.eye(4)})
+    with pytest.raises(InputError, match="ankle"):
+        Skeleton.build(g, ankle="ball")
 
 
 # ---- URDF content -------------------------------------------------------------------------------
@@ -346,7 +348,7 @@ def test_pinocchio_check_failure_is_an_input_error(monkeypatch):
     from pipeline.errors import InputError
     from pipeline.model import builder
 
-    monkeypatch.setattr(builder, "joint_names", lambda knee, legs: ["no_such_joint"])
+    monkeypatch.setattr(builder, "joint_names", lambda *args: ["no_such_joint"])
     with pytest.raises(InputError, match="expected"):
         builder.urdf_text(builder.SubjectGeometry.default(1.75, "m", "right"), legs=("right",))
 
@@ -363,3 +365,33 @@ def test_the_model_is_built_in_memory(tmp_path, monkeypatch):
         assert list(tmp_path.iterdir()) == []  # nothing written, nothing left behind
     finally:
         tempfile.tempdir = None
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_a_free_ankle_adds_the_jcs_third_rotation(side):
+    """The simulator's free ankle (Z-X-Y, as the JCS): its third joint is the ankle's third JCS
+    angle (the foot's internal rotation relative to the tibia), the same sign on either leg; the
+    other two angles and every frame above the ankle as the model's ankle puts them."""
+    from pipeline.analysis.joint_angles import jcs_angles
+
+    g = asymmetric_subject()
+    free, universal = Skeleton.build(g, ankle="free"), Skeleton.build(g)
+    assert free.ankle == "free" and universal.ankle == "universal"
+    assert sorted(free.joint_names) == sorted(joint_names("free", ankle="free"))
+    assert free.leg_joints(side, "ankle") == [f"{side}_ankle_{a}" for a in "ZXY"]
+    angles = {"ankle_Z": 0.3, "ankle_X": 0.1, "ankle_Y": -0.2, "knee_Z": 0.4, "hip_Y": 0.1}
+    q_free, q_universal = free.neutral(), universal.neutral()
+    for name, v in angles.items():
+        q_free[free.q_index(f"{side}_{name}")] = v
+        if name != "ankle_Y":
+            q_universal[universal.q_index(f"{side}_{name}")] = v
+    free.forward(q_free)
+    universal.forward(q_universal)
+
+    def rotation(sk, frame):
+        return sk.data.oMf[sk.frame_id(f"{side}_{frame}")].rotation
+
+    got = jcs_angles(rotation(free, "tibia"), rotation(free, "foot"), "ankle", side)
+    np.testing.assert_allclose(got, [0.3, 0.1, -0.2], atol=1e-12)
+    for frame in ("tibia", "AJC", "MM", "tibia_imu"):
+        np.testing.assert_allclose(rotation(free, frame), rotation(universal, frame), atol=1e-12)

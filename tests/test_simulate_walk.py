@@ -68,6 +68,47 @@ def test_feet_invert_in_push_off_and_land_flat(trial):
         assert np.abs(lateral_down[_flat_samples(trial, side)]).max() < 0.5
 
 
+def _axial_range(trial, segment: str) -> float:
+    """The segment's largest turn about its own long axis (deg) over one stride mid-walk: its
+    world rotation relative to the stride's start, the y component of its log."""
+    from pipeline.rotations import log3
+
+    imu = trial.imus[f"right_{segment}_imu"]
+    R = imu.rotation @ imu.R_segment.T
+    ic = np.searchsorted(trial.time, trial.walk.contacts("right")[0])
+    a, b = ic[2], ic[3]
+    turn = [log3(R[a].T @ R[k])[1] for k in range(a, b)]
+    return float(np.degrees(np.ptp(turn)))
+
+
+def test_a_free_ankle_lets_the_tibia_turn_on_its_planted_foot(trial):
+    """Built with ``ankle='free'``, the walk turns the foot relative to the tibia by
+    ``k * inversion`` (:mod:`pipeline.simulate.subtalar` eq 1): the feet keep
+    their poses, and the tibia and femur turn about their long axes further over a stride
+    than under the model's two-axis ankle."""
+    from pipeline.simulate.subtalar import ANKLE_TURN_PER_INVERSION
+
+    sk = Skeleton.build(geometry_from_measures(MEASURES)[0], knee="free", root="freeflyer",
+                        ankle="free")  # fmt: skip
+    free = simulate_trial(sk, "walk", duration_s=12.0, seed=3, standing_s=STANDING)
+    for side in ("right", "left"):
+        foot = f"{side}_foot_imu"
+        np.testing.assert_allclose(free.imus[foot].rotation, trial.imus[foot].rotation,
+                                   atol=1e-6)  # fmt: skip
+        # the foot's inversion in the world: the vertical in its frame, (., cos r, -sin r) times
+        # the cosine of its pitch
+        R = free.imus[foot].rotation @ free.imus[foot].R_segment.T
+        up = np.einsum("nji,j->ni", R, [0.0, 0.0, 1.0])
+        inverted = (1.0 if side == "right" else -1.0) * np.arctan2(-up[:, 2], up[:, 1])
+        turn = free.q[:, sk.q_index(f"{side}_ankle_Y")]
+        big = np.abs(inverted) > np.radians(2.0)
+        k = turn[big] / inverted[big]
+        assert big.sum() > 50 and np.ptp(k) < 1e-6, np.ptp(k)
+        assert ANKLE_TURN_PER_INVERSION[0] <= k[0] <= ANKLE_TURN_PER_INVERSION[1]
+    for segment in ("tibia", "femur"):
+        assert _axial_range(free, segment) > _axial_range(trial, segment) + 2.5, segment
+
+
 def test_the_pelvis_moves_through_the_room_and_turns(trial):
     p = trial.q[:, :3]
     walked = np.sum(np.linalg.norm(np.diff(p[:, :2], axis=0), axis=1))

@@ -31,10 +31,13 @@ joint              axis (parent frame)    positive q                            
 ``knee_Y`` (free)  ``(0, L, 0)``          tibial internal rotation              [-0.785, 0.785]
 ``ankle_Z``        ``(0, 0, 1)``          dorsiflexion                          [-1.571, 0.785]
 ``ankle_X``        ``(L, 0, 0)``          inversion                             [-0.524, 0.785]
+``ankle_Y`` (free) ``(0, L, 0)``          the foot's internal rotation          [-0.524, 0.524]
 =================  =====================  ====================================  =================
 
 Hip/ankle limits are the template's (its hip_X counted abduction positive; ISB adduction is used
 here, so the interval is negated); knee_X/knee_Y limits are ours (the template has a 1-DoF knee).
+The ankle is ``ankle_Z``, ``ankle_X`` (``universal``, the model's) or with ``ankle_Y`` after them
+(``free``: the simulator's, so that a tibia can turn on its planted foot; Z-X-Y as the JCS).
 
 Hinge knee: the joint frame sits at the KJC with rotation ``R0 = rotation_aligning(a_T, a_F)``
 relative to the femur, and turns about ``-a_T`` in the tibial frame, so ``R_F a_F = R_T a_T`` for
@@ -54,7 +57,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
-from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES, LANDMARKS, SEGMENTS
+from pipeline.model.conventions import ANKLE_MODES, DEFAULT_KNEE, KNEE_MODES, LANDMARKS, SEGMENTS
 from pipeline.model.geometry import TEMPLATE_HEIGHT_M, SubjectGeometry, mirror_point
 from pipeline.model.meshes import leg_visuals, materials, pelvis_visuals
 from pipeline.model.urdf_xml import Inertial, Joint, Link, urdf_xml
@@ -102,6 +105,7 @@ _LIMITS = {
     "knee_Y": (60.0, 6.0, -0.785398, 0.785398),
     "ankle_Z": (126.0, 12.7, -1.570795, 0.7853975),
     "ankle_X": (20.0, 6.0, -0.523598333, 0.785398),
+    "ankle_Y": (20.0, 6.0, -0.523598333, 0.523598333),
 }
 
 
@@ -122,13 +126,15 @@ def imu_frame_names(legs: Sequence[str] = ("right", "left")) -> list[str]:
     return ["pelvis_imu"] + [f"{s}_{seg}_imu" for s in legs for seg in SEGMENTS]
 
 
-def joint_names(knee: str = "hinge", legs: Sequence[str] = ("right", "left")) -> list[str]:
-    """Actuated joints in URDF order (hip Z-X-Y, knee, ankle Z-X per leg).
+def joint_names(knee: str = "hinge", legs: Sequence[str] = ("right", "left"),
+                ankle: str = "universal") -> list[str]:  # fmt: skip
+    """Actuated joints in URDF order (hip Z-X-Y, knee, ankle Z-X(-Y) per leg).
 
     Pinocchio orders the legs alphabetically (left first); use ``Skeleton`` for q indices.
     """
     k = ["knee"] if knee == "hinge" else ["knee_Z", "knee_X", "knee_Y"]
-    per_leg = ["hip_Z", "hip_X", "hip_Y", *k, "ankle_Z", "ankle_X"]
+    a = ["ankle_Z", "ankle_X"] + (["ankle_Y"] if ankle == "free" else [])
+    per_leg = ["hip_Z", "hip_X", "hip_Y", *k, *a]
     return [f"{s}_{j}" for s in legs for j in per_leg]
 
 
@@ -195,7 +201,8 @@ def _placement(name: str, value: object) -> np.ndarray:
     return T
 
 
-def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple[list, list]:
+def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray],
+         ankle: str = "universal") -> tuple[list, list]:  # fmt: skip
     side, lat = g.side, g.lateral_sign
     femur, tibia, foot = f"{side}_femur", f"{side}_tibia", f"{side}_foot"
     l_thigh, l_shank = g.thigh_length / _T_THIGH, g.shank_length / _T_SHANK
@@ -232,12 +239,16 @@ def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray]) -> tuple
             _revolute(jn + "knee_X", v1, v2, _tf(), (lat, 0, 0), "knee_X"),
             _revolute(jn + "knee_Y", v2, tibia, _tf(), (0, lat, 0), "knee_Y"),
         ]
+    last = f"{foot}_virtual_2" if ankle == "free" else foot  # ankle_X's child
     joints += [
         _revolute(
             jn + "ankle_Z", tibia, f"{foot}_virtual", _tf(p=g.ajc_tibia), (0, 0, 1), "ankle_Z"
         ),
-        _revolute(jn + "ankle_X", f"{foot}_virtual", foot, _tf(), (lat, 0, 0), "ankle_X"),
+        _revolute(jn + "ankle_X", f"{foot}_virtual", last, _tf(), (lat, 0, 0), "ankle_X"),
     ]
+    if ankle == "free":
+        links.append(Link(name=last))
+        joints.append(_revolute(jn + "ankle_Y", last, foot, _tf(), (0, lat, 0), "ankle_Y"))
     fixed = {
         "HJC": (femur, np.zeros(3)),
         "KJC": (femur, kjc),
@@ -266,6 +277,7 @@ def urdf_text(
     imu_placements: Mapping[str, object] | None = None,
     other_leg: SubjectGeometry | None = None,
     check: bool = True,
+    ankle: str = "universal",
 ) -> str:
     """The subject's lower-limb URDF as XML text (the model is built in memory from it).
 
@@ -279,9 +291,13 @@ def urdf_text(
             ``(R, p)`` in its segment frame; others get :func:`default_imu_placements`.
         other_leg: geometry of the opposite leg, for asymmetric subjects.
         check: load the result with ``pinocchio.buildModelFromXML`` and verify its joints.
+        ankle: ``'universal'`` (flexion, inversion: the model's) or ``'free'`` (and the foot's
+            rotation about its vertical axis: the simulator's).
     """
     if knee not in KNEE_MODES:
         raise InputError(f"expected knee in {KNEE_MODES}, got {knee!r}", field="knee")
+    if ankle not in ANKLE_MODES:
+        raise InputError(f"expected ankle in {ANKLE_MODES}, got {ankle!r}", field="ankle")
     legs = tuple(legs)
     if not legs or len(set(legs)) != len(legs) or not set(legs) <= {"right", "left"}:
         raise InputError(f"expected legs from ('right', 'left'), got {legs}", field="legs")
@@ -312,12 +328,13 @@ def urdf_text(
     links.append(link)
     joints.append(joint)
     for g in geoms.values():
-        leg_links, leg_joints = _leg(g, knee, imus)
+        leg_links, leg_joints = _leg(g, knee, imus, ankle)
         links += leg_links
         joints += leg_joints
-    text = urdf_xml(f"lower_limb_{knee}_knee_ISB_model", links, joints, materials())
+    name = f"lower_limb_{knee}_knee{'_free_ankle' if ankle == 'free' else ''}_ISB_model"
+    text = urdf_xml(name, links, joints, materials())
     if check:
-        _check_with_pinocchio(text, joint_names(knee, legs))
+        _check_with_pinocchio(text, joint_names(knee, legs, ankle))
     return text
 
 

@@ -4,17 +4,21 @@ Segments per leg ``femur``, ``tibia``, ``foot`` (ISB frames, Wu 2002); anatomica
 leg ``HJC``, ``KJC``, ``AJC`` (joint centres), ``EFM``, ``EFL``, ``MM``, ``LM`` (epicondyles,
 malleoli; Wang 2023) and ``HEE``, ``MT1``, ``MT5``, ``TOE`` (heel, first and fifth metatarsal
 heads, toe tip); knee models ``free`` (Z-X-Y, Wang eq 15-17) and ``hinge`` (one rotation
-about the knee AoR).
+about the knee AoR); ankle models ``universal`` (flexion, inversion) and ``free`` (a third
+rotation, the foot's about its vertical axis relative to the tibia: the simulator's, for a tibia
+that turns on its planted foot).
 """
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_KNEE", "JOINT_SEGMENTS", "KNEE_MODES", "LANDMARKS", "LANDMARK_SEGMENT",
-           "SEGMENTS", "other_side"]
+__all__ = ["ANKLE_MODES", "DEFAULT_KNEE", "JOINT_SEGMENTS", "KNEE_MODES", "LANDMARKS",
+           "LANDMARK_SEGMENT", "SEGMENTS", "other_side"]
 
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
 DEFAULT_KNEE = "free"
+#: Ankle models, the first the model's (the subject model is always built with it).
+ANKLE_MODES = ("universal", "free")
 LANDMARKS = ("HJC", "KJC", "AJC", "EFM", "EFL", "MM", "LM", "HEE", "MT1", "MT5", "TOE")
 SEGMENTS = ("femur", "tibia", "foot")
 #: The segment each landmark is fixed in.

@@ -163,6 +163,11 @@ class Skeleton:
         return "free" if any(n.endswith("_knee_Z") for n in self.model.names) else "hinge"
 
     @property
+    def ankle(self) -> str:
+        """``'universal'`` or ``'free'`` (:data:`~pipeline.model.conventions.ANKLE_MODES`)."""
+        return "free" if any(n.endswith("_ankle_Y") for n in self.model.names) else "universal"
+
+    @property
     def joint_names(self) -> list[str]:
         """Actuated joints in Pinocchio order (root joint included if any)."""
         return list(self.model.names)[1:]

@@ -34,19 +34,16 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   inversion; the real S02 feet 0.5-0.7), its angular acceleration there 5-7 rad/s^2 (S02 9-10),
   and one foot sensor's motion determines a point on it with conditioning 0.16-0.20 (0.14
   without; S02 0.41-0.46): the real foot's rotations off the sagittal plane are quicker, not
-  larger, and the simulator does not have them yet. Per straight stride the real S02 tibia
-  turns about its long axis by 11-35 deg, the simulated one by 2-2.5 (the femur 19-33 and
-  13-14; the foot's sagittal range 80-97 and 58): a flat foot whose heading is prescribed, under
-  an ankle of two axes (flexion, inversion), keeps the tibia from turning on it (the subtalar
-  joint's coupling of eversion with the tibia's internal rotation is not modelled). A toe-out of
-  the swinging foot, tried (5-20 deg), raised the tibia's conditioning from 0.21-0.27 to
-  0.24-0.38 (S02 0.51-0.54) but turned the femur about its long axis more than S02's: the hip
-  took all of it; not kept.
+  larger, and the simulator does not have them yet. A skeleton built with ``ankle='free'``
+  turns the tibia on its planted foot as the foot inverts (:mod:`pipeline.simulate.subtalar`);
+  the model's two-axis ankle keeps it from turning. A toe-out of the swinging foot, tried (5-20
+  deg), turned the femur about its long axis more than S02's; not kept.
   Footprints lie a hip's half-width either side of the path, where the pelvis passes at
   mid-stance, turned to the path's heading. The right foot pushes off first; the left stays flat
   on its standing footprint until half a stride later.
-* **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF) solve the foot's pose
-  exactly (Newton on ``log6``, Pinocchio's frame Jacobian); a free knee is not a hinge: its
+* **Legs.** Each sample, the hip (3 DoF), knee flexion and ankle (2 DoF; a free ankle's third
+  angle set first, as the knee's coupled ones) solve the foot's pose exactly (Newton on
+  ``log6``, Pinocchio's frame Jacobian); a free knee is not a hinge: its
   adduction and rotation follow its flexion and the stride (:mod:`pipeline.simulate.knee`), a
   hinge knee stays a hinge. ``v`` and ``a`` are five-point central differences on a grid four
   times finer than the trial's (errors ``O(dt^4)``), the root's as
@@ -71,6 +68,7 @@ from pipeline.simulate.chain import UPRIGHT
 from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
 from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching, hip_ankle_distance_sq
 from pipeline.simulate.motions import ramp, standing_height
+from pipeline.simulate.subtalar import ankle_turns
 
 __all__ = ["CLEARANCE_M", "FOOT_INVERSION_DEG", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH",
            "SMOOTHING_S", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
@@ -188,9 +186,9 @@ def _foot_frame(psi: np.ndarray, phi: np.ndarray, roll: np.ndarray | float = 0.0
 
 def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray,
                inversion: tuple[float, float] = (0.0, 0.0)):  # fmt: skip
-    """The foot frame's world rotation (N, 3, 3) and origin (N, 3) at clock times ``tau``;
-    ``inversion`` (rad) the foot's at initial contact and at the end of push-off (module
-    docstring)."""
+    """The foot frame's world rotation (N, 3, 3), origin (N, 3) and inversion (N,) (rad, the sole
+    turned medially on either side) at clock times ``tau``; ``inversion`` (rad) the foot's at
+    initial contact and at the end of push-off (module docstring)."""
     T, po = plan.T, plan.push_off[side]
     F, H = plan.footprints[side], plan.headings[side]
     at_ic, at_toe_off = inversion
@@ -205,6 +203,7 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
             done = bump_integral((tau - ic - a * T) / ((b - a) * T))
             phi += np.deg2rad(turn) * done
             roll += r * done
+    inverted = roll.copy()
     roll *= 1.0 if side == "right" else -1.0  # the sole turned medially; z points right
     psi = np.zeros_like(tau)
     pos = np.repeat(F[:1], tau.size, axis=0)
@@ -228,7 +227,7 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
         pos = np.where(in_swing[:, None], swing, pos)
         pos = np.where(pivot_heel[:, None], b, pos)
         pos = np.where(flat[:, None], F[j + 1], pos)
-    return _foot_frame(psi, phi, roll), pos
+    return _foot_frame(psi, phi, roll), pos, inverted
 
 
 def _five_point(x: np.ndarray, h: float) -> np.ndarray:
@@ -306,12 +305,15 @@ def walk_trajectories(
     p[:, 2] -= _pelvis_drop(skeleton, p, R, poses, s, dt)
     extra = {x: knee[x].stride_angles(2 * np.pi * tau / plan.T, s) for x in skeleton.legs}
     free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
-        *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle"))]
+        *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle")[:2])]
         for x in skeleton.legs}  # fmt: skip
+    subtalar = ankle_turns(skeleton, {x: poses[x][2] for x in skeleton.legs}, rng)
     Q = np.empty((tf.size, model.nq))
     qk = q0.copy()
     for k in range(tf.size):
         qk[:3], qk[3:7] = p[k], quat_xyzw_from_matrix(R[k])
+        for index, angle in subtalar:
+            qk[index] = angle[k]
         for x in skeleton.legs:
             qk = _solve_leg(skeleton, qk, x, pin.SE3(poses[x][0][k], poses[x][1][k]), free[x],
                             knee[x], extra[x][k])
