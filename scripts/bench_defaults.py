@@ -14,7 +14,8 @@ the default and each alternative, one at a time, on three sources of evidence:
   and inputs (the sensors' orientations, VQF 9-D, VQF 6-D) of the median sagittal RMSE against
   the truth, and of the other axes' (ab/adduction, rotation); and the same for the realistic
   ``walk`` motion with the artefacts (its gait events, pelvis list and turns as a walk has them,
-  where the sinusoidal gait's thighs swing about lines 31 deg apart);
+  where the sinusoidal gait's thighs swing about lines 31 deg apart; a free ankle, its tibia
+  turning on the planted foot: :mod:`pipeline.simulate.subtalar`);
 * **OpenSense's walking file** (``../shared/data/opensim/xsens_walking_orientations.sto``,
   orientations only: the posture and the heading alignment need raw signals and do not apply):
   the median RMS difference of hip and knee angles from OpenSense's own result (run here, with
@@ -105,7 +106,8 @@ def note_halves(source: str, changes: dict, run) -> None:
 # ---- simulator ---------------------------------------------------------------------------------
 def sim_inputs(seed: int, artefacts: Artefacts | None, motion: str = "gait"):
     geometry, _ = geometry_from_measures(SIM_SUBJECT)
-    sk = Skeleton.build(geometry, knee="free", root="freeflyer")
+    sk = Skeleton.build(geometry, knee="free", root="freeflyer",
+                        ankle="free" if motion == "walk" else "universal")  # fmt: skip
     trial = simulate_trial(sk, motion, duration_s=20.0, seed=seed, standing_s=3.0,
                            artefacts=artefacts)  # fmt: skip
 
@@ -244,7 +246,7 @@ def report(rows, with_opensense: bool) -> str:
              "inputs; simulator (3 seeds, free knee) over the sensors' orientations, VQF 9-D and "
              "6-D, realistic (soft tissue, wandering bias, the floor's field) and ideal, on the "
              "sinusoidal gait; and the realistic walk (`sim walk`: the walk motion, its pelvis "
-             "listing, with the same artefacts); "
+             "listing, a free ankle, with the same artefacts); "
              "OpenSense's walking file the median RMS difference of hip and knee angles from "
              "OpenSense's own result (orientations only: posture and drift do not apply).", "",
              f"Defaults: correction {d.correction}, knee {d.knee}, posture {d.posture}, "

@@ -223,7 +223,8 @@ def simulated_walk() -> tuple[Recording, Measures]:
     from pipeline.simulate.model import simulate_trial
 
     measures = Measures("m", 1.75)
-    sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer")
+    sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer",
+                        ankle="free")  # fmt: skip
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=5, standing_s=3.0,
                            artefacts=Artefacts())  # fmt: skip
     return trial.raw_recording(), measures
@@ -249,8 +250,8 @@ def main() -> None:
     args = ap.parse_args()
     lines = ["# Fault injection (scripts/bench_faults.py): one fault in the right shank's sensor",
              ""]  # fmt: skip
-    lines += bench(*simulated_walk(), "The simulator (the walk with soft tissue, wandering biases, "
-                   "the floor's field; 9-D)")  # fmt: skip
+    lines += bench(*simulated_walk(), "The simulator (the walk with a free ankle, soft tissue, "
+                   "wandering biases, the floor's field; 9-D)")  # fmt: skip
     if (args.data / "gaittoolbox_s02").exists():
         lines += bench(*s02(args.data), "S02 (the real walk, raw signals through VQF)")
     text = "\n".join(lines) + "\n"

@@ -220,10 +220,11 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
     from pipeline.simulate.motions import ramp
 
     measures, standing = Measures("m", 1.75), 3.0
-    sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer")
+    sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer",
+                        ankle="free")  # fmt: skip
     lines = ["", "## The simulated skeleton walking (pipeline.simulate.walk: feet that rest on "
-             "the floor and invert in push-off, a turn of 60-120 deg, soft tissue, bias and the "
-             "floor's field; `pipeline ik` defaults on the raw signals)", "",
+             "the floor and invert in push-off, a free ankle, a turn of 60-120 deg, soft tissue, "
+             "bias and the floor's field; `pipeline ik` defaults on the raw signals)", "",
              "| seed | IC error (ms) | stride time error (ms) | stride length error (cm) | "
              "pelvis path: mean / 95th pct (cm), % of the distance |", "|---|---|---|---|---|"]
     for seed in seeds:

@@ -26,8 +26,9 @@ axis, the lean off by 1.5 deg (median; at most 4.9) with that line kept and 1.2 
 without it, sagittal median RMSE 1.33 and 1.11 deg; on the walk whose knee is not a hinge
 (:mod:`pipeline.simulate.knee`) and whose feet invert (its fits still hinge-like: knees 4-14 deg,
 ankles 4-27, seeds 0-3), 2.1 (at most 3.8) both ways, sagittal 1.82 kept and 2.05 without: a
-loss there (before the feet inverted: 2.3 and 2.7, sagittal 2.12 and 2.15). Kept, as neither
-walk is the real one and the real fits never take the rule. The
+loss there (before the feet inverted: 2.3 and 2.7, sagittal 2.12 and 2.15); with a free ankle
+(:mod:`pipeline.simulate.subtalar`) the fits stay hinge-like (knees 3-13 deg, ankles 4-28). Kept,
+as neither walk is the real one and the real fits never take the rule. The
 real walks' fits are not hinge-like (S02 knees 50-74 deg, ankles 47-53, the x-IMU3 walk 64-65 and
 49-52), so their leans do not change; what makes them so is not in the simulator (the knee's
 biplane-sized rotations raise an ideal knee fit's conditioning from 0.01-0.02 to 0.05, the thigh
