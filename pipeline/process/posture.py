@@ -51,7 +51,11 @@ and the lean within :data:`MAX_LEAN_DEG`. A leg whose lean is not measured (no s
 sensor, one excluded as faulty, or implausible centres) takes the other leg's: people stand on
 both legs alike (measured leans, right / left: S02 +3.5 / +2.9 deg, the x-IMU3 walk +0.8 / -1.1
 deg), so the borrowed lean is off by the legs' difference (0.6 and 1.9 deg) where upright is off
-by the lean itself (0.8-3.5 deg). With neither leg measured both stand upright. The notes say
+by the lean itself (0.8-3.5 deg). With neither leg measured both stand upright. Tried: both
+measured legs at their mean (two noisy measures of nearly one lean; Vicon's S02 tibias differ by
+1.1 deg): on the simulated walk the lean's error fell (median 1.8 to 1.5 deg with the two-axis
+ankle, 2.1 to 0.9 with the free one, seeds 0-5, 9-D), but S02's sagittal medians rose by 0.1-0.3
+deg on every input (vendor 4.42 to 4.51, 6-D 4.49 to 4.66): not kept. The notes say
 which leg was measured, which borrowed and why.
 """
 
