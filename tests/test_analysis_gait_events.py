@@ -22,6 +22,7 @@ def test_contacts_of_a_simulated_foot(seed):
     assert np.abs(ev.ic / w.rate_hz - w.ic[1:]).max() < 0.010
     assert np.abs(ev.fc / w.rate_hz - w.fc).max() < 0.010
     assert np.all(ev.fc < ev.swing) and np.all(ev.swing < ev.ic)
+    assert ev.trajectory is None  # every swing strong: the foot's path was not needed
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -50,6 +51,11 @@ def test_a_step_that_barely_pitches_the_foot_counts_when_the_foot_moved(monkeypa
     assert len(ev.ic) == steps
     if steps:
         assert np.abs(ev.ic / w.rate_hz - w.ic[1:]).max() < 0.010
+    # the path computed for the weak swings is the one the gait analysis would compute, kept
+    from pipeline.analysis.foot_trajectory import foot_trajectory
+
+    again = foot_trajectory(w.gyr, w.acc, w.rate_hz, ev.rests)
+    np.testing.assert_array_equal(ev.trajectory.position, again.position)
 
 
 def test_the_sign_does_not_depend_on_the_mounting():

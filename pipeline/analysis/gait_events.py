@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.analysis.foot_trajectory import foot_trajectory
+from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import true_runs
 
@@ -60,13 +60,16 @@ class GaitEvents:
     """One foot's events: ``rests`` (k, 2) ``[start, stop)`` sample ranges of each rest, the
     swing peaks' samples ``swing``, and per swing ``fc`` before and ``ic`` after it (fractional
     sample indices);
-    ``axis``: the sagittal axis in the sensor frame (unit, mid-swing positive)."""
+    ``axis``: the sagittal axis in the sensor frame (unit, mid-swing positive); ``trajectory``:
+    the foot's path between its rests when a weak swing needed it (None otherwise), so that the
+    gait analysis does not compute it again."""
 
     rests: np.ndarray
     swing: np.ndarray
     ic: np.ndarray
     fc: np.ndarray
     axis: np.ndarray
+    trajectory: FootTrajectory | None = None
 
 
 def _moving_max(x: np.ndarray, n: int) -> np.ndarray:
@@ -191,7 +194,7 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
     w, axis = sagittal_rate(gyr, rests, rest_vertical(acc, rests))
     w = lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
     swing, ic, fc = [], [], []
-    path = None
+    path = None  # the foot's trajectory, once a weak swing asks for it
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):
         if b - a < 3:
             continue
@@ -201,11 +204,12 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
             continue
         if w[peak] < MIN_SWING_RATE:
             if path is None:
-                path = foot_trajectory(gyr, acc, rate_hz, rests).position
-            if not np.linalg.norm(path[b, :2] - path[a - 1, :2]) >= MIN_STEP_M:
+                path = foot_trajectory(gyr, acc, rate_hz, rests)
+            step = path.position[b, :2] - path.position[a - 1, :2]
+            if not np.linalg.norm(step) >= MIN_STEP_M:
                 continue
         swing.append(peak)
         fc.append(float(a + np.argmin(w[a:start])))
         ic.append(_crossing(w, stop))
     return GaitEvents(rests, np.asarray(swing, int), np.asarray(ic, float), np.asarray(fc, float),
-                      axis)  # fmt: skip
+                      axis, path)  # fmt: skip

@@ -70,7 +70,8 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
             continue
         s = rec.sensors[name]
         ev = gait_events(s.gyr, s.acc, rec.rate_hz, "foot" if foot else "shank")
-        path = foot_trajectory(s.gyr, s.acc, rec.rate_hz, ev.rests) if foot else None
+        path = None if not foot else (ev.trajectory if ev.trajectory is not None
+                                      else foot_trajectory(s.gyr, s.acc, rec.rate_hz, ev.rests))
         found = foot_strides(side, rec.time, ev, path)
         events[side], sources[side] = ev, f"{'foot' if foot else 'shank'} sensor {name}"
         if path is not None:
