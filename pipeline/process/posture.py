@@ -51,7 +51,14 @@ and the lean within :data:`MAX_LEAN_DEG`. A leg whose lean is not measured (no s
 sensor, one excluded as faulty, or implausible centres) takes the other leg's: people stand on
 both legs alike (measured leans, right / left: S02 +3.5 / +2.9 deg, the x-IMU3 walk +0.8 / -1.1
 deg), so the borrowed lean is off by the legs' difference (0.6 and 1.9 deg) where upright is off
-by the lean itself (0.8-3.5 deg). With neither leg measured both stand upright. Tried: both
+by the lean itself (0.8-3.5 deg). With neither leg measured both stand upright.
+
+What the measured lean misses on the simulated walk is the sensors' soft-tissue shift: the
+centres are fitted while walking puts the shank's sensor elsewhere on the bone than standing
+does (:mod:`pipeline.simulate.artefacts`), and the lean is read at the standing pose. Measured
+once by hand (seeds 0-5, 9-D, free ankle): with the true centres the lean is within 1.0 deg,
+with centres fitted without soft tissue within 1.5, with it up to 4.3; nothing in the signals
+tells the shift apart. Tried: both
 measured legs at their mean (two noisy measures of nearly one lean; Vicon's S02 tibias differ by
 1.1 deg): on the simulated walk the lean's error fell (median 1.8 to 1.5 deg with the two-axis
 ankle, 2.1 to 0.9 with the free one, seeds 0-5, 9-D), but S02's sagittal medians rose by 0.1-0.3
