@@ -236,3 +236,23 @@ def test_a_change_of_gait_on_a_real_recording_is_not_a_slip():
     assert {f.action for f in found} == {"listed"}
     assert {f.sensor for f in found} >= {"femur_l_imu", "femur_r_imu"}
     assert all("the movement itself changed" in f.evidence for f in found)
+
+
+@pytest.mark.dataset
+def test_a_dropout_over_a_legs_rests_gives_no_warning():
+    """S02's right shank without 5 s of samples (t = 10-15 s, its dropout check excludes it):
+    the strides whose rests fall there have no gravity; the steps are computed without them,
+    with no division by zero on the user's console."""
+    import sys
+    import warnings
+
+    if not S02.exists():
+        pytest.skip("../shared/data/gaittoolbox_s02 not present")
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from bench_faults import dropout, s02
+
+    rec = dropout(s02(S02.parent)[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        steps = {n: slip_step(n, rec) for n in rec.sensors}
+    assert steps["femur_r_imu"] is not None and not steps["femur_r_imu"].slipped

@@ -162,7 +162,12 @@ def _larger(*steps: float) -> float:
 
 
 def _angle(a: np.ndarray, b: np.ndarray, signed: bool = True) -> float:
-    c = float(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)))
+    """The angle (deg) between ``a`` and ``b`` (of their lines when not ``signed``); NaN when
+    either is zero (a sensor's samples missing there)."""
+    norms = float(np.linalg.norm(a) * np.linalg.norm(b))
+    if not norms > 0.0:
+        return float("nan")
+    c = float(a @ b / norms)
     return float(np.degrees(np.arccos(np.clip(c if signed else abs(c), -1.0, 1.0))))
 
 
