@@ -134,7 +134,10 @@ def test_v_and_a_are_the_time_derivatives_of_q(trial):
     steps = np.cumsum(0.5 * h * (a[1:] + a[:-1]), axis=0)
     np.testing.assert_allclose((v[250::50] - v[200:-50:50]), steps[249::50] - steps[199:-50:50],
                                atol=1e-3 * np.abs(v).max())  # fmt: skip
-    close((q[2:, 7:] - q[:-2, 7:]) / (2 * h), v[:, 6:], 3e-3 * np.abs(v[:, 6:]).max())
+    # five-point differences: the swinging knee's jerk (it flexes to ~65 deg) defeats three
+    five = (q[:-4, 7:] - 8 * q[1:-3, 7:] + 8 * q[3:-1, 7:] - q[4:, 7:]) / (12 * h)
+    np.testing.assert_allclose(five[moving], v[2:-2, 6:][moving],
+                               atol=3e-3 * np.abs(v[:, 6:]).max())  # fmt: skip
     R = matrix_from_quat(q[:, [6, 3, 4, 5]])
     dp = (q[2:, :3] - q[:-2, :3]) / (2 * h)
     close(np.einsum("nji,nj->ni", R[1:-1], dp), v[:, :3], 1e-3)

@@ -19,8 +19,8 @@ split ``m`` of the strides, with at least :data:`MIN_SIDE` strides on either sid
 
 (``e1``: the principal eigenvector, its sign free). The step is the largest ``max(d_axis, d_g)``
 over the splits; beyond :data:`SLIP_DEG` the sensor slipped at that stride. Measured without a
-slip: up to 7 deg on the real walk gaittoolbox_s02 (5-6 strides a side, a turn), 9.4 on the
-simulated walk with soft tissue (its first strides from standing differ; seeds 0, 1, 5); a 30 deg
+slip: up to 7 deg on the real walk gaittoolbox_s02 (5-6 strides a side, a turn), 10.6 on the
+simulated walk with soft tissue (its first strides from standing differ; seeds 0-3, 5); a 30 deg
 slip about any of the sensor's axes, of a thigh, shank or foot sensor halfway through the walk:
 23-34 deg on S02, 25-35 on the simulated walk
 (``tests/test_process_slip.py``, ``scripts/bench_faults.py``). A leg with fewer than
@@ -40,8 +40,8 @@ duration):
 a lone step, or two strides joined by a missed contact, rock at another rate (on the qmt
 recording such strides put the axis 74-84 deg away). Measured without a slip (the largest step
 of eq 1 for the pelvis): S02 8.0 deg on the right leg's strides (4.7 on the left's), the
-simulated walk 0.7-2.1 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
-belt turning around the waist) 22 deg on S02 and 27-30 on the simulated walk, found; a turn
+simulated walk 0.6-2.1 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
+belt turning around the waist) 22 deg on S02 and 26-30 on the simulated walk, found; a turn
 about a horizontal axis turns gravity (27-31 deg). The principal axis of the low-passed (3 Hz)
 horizontal angular velocity, tried first, mixes the rocking with the tilt (principal ratio
 1.2-3.3 against the harmonic's 6-8 on S02 and hundreds on the simulated walk) and stepped 11-15
@@ -57,8 +57,9 @@ standing), and on the qmt full-body recording, whose movement changes at 67-70 s
 mid-stance gravity steps 21-29 deg with the shanks' 10-15 and the other thigh's 18-22: a change of
 the movement, which the rule keeps from being taken for slips. Two sensors of a leg slipping
 together (one strap over both) step 23-30 deg (S02) and 29-32 (the simulated walk) while the other
-leg's step 2-4: both are named. Without a slip the other leg's same sensor steps 1.5-9.4 deg at
-the split (S02, the simulated walk's seeds 0, 1, 5). A step beyond the limit that the leg's
+leg's step 2-4: both are named. Without a slip the other leg's same sensor steps 1.9-6.4 deg at
+the split (a right thigh, shank or foot sensor slipped on S02, on the simulated walk's seeds 0-3,
+5). A step beyond the limit that the leg's
 others and the other leg's share (:attr:`Slip.inconclusive`) cannot be told from such a change:
 the sensor is listed as not checked (the x-IMU3 walk, two short walks with turns on the spot and
 shuffles: every leg sensor steps 20-86 deg with the others, the pelvis 19; qmt's thighs).
@@ -81,8 +82,8 @@ from pipeline.model.conventions import other_side
 __all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG", "STRIDE_TOL",
            "Slip", "leg_slips", "slip_step", "unchecked", "walking_strides"]
 
-#: A step beyond this (deg) is a slip: about twice the largest step measured without one (module
-#: docstring), under the 19-33 deg a 30 deg slip gives.
+#: A step beyond this (deg) is a slip: half as much again as the largest step measured without
+#: one (10.6, module docstring), under the 19-35 deg a 30 deg slip gives.
 SLIP_DEG = 15.0
 #: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
 #: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
