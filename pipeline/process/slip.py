@@ -19,7 +19,7 @@ split ``m`` of the strides, with at least :data:`MIN_SIDE` strides on either sid
 
 (``e1``: the principal eigenvector, its sign free). The step is the largest ``max(d_axis, d_g)``
 over the splits; beyond :data:`SLIP_DEG` the sensor slipped at that stride. Measured without a
-slip: up to 7 deg on the real walk gaittoolbox_s02 (5-6 strides a side, a turn), 10.6 on the
+slip: up to 7 deg on the real walk gaittoolbox_s02 (5-6 strides a side, a turn), 9.8 on the
 simulated walk with soft tissue (its first strides from standing differ; seeds 0-3, 5); a 30 deg
 slip about any of the sensor's axes, of a thigh, shank or foot sensor halfway through the walk:
 23-34 deg on S02, 25-35 on the simulated walk
@@ -83,7 +83,7 @@ __all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG", 
            "Slip", "leg_slips", "slip_step", "unchecked", "walking_strides"]
 
 #: A step beyond this (deg) is a slip: half as much again as the largest step measured without
-#: one (10.6, module docstring), under the 19-35 deg a 30 deg slip gives.
+#: one (9.8, module docstring), under the 19-35 deg a 30 deg slip gives.
 SLIP_DEG = 15.0
 #: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
 #: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
