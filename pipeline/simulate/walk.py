@@ -20,10 +20,10 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
   -17-34 deg; a constant drop, before, kept the knees above 26 deg). Tried, not kept: 99.9 %
   and a 10 cm swing lift give knees 5-65, hips -17-42 and ankles -13-29 deg (seeds 0-2), like
   S02's, but the faster swing raises the joint-centre fits' residuals (ankles 0.6-1.6 m/s^2
-  against 0.5-1.0 here and S02's 0.3: the simulated soft tissue, linear in the joint angles,
-  accelerates with them) and a 6-D hip's heading alignment then fails on one mounting
-  (``scripts/bench_sensor_sets.py``: 12.9 deg); first the soft tissue must be as damped as the
-  real one.
+  against 0.5-1.0 here; the real S02's 0.3, the x-IMU3 walk's 1.0: the simulated soft tissue,
+  linear in the joint angles, accelerates with them) and a 6-D hip's heading alignment then
+  fails on one mounting (``scripts/bench_sensor_sets.py``: 12.9 deg); first the simulated soft
+  tissue must lag and damp as real tissue does.
   The pelvis turns with the stride as a walking pelvis does (:data:`PELVIS_TURN_DEG`): about the
   vertical and forward axes once per stride, about the lateral axis twice.
 * **Feet** (per stride ``T`` from an initial contact IC, as
