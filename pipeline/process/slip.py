@@ -36,9 +36,8 @@ turns about the vertical. So its axis is taken from the stride rate alone: per s
 (no low-pass: the coefficient is one), whose principal axis goes into eq (1), with gravity at
 mid-stance (eq 2), on the right foot's strides, else the left's. Only strides of a walk count
 (:func:`walking_strides`: joined to a neighbour, within :data:`STRIDE_TOL` of the median
-duration):
-a lone step, or two strides joined by a missed contact, rock at another rate (on the qmt
-recording such strides put the axis 74-84 deg away). Measured without a slip (the largest step
+duration): a lone step, or two strides joined by a missed contact, rock at another rate (on the
+qmt recording such strides put the axis 74-84 deg away). Measured without a slip (the largest step
 of eq 1 for the pelvis): S02 8.0 deg on the right leg's strides (4.7 on the left's), the
 simulated walk 0.6-2.1 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
 belt turning around the waist) 22 deg on S02 and 26-30 on the simulated walk, found; a turn
