@@ -82,6 +82,10 @@ FIGURES = [
      "results/bench_faults.txt", rf"## S02[\s\S]*?\(it turned by {NUM} deg\)"),
     ("docs/results.md", rf"rocks about once a stride by {NUM}° on S02", "results/bench_faults.txt",
      rf"## S02[\s\S]*?the axis it rocks about once a stride turned by {NUM} deg"),
+    ("docs/results.md", rf"with a free ankle, {NUM}° and", "results/bench_faults.txt",
+     rf"the undisturbed run measured right {NUM} deg"),
+    ("docs/results.md", rf"with a free ankle, [-+\d.]+° and \+?{NUM}°", "results/bench_faults.txt",
+     rf"the undisturbed run measured right [-+\d.]+ deg, left \+?{NUM} deg"),
 ]  # fmt: skip
 
 
