@@ -196,18 +196,23 @@ def _horizontal(w: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray:
     return w - np.sum(w * u, axis=1, keepdims=True) * u
 
 
-def _per_stride(gyr, acc, rate_hz, strides, rests) -> tuple[np.ndarray, np.ndarray]:
-    """``C_k`` (k, 3, 3) and ``g_k`` (k, 3), NaN for a stride without a foot rest."""
+def _flexing(gyr, acc, rate_hz, strides) -> np.ndarray:
+    """A leg sensor's ``C_k`` (k, 3, 3), eq (1): the scatter of its horizontal angular velocity."""
     w_h = _horizontal(lowpass(gyr, rate_hz, AXIS_CUTOFF_HZ), acc, rate_hz)
     w_h[np.linalg.norm(w_h, axis=1) < MIN_SPEED] = 0.0
-    C = np.array([w_h[a:b].T @ w_h[a:b] for a, b in strides])
+    return np.array([w_h[a:b].T @ w_h[a:b] for a, b in strides])
+
+
+def _mid_stance_gravity(acc, strides, rests) -> np.ndarray:
+    """``g_k`` (k, 3), eq (2): the mean accelerometer over the stride's longest foot rest, NaN
+    for a stride without one."""
     g = np.full((len(strides), 3), np.nan)
     for k, (a, b) in enumerate(strides):
         inside = [(r0, r1) for r0, r1 in rests if a <= r0 and r1 <= b]
         if inside:
             r0, r1 = max(inside, key=lambda r: r[1] - r[0])
             g[k] = np.mean(acc[r0:r1], axis=0)
-    return C, g
+    return g
 
 
 def _rocking(gyr, acc, rate_hz, strides) -> np.ndarray:
@@ -271,12 +276,11 @@ def _leg_views(rec: Recording, side: str, pelvis: bool):
     names += [pelvis_name] if pelvis else []
     leg = {n: rec.sensors[n] for n in names if n in rec.sensors
            and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}  # fmt: skip
-    views = {n: _per_stride(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz, strides,
-                            rests) for n, s in leg.items()}  # fmt: skip
-    if pelvis_name in views:  # no flexion axis: the one it rocks about (eq 3)
-        s = leg[pelvis_name]
-        views[pelvis_name] = (_rocking(np.nan_to_num(s.gyr), np.nan_to_num(s.acc), rec.rate_hz,
-                                       strides), views[pelvis_name][1])  # fmt: skip
+    views = {}
+    for n, s in leg.items():
+        gyr, acc = np.nan_to_num(s.gyr), np.nan_to_num(s.acc)
+        axis = _rocking if n == pelvis_name else _flexing  # the pelvis has no flexion axis
+        views[n] = (axis(gyr, acc, rec.rate_hz, strides), _mid_stance_gravity(acc, strides, rests))
     return strides, leg, views
 
 
