@@ -130,13 +130,17 @@ def swapped(rec: Recording) -> Recording:
     return rec.with_sensors(sensors)
 
 
-FAULTS = {"saturated gyroscope (+-250 deg/s)": saturated,
-          "magnetometer hard-iron offset (60 % of the field)": hard_iron,
-          "dead gyroscope axis": dead, "mounting turned by 90 deg": turned,
-          "sensor slipping 30 deg halfway": slipping,
-          "thigh and shank sensors slipping 30 deg together": slipping_together,
-          "5 s dropout": dropout, "thigh and shank sensors swapped": swapped,
-          "pelvis belt turning 30 deg around the waist halfway": belt_turning}  # fmt: skip
+#: Fault -> (how it is injected, the sensor whose notes name it, the joints that sensor observes).
+FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
+          "magnetometer hard-iron offset (60 % of the field)": (hard_iron, TARGET, TOUCHED),
+          "dead gyroscope axis": (dead, TARGET, TOUCHED),
+          "mounting turned by 90 deg": (turned, TARGET, TOUCHED),
+          "sensor slipping 30 deg halfway": (slipping, TARGET, TOUCHED),
+          "thigh and shank sensors slipping 30 deg together": (slipping_together, TARGET, TOUCHED),
+          "5 s dropout": (dropout, TARGET, TOUCHED),
+          "thigh and shank sensors swapped": (swapped, TARGET, TOUCHED),
+          "pelvis belt turning 30 deg around the waist halfway": (belt_turning, PELVIS,
+                                                                  PELVIS_TOUCHED)}  # fmt: skip
 
 
 def _named(run, base, sensor: str) -> str:
@@ -173,7 +177,8 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
     lines = [f"## {label}", "", "| fault | detected | what the run said | untouched joints "
              "(deg) | its joints (deg) |", "|---|---|---|---|---|"]  # fmt: skip
     peak = np.degrees(np.abs(rec.sensors[TARGET].gyr).max())
-    for name, inject in FAULTS.items():
+    heading_turn = {}  # fault -> how far the subject's anatomical heading turned (deg)
+    for name, (inject, sensor, joints) in FAULTS.items():
         if inject is saturated and peak < 250.0:
             lines.append(f"| {name} | not applicable: the sensor peaks at {peak:.0f} deg/s, below "
                          "the smallest range (a real shank reaches 300-400) | - | - | - |")
@@ -183,7 +188,6 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
         except InputError as exc:
             lines.append(f"| {name} | yes | refused: {exc} | - | - |")
             continue
-        sensor, joints = (PELVIS, PELVIS_TOUCHED) if inject is belt_turning else (TARGET, TOUCHED)
         said = _named(run, base, sensor)
         untouched, touched = _change(run, base, joints)
         text = said.replace("|", "/") if said else "nothing"
@@ -191,14 +195,15 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
         if not said and max(untouched, touched) < HARMLESS_DEG:
             verdict = "no: harmless (the calibration absorbs it)"
         lines.append(f"| {name} | {verdict} | {text} | {untouched:.2f} | {touched:.2f} |")
-        if inject is belt_turning:
-            turned = np.degrees(np.arccos(np.clip(run.heading_right @ base.heading_right, -1, 1)))
+        heading_turn[name] = np.degrees(np.arccos(np.clip(run.heading_right @ base.heading_right,
+                                                          -1, 1)))  # fmt: skip
     rows = [r for r in lines[4:] if "not applicable" not in r]
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
     moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
              if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r
              and "| pelvis" not in r]  # fmt: skip
-    belt = [r.split(" | ")[3] for r in rows if r.startswith("| pelvis belt")]
+    belt = [(r.split(" | ")[3], heading_turn[r.split(" | ")[0][2:]]) for r in rows
+            if r.startswith("| pelvis belt")]  # fmt: skip
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
               f"(the shank's faults) moved by up to {max(moved):.2f} deg (target 0.5): "
@@ -207,9 +212,9 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
               "flexion by the "
               f"difference (the undisturbed run measured {_leans(base)}); the anatomical heading "
               "loses that knee's axis."]
-    if belt:
+    for moved_deg, turned in belt:
         lines[-1] += (f" With the pelvis's sensor excluded (its belt) the hips and the pelvis are "
-                      f"not written and the legs' joints move by up to {belt[0]} deg: the "
+                      f"not written and the legs' joints move by up to {moved_deg} deg: the "
                       "subject's anatomical heading is found without the hips' flexion axes "
                       f"(it turned by {turned:.1f} deg), which mixes some knee flexion into the "
                       "knees' ab/adduction.")
