@@ -310,6 +310,8 @@ def walk_trajectories(
                         np.full((tf.size, 1), z0)], axis=1)  # fmt: skip
     p[:, 2] -= _pelvis_drop(skeleton, p, R, poses, s, dt)
     extra = {x: knee[x].stride_angles(2 * np.pi * tau / plan.T, s) for x in skeleton.legs}
+    # solved: the hip's three and the ankle's flexion and inversion (chain order Z, X); a free
+    # ankle's third angle is set, as the knee's coupled ones
     free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
         *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle")[:2])]
         for x in skeleton.legs}  # fmt: skip
