@@ -216,8 +216,8 @@ def summary(s02, ximu3) -> str:
     sets = {label: max(m for _, lab, _, m in s02 if lab == label) for label in SETS}
     feet = "without the feet's sensors"
     others = max(m for label, m in sets.items() if label != feet)
-    return (f"Remounting every sensor moved no sagittal angle by more than {max(remount):.1f} deg "
-            f"on S02 (any input) and {max(remount_x):.1f} deg on the x-IMU3 walk (with or "
+    return (f"Remounting every sensor moved the sagittal angles by at most {max(remount):.2f} deg "
+            f"RMS on S02 (any input) and {max(remount_x):.2f} deg on the x-IMU3 walk (with or "
             "without its magnetometers). Leaving "
             f"sensors out moved the joints still written by up to {others:.1f} deg on S02, and "
             f"{sets[feet]:.1f} deg {feet}: the standing lean is then not measured (it needs the "

@@ -205,3 +205,20 @@ def test_ipopt_reuses_one_solver_per_shape_and_its_data_is_a_parameter():
     assert np.degrees(angle_between(pulled.axis_1, wrong)) < 2.0  # the prior is 23 deg off
     assert np.degrees(angle_between(pulled.axis_1, a.axis_1)) > 20.0
     assert ipopt._solver.cache_info().misses == 1
+
+
+def test_ipopt_from_a_given_start_turns_with_the_sensor(hinge):
+    """A start given in the sensors' frames (``start``) replaces the Gauss-Newton steps' random
+    one (with no iteration the result is the start), and the same signals seen by a sensor
+    mounted turned by ``Q`` end in the same centre turned by ``Q^T``."""
+    tr, d = hinge
+    Q = exp3(np.array([0.7, -1.9, 0.4]))
+    turned = joint_data(tr.time, tr.imu_1.gyr @ Q, tr.imu_1.acc @ Q, tr.imu_2.gyr, tr.imu_2.acc)
+    o1, o2 = np.array([0.05, -0.1, 0.02]), np.array([0.0, 0.12, -0.03])
+    still = calibrate_ipopt(d, "spherical", start=(o1, o2), max_iter=0)
+    assert np.allclose(still.position_1_m, o1) and np.allclose(still.position_2_m, o2)
+    a = calibrate_ipopt(d, "spherical", start=(o1, o2))
+    b = calibrate_ipopt(turned, "spherical", start=(Q.T @ o1, o2))
+    assert np.linalg.norm(a.position_1_m - o1) > 0.01  # it moved from the start
+    assert np.linalg.norm(Q.T @ a.position_1_m - b.position_1_m) < 1e-6
+    assert np.linalg.norm(a.position_2_m - b.position_2_m) < 1e-6

@@ -119,6 +119,7 @@ def calibrate_ipopt(
     quat_2: np.ndarray | None = None,
     reference_1: np.ndarray | None = None,
     position_bound: float = 0.3,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
     seed: int = 0,
     max_iter: int = 100,
 ) -> CalibrationResult:
@@ -128,6 +129,9 @@ def calibrate_ipopt(
     robust losses' transition points. ``prior_axis_*`` (sensor frames) with ``prior_weight``
     add ``w |j - p|^2``. Signs: from the priors, else :func:`consistent_axis_signs`. Position
     components are bounded by ``position_bound`` (m), which keeps an unobservable position finite.
+    ``start``: the positions ``(o_1, o_2)`` to start from instead of the Gauss-Newton steps'
+    (which start at random points of the bounds' box, so their minimum depends on how the
+    sensors sit; a start computed from the signals alike in any sensor frame does not).
     """
     if joint not in ("hinge", "spherical"):
         raise InputError(f"expected joint 'hinge' or 'spherical', got {joint!r}", field="joint")
@@ -135,8 +139,12 @@ def calibrate_ipopt(
     n = data.gyr_1.shape[0]
     coarse = _decimate(data, max(1, n // 400))
     opts = {"restarts": 2, "max_iter": 15}
-    xo, _, it0 = solve_subproblem(coarse, "positions", "gn", seed, {"restarts": 1, "max_iter": 15})
-    o1, o2 = xo[:3], xo[3:]
+    if start is None:
+        xo, _, it0 = solve_subproblem(coarse, "positions", "gn", seed,
+                                      {"restarts": 1, "max_iter": 15})  # fmt: skip
+        o1, o2 = xo[:3], xo[3:]
+    else:
+        (o1, o2), it0 = (np.asarray(o, float) for o in start), 0
     K1 = gamma_matrix(data.gyr_1, data.gyr_dot_1)
     K2 = gamma_matrix(data.gyr_2, data.gyr_dot_2)
     blocks = [_position_data(data.acc_1, K1), _position_data(data.acc_2, K2)]

@@ -71,23 +71,33 @@ def joint_centre(
     *,
     rows: np.ndarray | slice = slice(None),
     cutoff_hz: float = CUTOFF_HZ,
+    shared_axis: int | None = None,
 ) -> JointCentre:
     """Eq (2) of the module docstring on the samples ``rows`` (the signals are filtered over the
     whole trial first): gyroscopes (rad/s) and accelerometers (m/s^2) in the sensor frames,
-    orientations ``R_i`` (N, 3, 3) sensor -> world (one world)."""
+    orientations ``R_i`` (N, 3, 3) sensor -> world (one world). ``shared_axis``: the index of
+    the one world axis the two orientations share (the vertical of two attitude filters whose
+    headings differ): only (2)'s component along it is used, one equation per sample, which
+    any turn of either world about that axis leaves exact (the residual is then that
+    component's RMS)."""
     t = np.asarray(time, dtype=float)
     rate = 1.0 / float(np.median(np.diff(t)))
     g1, a1 = lowpass(gyr_1, rate, cutoff_hz), lowpass(acc_1, rate, cutoff_hz)
     g2, a2 = lowpass(gyr_2, rate, cutoff_hz), lowpass(acc_2, rate, cutoff_hz)
     G1, G2 = _gamma_matrices(t, g1)[rows], _gamma_matrices(t, g2)[rows]
     R1, R2 = np.asarray(R_1, float)[rows], np.asarray(R_2, float)[rows]
-    A = np.concatenate([R1 @ G1, -(R2 @ G2)], axis=2).reshape(-1, 6)
-    y = (np.einsum("nij,nj->ni", R2, a2[rows]) - np.einsum("nij,nj->ni", R1, a1[rows])).ravel()
+    A = np.concatenate([R1 @ G1, -(R2 @ G2)], axis=2)
+    y = np.einsum("nij,nj->ni", R2, a2[rows]) - np.einsum("nij,nj->ni", R1, a1[rows])
+    if shared_axis is not None:
+        A, y = A[:, shared_axis : shared_axis + 1], y[:, shared_axis]
+    A, y = A.reshape(-1, 6), y.ravel()
     ok = np.isfinite(y) & np.all(np.isfinite(A), axis=1)
     if ok.sum() < 30:
         raise InputError("too few samples to locate the joint's centre", field="time")
     x, *_ = np.linalg.lstsq(A[ok], y[ok], rcond=None)
     _, s, Vt = np.linalg.svd(A[ok], full_matrices=False)
     res = A[ok] @ x - y[ok]
-    return JointCentre(x[:3], x[3:], float(np.sqrt(np.mean(res**2) * 3)), float(s[-1] / s[0]),
+    per_sample = 3 if shared_axis is None else 1  # components of (2) per sample
+    return JointCentre(x[:3], x[3:], float(np.sqrt(np.mean(res**2) * per_sample)),
+                       float(s[-1] / s[0]),
                        (Vt[-1, :3], Vt[-1, 3:]))

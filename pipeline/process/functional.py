@@ -157,10 +157,11 @@ def _vs_model(axis_thigh, axis_shank, placements, side, model_axes):
 
 
 def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joint: str = "hinge",
-              verify_start: bool = True):  # fmt: skip
+              verify_start: bool = True, **options):  # fmt: skip
     """Hu 2021's calibration of one joint between sensors ``s1`` and ``s2``
     (:class:`~pipeline.io.recording.SensorSignals`) on the samples ``rows``, at most
-    :data:`MAX_SAMPLES` of them (``verify_start``: solved again from an independent start)."""
+    :data:`MAX_SAMPLES` of them (``verify_start``: solved again from an independent start);
+    ``options`` go to the method (:func:`~pipeline.calibration.calibrate.calibrate`)."""
     # the solvers (CasADi for IPOPT) load only when a recording has raw signals to calibrate
     from pipeline.calibration.calibrate import calibrate
     from pipeline.calibration.joint_constraints import JointData, joint_data
@@ -174,4 +175,5 @@ def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joi
         d = JointData(*(getattr(d, f.name)[keep] for f in fields(JointData)))
         q1 = None if q1 is None else q1[keep]
         q2 = None if q2 is None else q2[keep]
-    return calibrate(d, joint, method, quat_1=q1, quat_2=q2, verify_start=verify_start)
+    return calibrate(d, joint, method, quat_1=q1, quat_2=q2, verify_start=verify_start,
+                     **options)  # fmt: skip
