@@ -143,9 +143,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "(<sensor>.csv, Movella DOT .csv, x-IMU3 device folders) or one file (required)")
     p.add_argument("--filter", choices=FILTERS, default=DEFAULT_FILTER,
                    help=f"attitude filter (default {DEFAULT_FILTER}; pi: Hu 2021's PI filter)")
-    p.add_argument("--sensor-map", nargs="+", metavar="NAME=ID",
+    p.add_argument("--sensor-map", action="extend", nargs="+", metavar="NAME=ID",
                    help="our sensor name = a unique part of a file name (default: the names)")
-    p.add_argument("--ignore", nargs="+", metavar="PATTERN", default=(),
+    p.add_argument("--ignore", action="extend", nargs="+", metavar="PATTERN", default=[],
                    help="entries of the folder to leave out (file name patterns) (default: none)")
     p.add_argument("--out", type=Path, required=True, help="output .sto file")
     p.set_defaults(func=_cmd_orientations)

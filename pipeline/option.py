@@ -130,12 +130,13 @@ def add_flags(parser: argparse.ArgumentParser, options: list[Spec]) -> None:
         elif s.kind == "vec3":
             parser.add_argument(*names, type=float, nargs=3, metavar=s.metavar or ("X", "Y", "Z"),
                                 **common)  # fmt: skip
-        elif s.kind == "words":
-            parser.add_argument(*names, nargs="+", metavar=s.metavar, **common)
+        elif s.kind == "words":  # a flag given twice adds to the first (--ignore a --ignore b)
+            parser.add_argument(*names, action="extend", nargs="+", metavar=s.metavar, **common)
         elif s.kind == "pairs":
-            parser.add_argument(*names, nargs="+", metavar=s.metavar or "NAME=VALUE", **common)
+            parser.add_argument(*names, action="extend", nargs="+",
+                                metavar=s.metavar or "NAME=VALUE", **common)  # fmt: skip
             for alias in s.aliases:
-                parser.add_argument(alias, nargs="+", dest=s.name, default=None,
+                parser.add_argument(alias, action="extend", nargs="+", dest=s.name, default=None,
                                     help=argparse.SUPPRESS)  # fmt: skip
         elif s.kind == "choice":
             parser.add_argument(*names, choices=s.choices, metavar=s.metavar, **common)

@@ -33,6 +33,17 @@ def test_specs_and_flags_follow_the_declaration():
                    "names": {"x": "1", "y": "2"}, "where": None}  # fmt: skip
 
 
+def test_a_list_flag_given_twice_adds_to_the_first():
+    """``--names x=1 --names y=2`` as ``--names x=1 y=2`` (argparse's default keeps the last)."""
+    p = argparse.ArgumentParser()
+    add_flags(p, specs(_Demo))
+    s = {x.name: x for x in specs(_Demo)}
+    a = p.parse_args(["--names", "x=1", "--names", "y=2", "z=3"])
+    assert from_flag(s["names"], a.names) == {"x": "1", "y": "2", "z": "3"}
+    with pytest.raises(InputError):  # a name given twice across the flags is still refused
+        from_flag(s["names"], p.parse_args(["--names", "x=1", "--names", "x=2"]).names)
+
+
 def test_cells_and_toml_values_parse_alike(tmp_path):
     s = {x.name: x for x in specs(_Demo)}
     f = tmp_path / "m.csv"

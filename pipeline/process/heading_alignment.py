@@ -33,9 +33,8 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
   frame (:func:`~pipeline.calibration.flexion_axis.flexion_axis`, the principal axis of its
   horizontal angular velocity, signed by ``leg_flexion_axes``): in walking thigh and shank
   turn about one medio-lateral direction, so ``R_1 j_1``, ``R_2 j_2`` are one world line.
-  Measured: the simulated walk's knees (6-D, seeds 0-2) leave 2.4-3.7 deg by the centre,
-  3.2-9.0 by the flexion axes; S02's (vendor) 7.8-7.9 and 6.6-6.8, its sagittal median 4.42
-  deg by the flexion axes, 4.55 by the centre.
+  Measured: the simulated walk's knees (6-D, seeds 0-2) leave 2.4-3.7 deg by the centre, 3.2-9.0
+  by the flexion axes; S02's 7.8-7.9 and 6.6-6.8 (vendor; sagittal median 4.55 and 4.42 deg).
 
 * **a hip that does not align** (its windows never agree: the real x-IMU3 walk's hips without
   magnetometers; both of the simulated walk's under its soft tissue): its thigh, with the leg's
@@ -71,6 +70,8 @@ heading is not in the shared world (6-D filter output, a disturbed magnetometer'
 """
 
 from __future__ import annotations
+
+from functools import partial
 
 import numpy as np
 
@@ -317,10 +318,9 @@ def _signals(trial: Recording, segment: str):
 
 
 def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[HeadingDrift, str]:
-    """The knee's heading by the trusted hinge axes where they hold, else by whichever of the
-    knee centre's force and the segments' flexion axes the data hold better (the smaller
-    residual; the centre's only where its windows agree and its residual is within
-    :data:`MAX_RESIDUAL_DEG`) (module docstring)."""
+    """The knee's heading by the trusted hinge axes where they hold, else by whichever of the knee
+    centre's force and the segments' flexion axes the data hold better: the smaller residual,
+    within :data:`MAX_RESIDUAL_DEG` where either is (module docstring)."""
     c = next((k for k in knees if k.side == side and k.axes_trusted), None)
     if c is not None:  # the fit leaves each axis's sign free: the knee's flexion signs them
         s_1, s_2 = knee_signs(*(np.einsum("nji,j->ni", R, _UP) for R in (R_1, R_2)),
@@ -329,21 +329,21 @@ def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[Headi
                               up=_UP, window_s=WINDOW_S)  # fmt: skip
         if drift.residual_deg <= MAX_HINGE_RESIDUAL_DEG:
             return drift, "the knee's hinge axis"
-    try:
-        centre = _ball(trial, R_1, R_2, prox, dist, method)
-    except InputError:
-        centre = None
-    if centre is not None and centre.residual_deg > MAX_RESIDUAL_DEG:
-        centre = None
-    try:
-        flexion = _flexion(trial, R_1, R_2, axes, prox, dist)
-    except InputError:
-        if centre is None:
-            raise
-        flexion = None
-    if centre is not None and (flexion is None or centre.residual_deg <= flexion.residual_deg):
-        return centre, "the knee centre's acceleration"
-    return flexion, "the segments' flexion axes"
+    solvers = {
+        "the knee centre's acceleration": partial(_ball, trial, R_1, R_2, prox, dist, method),
+        "the segments' flexion axes": partial(_flexion, trial, R_1, R_2, axes, prox, dist)}
+    found, why = {}, None  # how -> its drift
+    for how, solve in solvers.items():
+        try:
+            found[how] = solve()
+        except InputError as e:
+            why = e
+    if not found:
+        raise why
+    held = {k: d for k, d in found.items() if d.residual_deg <= MAX_RESIDUAL_DEG} or found
+    best = min(held, key=lambda k: held[k].residual_deg)
+    return held[best], best + "".join(f", not {k} (its residual {d.residual_deg:.1f} deg)"
+                                      for k, d in held.items() if k != best)  # fmt: skip
 
 
 def _leg_axes(trial: Recording, rotations, side: str) -> dict[str, FlexionAxis] | str:
