@@ -21,7 +21,7 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
   (:func:`~pipeline.calibration.joint_centres.joint_centre`, ``shared_axis``), so it ends in one
   minimum however the sensors sit. From random starts in the sensors' frames S02's knee fits
   ended in one of two minima by the mounting (mean squared residual 0.32 / 0.42 as recorded,
-  0.22 / 0.29 turned), the angles moving by up to 1.0 deg (``bench_sensor_sets``); the simulated
+  0.22 / 0.29 turned), the angles moving by up to 1.2 deg (``bench_sensor_sets``); the simulated
   gait's hips (seed 0, 6-D) now end where a start at the true centres ends, before on the box's
   bound, where their headings happened to be steadier (0.2-0.7 against 2.9-3.7 deg RMS about
   the truth): its sagittal median rose from 0.96 to 1.18 deg through one hip, the other axes fell
