@@ -41,13 +41,12 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
   sensors aligned to it, is turned into the other thigh's heading where that one is the
   pelvis's, by the two thighs' flexion axes (in walking both swing about the body's
   medio-lateral line; Vicon's thighs on S02: 2.6 and 6.7 deg apart over the walk's two
-  halves); else onto the pelvis's medio-lateral line, which the pelvis's list at the stride
-  frequency shows in its sensor's frame
-  (:func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip centres
-  (the right one on the right, :data:`MIN_SIDE_MARGIN`). Before, such a thigh kept its
-  sensor's own heading, which a 6-D filter takes from how the sensor sits: the x-IMU3 walk's
-  angles changed by up to 20 deg with the mounting, the simulated walk's 6-D median error by up
-  to 25 deg (``results/bench_sensor_sets.txt``). On S02 without magnetometers, with one hip
+  halves); else onto the pelvis's medio-lateral line, which its list at the stride frequency
+  shows in its sensor's frame (``pelvis_lateral_line``), signed by the hip centres (the right
+  one on the right, :data:`MIN_SIDE_MARGIN`). Before, such
+  a thigh kept the heading a 6-D filter takes from how its sensor sits: the x-IMU3 walk's angles
+  moved by up to 20 deg with the mounting, the simulated walk's 6-D median error by up to 25 deg
+  (``results/bench_sensor_sets.txt``). On S02 without magnetometers, with one hip
   refused on purpose, every sagittal RMSE within 0.8 deg of the run whose hips both aligned;
   with both refused, the median within 0.1 deg and the hips' ab/adduction r 0.86 / 0.92 instead
   of 0.75 / 0.86 (measured once by hand). A thigh that neither aligns keeps its own heading, and
@@ -59,14 +58,12 @@ sensor's orientations turned into its proximal neighbour's world by ``psi(t)``
 
 Windows of :data:`WINDOW_S` hold several whole strides, over which a real knee's rotation and
 ab/adduction, the hip's rotation and the soft tissue average out; a window whose samples do not
-agree is left out (:data:`~pipeline.calibration.heading_offset.MIN_AGREEMENT`), and a joint whose
-constraint is not met after the turn (:data:`MAX_RESIDUAL_DEG`) is not used. On the real walk
-``gaittoolbox_s02`` without magnetometers this takes the six sagittal angles' median RMS error
-from 18.8 to the vendor orientations' (``results/bench_real_gait.txt``).
+agree is left out (``MIN_AGREEMENT``), and a joint whose constraint is not met after the turn
+(:data:`MAX_RESIDUAL_DEG`) is not used. On S02 without magnetometers this takes the
+sagittal median RMS error from 18.8 deg to the vendor orientations' (``bench_real_gait``).
 
-Which sensors are aligned (:func:`sensors_to_align`): ``drift='auto'`` aligns every sensor whose
-heading is not in the shared world (6-D filter output, a disturbed magnetometer's sensor);
-``'joints'`` every sensor; ``'none'`` none.
+Which sensors are aligned (:func:`sensors_to_align`): ``drift='auto'`` those whose heading is
+not the shared world's (6-D output, a disturbed magnetometer), ``'joints'`` all, ``'none'`` none.
 """
 
 from __future__ import annotations
@@ -121,7 +118,7 @@ MAX_HINGE_RESIDUAL_DEG = 10.0
 CENTRE_BOUND_M = 0.5
 #: The hip centres sign the pelvis's medio-lateral line when the cosine between it and the
 #: vector from the left hip centre to the right (or one centre's lateral side) is at least this:
-#: 0.08-0.72 on the simulated walk, S02 and the x-IMU3 walk (all signed right).
+#: 0.53-0.99 on the simulated walk (6-D, seeds 1-3), S02 (hips refused) and the x-IMU3 walk.
 MIN_SIDE_MARGIN = 0.05
 
 
@@ -281,8 +278,6 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
     """The thigh's flexion axis on the pelvis's medio-lateral line (its list at the stride
     frequency, :func:`~pipeline.calibration.flexion_axis.pelvis_lateral_line`), signed by the hip
     centres: the right one lies on the right."""
-    from pipeline.process.functional import fit_joint
-
     femur = f"{side}_femur"
     thigh = _leg_axes_of(axes, side)[femur]
     pelvis, s_f = _signals(trial, "pelvis"), _signals(trial, femur)
@@ -293,8 +288,8 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
     for s, sign in (("right", 1.0), ("left", -1.0)):
         if f"{s}_femur" not in out or not _has_signals(trial, f"{s}_femur"):
             continue
-        fit = fit_joint(trial.time, pelvis, _signals(trial, f"{s}_femur"), slice(None), method,
-                        shared_world=False, joint="spherical", verify_start=False)
+        fit, _, _ = _centre_fit(trial, out["pelvis"], out[f"{s}_femur"], "pelvis", f"{s}_femur",
+                                method)  # fmt: skip
         rightward += sign * fit.position_1_m
     margin = float(rightward @ line) / max(float(np.linalg.norm(rightward)), 1e-9)
     if abs(margin) < MIN_SIDE_MARGIN:
@@ -371,12 +366,11 @@ def _flexion(trial: Recording, R_1, R_2, axes, prox: str, dist: str) -> HeadingD
                          window_s=WINDOW_S)  # fmt: skip
 
 
-def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> HeadingDrift:
-    """Eq (1) on the specific force at the joint's centre (module docstring). IPOPT (the default
-    method) starts from the centre's vertical constraint; the classic methods (``gn``, ``dwpso``,
-    ``gwo``) search from their own random starts and populations, in the sensors' frames."""
+def _centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
+    """Hu's spherical fit of the joint on both signals low-passed at :data:`CUTOFF_HZ`, and those
+    signals. IPOPT (the default) starts from the centre's vertical constraint (module docstring);
+    ``gn``, ``dwpso``, ``gwo`` from their own random starts in the sensors' frames."""
     from pipeline.calibration.joint_centres import joint_centre
-    from pipeline.calibration.joint_constraints import joint_data, joint_force
     from pipeline.process.functional import fit_joint
 
     rate = trial.rate_hz
@@ -386,15 +380,21 @@ def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> Head
         c = joint_centre(trial.time, s1.gyr, s1.acc, R_1, s2.gyr, s2.acc, R_2,
                          cutoff_hz=CUTOFF_HZ, shared_axis=1)  # fmt: skip
         options = {"start": (c.o_1, c.o_2), "position_bound": CENTRE_BOUND_M}
-    s1 = s1.replace(gyr=lowpass(s1.gyr, rate, CUTOFF_HZ), acc=lowpass(s1.acc, rate, CUTOFF_HZ))
-    s2 = s2.replace(gyr=lowpass(s2.gyr, rate, CUTOFF_HZ), acc=lowpass(s2.acc, rate, CUTOFF_HZ))
-    fit = fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
-                    joint="spherical", verify_start=False, **options)
+    s1, s2 = (s.replace(gyr=lowpass(s.gyr, rate, CUTOFF_HZ), acc=lowpass(s.acc, rate, CUTOFF_HZ))
+              for s in (s1, s2))  # fmt: skip
+    return fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
+                     joint="spherical", verify_start=False, **options), s1, s2
+
+
+def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> HeadingDrift:
+    """Eq (1) on the specific force at the joint's centre (module docstring)."""
+    from pipeline.calibration.joint_constraints import joint_data, joint_force
+
+    fit, s1, s2 = _centre_fit(trial, R_1, R_2, prox, dist, method)
     # no observability test: a direction the fit leaves free moves the centre without changing
     # its force much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)
     data = joint_data(trial.time, s1.gyr, s1.acc, s2.gyr, s2.acc)
     f1, f2 = joint_force(data, fit.position_1_m, fit.position_2_m)
-    u = np.einsum("nij,nj->ni", R_1, f1)
-    v = np.einsum("nij,nj->ni", R_2, f2)
-    return heading_between(u, v, rate, up=_UP, window_s=WINDOW_S,
+    u, v = (np.einsum("nij,nj->ni", R, f) for R, f in ((R_1, f1), (R_2, f2)))
+    return heading_between(u, v, trial.rate_hz, up=_UP, window_s=WINDOW_S,
                            min_weight=MIN_ACCELERATION**2)  # fmt: skip
