@@ -35,6 +35,10 @@ done about it:
   fell off): **excluded** when two or more neighbours move around it, **noted** with one (a foot
   stays on the floor while its shank turns). A still neighbour means a still segment is
   plausible (a thigh on a chair while the shank swings; a pelvis while one hip flexes).
+* ``swapped`` (:mod:`pipeline.process.swap`, after the others, on the legs whose thigh, shank and
+  foot sensors passed them): a leg's thigh and shank sensors exchanged (straps or names), told
+  apart by the foot, whose ankle fits the shank's sensor and not the thigh's: **read as swapped
+  back** (a flag).
 
 * ``quaternion order`` (:func:`check_quaternion_order`, the whole recording, where it has
   orientations and accelerometers): orientations that keep gravity along a world axis far better
@@ -70,9 +74,10 @@ from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
+from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.process.signals import gravity_in_world
 from pipeline.process.slip import slip_step, unchecked
+from pipeline.process.swap import swap_evidence
 
 __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
            "ORDER_RATIO", "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors",
@@ -107,9 +112,9 @@ UNIT_RATIO = (0.1, 10.0)
 @dataclass(frozen=True)
 class Finding:
     """One fault of one sensor: ``check`` (a :data:`CHECKS` name), ``action`` (``'excluded'``,
-    ``'magnetometer not used'``, ``'noted'`` or ``'listed'``) and the ``evidence`` a summary
-    prints. Every action but ``'listed'`` is also a flag (:attr:`flagged`); a listed finding is
-    the sensor table's only (the reader's repairs, already among the run's notes)."""
+    ``'magnetometer not used'``, ``'read as swapped back'``, ``'noted'`` or ``'listed'``) and the
+    ``evidence`` a summary prints. Every action but ``'listed'`` is also a flag (:attr:`flagged`);
+    a listed finding is the sensor table's only (the reader's repairs, among the run's notes)."""
 
     sensor: str
     check: str
@@ -360,6 +365,7 @@ CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
     "moves with its segment": _moves_with_segment,
     "slipped": _slipped,
 }
+SWAPPED_BACK = "read as swapped back"  # a shank's sensor and its thigh's (pipeline.process.swap)
 
 
 def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
@@ -376,10 +382,18 @@ def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
                 findings.append(f)
                 if f.action == "excluded":  # one reason is enough
                     break
+    faulty = {f.sensor for f in findings if f.flagged}
+    for side in ("right", "left"):  # a leg whose three sensors passed: its thigh's and shank's
+        ev = swap_evidence(side, rec, faulty)
+        if ev is not None and ev.swapped:
+            findings.append(Finding(ev.shank, "swapped", SWAPPED_BACK, ev.evidence()))
     sensors = dict(rec.sensors)
     for f in findings:
         if f.action == "excluded":
             sensors.pop(f.sensor, None)
+        elif f.action == SWAPPED_BACK:
+            thigh = SEGMENT_SENSOR[SENSOR_TO_SEGMENT[f.sensor].replace("_tibia", "_femur")]
+            sensors[thigh], sensors[f.sensor] = sensors[f.sensor], sensors[thigh]
         elif f.action == "magnetometer not used" and f.sensor in sensors:
             sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
     return rec.with_sensors(sensors), findings
