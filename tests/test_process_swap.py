@@ -90,3 +90,19 @@ def test_the_real_walks():
             ev = swap_evidence(side, rec)
             assert ev.thigh_residual > 2.0 * ev.shank_residual, ev
             assert swap_evidence(side, _swapped(rec, side[0])).swapped
+
+
+def test_a_faulty_sensor_keeps_its_leg_from_deciding_a_dead_magnetometer_does_not(walk):
+    """A leg sensor excluded or noted (here the foot's gyroscope axis dead) could make either fit
+    the worse: that leg is not decided; a magnetometer left out (all zero) changes no fit."""
+    swapped = _swapped(walk, "r")
+    foot = swapped.sensors["calcn_r_imu"]
+    dead = swapped.with_sensors({**swapped.sensors, "calcn_r_imu": foot.replace(
+        gyr=np.column_stack([foot.gyr[:, 0], np.zeros(len(foot.gyr)), foot.gyr[:, 2]]))})
+    assert not [f for f in check_sensors(dead)[1] if f.check == "swapped"]
+    shank = swapped.sensors["tibia_r_imu"]
+    no_mag = swapped.with_sensors({**swapped.sensors,
+                                   "tibia_r_imu": shank.replace(mag=np.zeros_like(shank.mag))})
+    found = check_sensors(no_mag)[1]
+    assert any(f.action == "magnetometer not used" for f in found)
+    assert [f.action for f in found if f.check == "swapped"] == [SWAPPED_BACK]

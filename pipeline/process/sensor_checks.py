@@ -382,7 +382,7 @@ def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
                 findings.append(f)
                 if f.action == "excluded":  # one reason is enough
                     break
-    faulty = {f.sensor for f in findings if f.flagged}
+    faulty = {f.sensor for f in findings if f.flagged and f.action != "magnetometer not used"}
     for side in ("right", "left"):  # a leg whose three sensors passed: its thigh's and shank's
         ev = swap_evidence(side, rec, faulty)
         if ev is not None and ev.swapped:
