@@ -54,3 +54,16 @@ def test_a_sensor_turned_on_its_segment_measures_the_same_world_in_its_new_axes(
     world_after = np.einsum("nij,nj->ni", matrix_from_quat(t.quat), t.gyr)
     np.testing.assert_allclose(world_after, world_before, atol=1e-12)
     np.testing.assert_allclose(matrix_from_quat(t.quat), R0 @ R, atol=1e-12)
+
+
+def test_low_passed_filters_the_inertial_signals_only():
+    t = np.arange(400) / 100.0
+    wave = np.column_stack([np.sin(2 * np.pi * 1.0 * t) + np.sin(2 * np.pi * 20.0 * t)] * 3)
+    quat = np.tile([1.0, 0.0, 0.0, 0.0], (400, 1))
+    s = SensorSignals(quat=quat, gyr=wave, acc=2 * wave, mag=wave)
+    f = s.low_passed(100.0, 5.0)
+    slow = np.sin(2 * np.pi * 1.0 * t)[100:300]
+    assert np.max(np.abs(f.gyr[100:300, 0] - slow)) < 0.05
+    assert np.max(np.abs(f.acc[100:300, 1] - 2 * slow)) < 0.1
+    assert f.quat is quat and f.mag is wave
+    assert SensorSignals(quat=quat).low_passed(100.0, 5.0).gyr is None

@@ -144,7 +144,8 @@ def calibrate_ipopt(
                                       {"restarts": 1, "max_iter": 15})  # fmt: skip
         o1, o2 = xo[:3], xo[3:]
     else:
-        (o1, o2), it0 = (np.asarray(o, float) for o in start), 0
+        o1, o2 = (np.asarray(o, float) for o in start)
+        it0 = 0
     K1 = gamma_matrix(data.gyr_1, data.gyr_dot_1)
     K2 = gamma_matrix(data.gyr_2, data.gyr_dot_2)
     blocks = [_position_data(data.acc_1, K1), _position_data(data.acc_2, K2)]

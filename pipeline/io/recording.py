@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.filtering import lowpass
 from pipeline.rotations import matrix_from_quat, quat_from_matrix
 
 __all__ = ["WORLD", "Z_UP_WORLDS", "Recording", "SensorSignals", "world_of"]
@@ -61,6 +62,12 @@ class SensorSignals:
 
     def replace(self, **changes: np.ndarray | None) -> SensorSignals:
         return dataclasses.replace(self, **changes)
+
+    def low_passed(self, rate_hz: float, cutoff_hz: float) -> SensorSignals:
+        """The gyroscope's and the accelerometer's signals low-passed
+        (:func:`pipeline.filtering.lowpass`); the orientations and the magnetometer as they are."""
+        return self.replace(**{k: lowpass(getattr(self, k), rate_hz, cutoff_hz)
+                               for k in ("gyr", "acc") if getattr(self, k) is not None})
 
     def turned(self, R: np.ndarray) -> SensorSignals:
         """The same sensor mounted turned by ``R`` (3, 3) on its segment, its new axes ``R``'s

@@ -87,7 +87,6 @@ from pipeline.calibration.heading_offset import (
     turn_about_vertical,
 )
 from pipeline.errors import InputError
-from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.conventions import JOINT_SEGMENTS, other_side
@@ -380,8 +379,7 @@ def _centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
         c = joint_centre(trial.time, s1.gyr, s1.acc, R_1, s2.gyr, s2.acc, R_2,
                          cutoff_hz=CUTOFF_HZ, shared_axis=1)  # fmt: skip
         options = {"start": (c.o_1, c.o_2), "position_bound": CENTRE_BOUND_M}
-    s1, s2 = (s.replace(gyr=lowpass(s.gyr, rate, CUTOFF_HZ), acc=lowpass(s.acc, rate, CUTOFF_HZ))
-              for s in (s1, s2))  # fmt: skip
+    s1, s2 = (s.low_passed(rate, CUTOFF_HZ) for s in (s1, s2))
     return fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
                      joint="spherical", verify_start=False, **options), s1, s2
 

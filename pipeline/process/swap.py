@@ -27,7 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.calibration.conventions import DEFAULT_METHOD
-from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
@@ -70,9 +69,7 @@ def _ankle_residual(rec: Recording, leg: SensorSignals, foot: SensorSignals) -> 
     from pipeline.calibration.joint_constraints import joint_data, spherical_residual
     from pipeline.process.functional import fit_joint
 
-    rate = rec.rate_hz
-    s1, s2 = (s.replace(gyr=lowpass(s.gyr, rate, CUTOFF_HZ), acc=lowpass(s.acc, rate, CUTOFF_HZ))
-              for s in (leg, foot))  # fmt: skip
+    s1, s2 = (s.low_passed(rec.rate_hz, CUTOFF_HZ) for s in (leg, foot))
     fit = fit_joint(rec.time, s1, s2, slice(None, None, STEP), DEFAULT_METHOD, shared_world=False,
                     joint="spherical", verify_start=False)  # fmt: skip
     e = spherical_residual(fit.position_1_m, fit.position_2_m,
