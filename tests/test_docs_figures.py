@@ -86,6 +86,10 @@ FIGURES = [
      rf"the undisturbed run measured right {NUM} deg"),
     ("docs/results.md", rf"with a free ankle, [-+\d.]+° and \+?{NUM}°", "results/bench_faults.txt",
      rf"the undisturbed run measured right [-+\d.]+ deg, left \+?{NUM} deg"),
+    ("docs/results.md", rf"the foot's, {NUM} m/s² on S02", "results/bench_faults.txt",
+     rf"## S02[\s\S]*?fits an ankle with femur_r_imu \(residual {NUM} m/s"),
+    ("docs/results.md", rf"not the thigh's, {NUM}\)", "results/bench_faults.txt",
+     rf"## S02[\s\S]*?better than with tibia_r_imu \({NUM}\)"),
 ]  # fmt: skip
 
 
