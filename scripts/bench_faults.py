@@ -1,5 +1,6 @@
 """Fault injection: one fault at a time in one sensor's raw signals (the right shank's; with the
-thigh's for the slipping pair and the swap; the pelvis's for its belt turning around the waist),
+thigh's for the slipping pair and the swap; the pelvis's for its belt turning around the waist;
+every leg sensor's name for the legs named left for right),
 on the simulator and on the real S02 walk; was it detected and named, what was done, and how far
 did the joint angles move.
 
@@ -24,6 +25,7 @@ from pipeline.errors import InputError
 from pipeline.io.recording import Recording
 from pipeline.model.measures import Measures
 from pipeline.process import process_recording
+from pipeline.process.sides import mirrored
 from pipeline.rotations import exp3
 
 #: The sensor each fault is injected into (a shank: it observes the knee and the ankle).
@@ -32,6 +34,8 @@ TARGET = "tibia_r_imu"
 TOUCHED = ("right_knee", "right_ankle")
 #: The pelvis's sensor and the joints it observes (its belt fault).
 PELVIS, PELVIS_TOUCHED = "pelvis_imu", ("right_hip", "left_hip", "pelvis")
+#: The joints the legs' sensors observe (the legs named left for right).
+LEGS_TOUCHED = ("right_", "left_")
 #: A fault that moves no joint angle by this much (deg) needs no detection.
 HARMLESS_DEG = 0.5
 
@@ -130,6 +134,12 @@ def swapped(rec: Recording) -> Recording:
     return rec.with_sensors(sensors)
 
 
+def mirrored_legs(rec: Recording) -> Recording:
+    """Every leg sensor named for its namesake on the other leg (a sensor map's left and right
+    exchanged)."""
+    return mirrored(rec)
+
+
 #: Fault -> (how it is injected, the sensor whose notes name it, the joints that sensor observes).
 FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
           "magnetometer hard-iron offset (60 % of the field)": (hard_iron, TARGET, TOUCHED),
@@ -139,6 +149,8 @@ FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
           "thigh and shank sensors slipping 30 deg together": (slipping_together, TARGET, TOUCHED),
           "5 s dropout": (dropout, TARGET, TOUCHED),
           "thigh and shank sensors swapped": (swapped, TARGET, TOUCHED),
+          "left and right legs' sensors named for each other": (mirrored_legs, "femur_r_imu",
+                                                                 LEGS_TOUCHED),
           "pelvis belt turning 30 deg around the waist halfway": (belt_turning, PELVIS,
                                                                   PELVIS_TOUCHED)}  # fmt: skip
 
@@ -201,7 +213,7 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
     moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
              if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r
-             and "| pelvis" not in r]  # fmt: skip
+             and "| pelvis" not in r and "| left and right" not in r]  # fmt: skip
     belt = [(r.split(" | ")[3], heading_turn[r.split(" | ")[0][2:]]) for r in rows
             if r.startswith("| pelvis belt")]  # fmt: skip
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"

@@ -90,6 +90,10 @@ FIGURES = [
      rf"## S02[\s\S]*?fits an ankle with femur_r_imu \(residual {NUM} m/s"),
     ("docs/results.md", rf"not the thigh's, {NUM}\)", "results/bench_faults.txt",
      rf"## S02[\s\S]*?better than with tibia_r_imu \({NUM}\)"),
+    ("docs/results.md", rf"\(cosine {NUM} on S02", "results/bench_faults.txt",
+     rf"## S02[\s\S]*?femur_l_imu's \([\d.]+ m apart, cosine {NUM} with"),
+    ("docs/results.md", rf"{NUM} on the simulated walk, with the subject's right",
+     "results/bench_faults.txt", rf"femur_l_imu's \([\d.]+ m apart, cosine {NUM} with"),
 ]  # fmt: skip
 
 

@@ -93,7 +93,7 @@ from pipeline.model.conventions import JOINT_SEGMENTS, other_side
 from pipeline.process.functional import KneeCalibration
 
 __all__ = ["CENTRE_BOUND_M", "CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG",
-           "MIN_SIDE_MARGIN", "WINDOW_S", "align_headings", "sensors_to_align"]
+           "MIN_SIDE_MARGIN", "WINDOW_S", "align_headings", "centre_fit", "sensors_to_align"]
 
 _UP = np.array([0.0, 1.0, 0.0])
 #: Window of eq (1) (s): several whole strides (a stride takes ~1-1.3 s).
@@ -287,7 +287,7 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
     for s, sign in (("right", 1.0), ("left", -1.0)):
         if f"{s}_femur" not in out or not _has_signals(trial, f"{s}_femur"):
             continue
-        fit, _, _ = _centre_fit(trial, out["pelvis"], out[f"{s}_femur"], "pelvis", f"{s}_femur",
+        fit, _, _ = centre_fit(trial, out["pelvis"], out[f"{s}_femur"], "pelvis", f"{s}_femur",
                                 method)  # fmt: skip
         rightward += sign * fit.position_1_m
     margin = float(rightward @ line) / max(float(np.linalg.norm(rightward)), 1e-9)
@@ -365,7 +365,7 @@ def _flexion(trial: Recording, R_1, R_2, axes, prox: str, dist: str) -> HeadingD
                          window_s=WINDOW_S)  # fmt: skip
 
 
-def _centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
+def centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
     """Hu's spherical fit of the joint on both signals low-passed at :data:`CUTOFF_HZ`, and those
     signals. IPOPT (the default) starts from the centre's vertical constraint (module docstring);
     ``gn``, ``dwpso``, ``gwo`` from their own random starts in the sensors' frames."""
@@ -388,7 +388,7 @@ def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> Head
     """Eq (1) on the specific force at the joint's centre (module docstring)."""
     from pipeline.calibration.joint_constraints import joint_data, joint_force
 
-    fit, s1, s2 = _centre_fit(trial, R_1, R_2, prox, dist, method)
+    fit, s1, s2 = centre_fit(trial, R_1, R_2, prox, dist, method)
     # no observability test: a direction the fit leaves free moves the centre without changing
     # its force much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)
     data = joint_data(trial.time, s1.gyr, s1.acc, s2.gyr, s2.acc)

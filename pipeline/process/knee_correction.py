@@ -41,8 +41,10 @@ from pipeline.calibration.correction import (
     population_correction,
 )
 from pipeline.process.functional import KneeCalibration
+from pipeline.process.pose import CalibrationPose
 
-__all__ = ["CORRECTIONS", "MAX_SPREAD_DEG", "KneeInputs", "apply_correction", "choose_correction"]
+__all__ = ["CORRECTIONS", "MAX_SPREAD_DEG", "KneeInputs", "apply_correction", "choose_correction",
+           "correct_knees"]  # fmt: skip
 
 #: Largest angle (deg) between the corrections of the two halves of a knee's moving span for which
 #: a correction from the orientations is applied.
@@ -161,3 +163,28 @@ def apply_correction(
         out[f"{foot}_imu"] = corrected_placement(out[f"{foot}_imu"],
                                                  carried_correction(c.tibia_rotation, R_c))
     return out
+
+
+def correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, method: str,
+                  unaligned: set[str], rate_hz: float, notes: list[str]):  # fmt: skip
+    """Step 5 on every knee: ``(placements, corrections)``. ``rotations``: segment -> (N, 3, 3)
+    sensor orientations; ``knee_axes``: side -> the reference axes (femur, tibia);
+    ``knee_cal``: the knees' functional calibrations; ``unaligned``: the tibias whose sensors'
+    headings were not aligned to their thighs'; ``method``: a :data:`CORRECTIONS` name or
+    ``'none'``."""
+    placements = dict(cal.placements)
+    corrections: dict[str, KneeCorrection] = {}
+    if method == "none":
+        return placements, corrections
+    calibrations = {c.side: c for c in knee_cal}
+    for side, (a_F, a_T) in knee_axes.items():
+        fem, tib = f"{side}_femur", f"{side}_tibia"
+        P_F, P_T = placements[f"{fem}_imu"][:3, :3], placements[f"{tib}_imu"][:3, :3]
+        k = KneeInputs(side, rotations[fem] @ P_F.T, rotations[tib] @ P_T.T, a_F, a_T,
+                       cal.pose[fem].T @ cal.pose[tib], P_F, P_T, rate_hz,
+                       calibrations.get(side),
+                       headings_shared=tib not in unaligned)  # fmt: skip
+        c = choose_correction(k, method, notes)
+        corrections[side] = c
+        placements = apply_correction(placements, c, cal.pose)
+    return placements, corrections

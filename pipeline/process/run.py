@@ -65,7 +65,7 @@ from pipeline.model.skeleton import Skeleton
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
 from pipeline.process.gait import Gait, gait_of, with_pelvis_path
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
-from pipeline.process.knee_correction import KneeInputs, apply_correction, choose_correction
+from pipeline.process.knee_correction import correct_knees
 from pipeline.process.options import IKOptions, InputOptions
 from pipeline.process.pose import (
     CalibrationPose,
@@ -74,8 +74,9 @@ from pipeline.process.pose import (
     still_gravity,
 )
 from pipeline.process.posture import Posture, lean_pose, standing_posture
-from pipeline.process.sensor_checks import Finding, check_sensors
+from pipeline.process.sensor_checks import SWAPPED_BACK, Finding, check_sensors
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
+from pipeline.process.sides import Sides, mirrored, side_evidence
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
 from pipeline.rotations import (
     euler_zxy_from_matrix,
@@ -172,6 +173,7 @@ def process_recording(
     the static recording that gives the calibration pose.
     """
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
+    given, given_static = trial, static
     notes = list(trial.notes)
     trial, findings = check_sensors(trial)
     gait = gait_of(trial, notes)
@@ -216,6 +218,9 @@ def process_recording(
             cal = read_pose(rotations, pose_notes := [])
             knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     notes += pose_notes
+    sides = side_evidence(trial, rotations, cal.right, method, geometry, gait.strides)
+    if sides is not None and sides.mirrored:
+        return _read_mirrored(given, given_static, measures, opts, sides)
     posture = None
     if opts.posture == "measured" and opts.calibration_pose == "standing":
         posture = _measured_posture(trial, rotations, cal, geometry, legs, notes)
@@ -223,8 +228,8 @@ def process_recording(
         knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     unaligned = {f"{side}_tibia" for side in legs
                  if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
-    placements, corrections = _correct_knees(rotations, cal, knee_axes, knee_cal, opts,
-                                             unaligned, trial.rate_hz, notes)  # fmt: skip
+    placements, corrections = correct_knees(rotations, cal, knee_axes, knee_cal,
+                                            opts.correction, unaligned, trial.rate_hz, notes)
     t0 = _time.perf_counter()
     sk, Q, result = _solve(geometry, opts, legs, placements, rotations, cal, sensors.pelvis)
     seconds = _time.perf_counter() - t0
@@ -240,6 +245,16 @@ def process_recording(
                  sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
                  drifts, filtered, oriented.magnetometers, posture, measures,
                  trial.source, sensor_findings=findings, gait=gait)  # fmt: skip
+
+
+def _read_mirrored(trial, static, measures, opts: IKOptions, sides: Sides) -> IKRun:
+    """The run on the recording with its legs' sensor names exchanged
+    (:mod:`pipeline.process.sides`), the finding first among its flags."""
+    run = process_recording(mirrored(trial), measures, opts, static=mirrored(static))
+    finding = Finding("femur_r_imu", "sides", SWAPPED_BACK, sides.evidence())
+    run.sensor_findings.insert(0, finding)
+    run.flags.insert(0, finding.line())
+    return run
 
 
 def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:
@@ -300,27 +315,6 @@ def _geometry(measures: Measures, opts: IKOptions):
                     knee_axis_tibia=np.array(opts.knee_axis_tibia))  # fmt: skip
     geometry, _ = geometry_from_measures(measures, foot_length_m=opts.foot_length_m, **axes)
     return geometry
-
-
-def _correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, opts: IKOptions,
-                   unaligned: set[str], rate_hz: float, notes: list[str]):  # fmt: skip
-    """Step 5: ``(placements, corrections)`` (:mod:`pipeline.process.knee_correction`)."""
-    placements = dict(cal.placements)
-    corrections: dict[str, KneeCorrection] = {}
-    if opts.correction == "none":
-        return placements, corrections
-    calibrations = {c.side: c for c in knee_cal}
-    for side, (a_F, a_T) in knee_axes.items():
-        fem, tib = f"{side}_femur", f"{side}_tibia"
-        P_F, P_T = placements[f"{fem}_imu"][:3, :3], placements[f"{tib}_imu"][:3, :3]
-        k = KneeInputs(side, rotations[fem] @ P_F.T, rotations[tib] @ P_T.T, a_F, a_T,
-                       cal.pose[fem].T @ cal.pose[tib], P_F, P_T, rate_hz,
-                       calibrations.get(side),
-                       headings_shared=tib not in unaligned)  # fmt: skip
-        c = choose_correction(k, opts.correction, notes)
-        corrections[side] = c
-        placements = apply_correction(placements, c, cal.pose)
-    return placements, corrections
 
 
 def _solve(geometry, opts: IKOptions, legs, placements, rotations, cal: CalibrationPose,
