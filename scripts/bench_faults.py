@@ -1,6 +1,6 @@
 """Fault injection: one fault at a time in one sensor's raw signals (the right shank's; with the
 thigh's for the slipping pair and the swap; the pelvis's for its belt turning around the waist;
-every leg sensor's name for the legs named left for right),
+both shanks' for their exchange; every leg sensor's name for the legs named left for right),
 on the simulator and on the real S02 walk; was it detected and named, what was done, and how far
 did the joint angles move.
 
@@ -134,6 +134,13 @@ def swapped(rec: Recording) -> Recording:
     return rec.with_sensors(sensors)
 
 
+def crossed(rec: Recording) -> Recording:
+    """The right and left shanks' sensors exchanged (their names or straps)."""
+    sensors = dict(rec.sensors)
+    sensors[TARGET], sensors["tibia_l_imu"] = sensors["tibia_l_imu"], sensors[TARGET]
+    return rec.with_sensors(sensors)
+
+
 def mirrored_legs(rec: Recording) -> Recording:
     """Every leg sensor named for its namesake on the other leg (a sensor map's left and right
     exchanged)."""
@@ -149,6 +156,8 @@ FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
           "thigh and shank sensors slipping 30 deg together": (slipping_together, TARGET, TOUCHED),
           "5 s dropout": (dropout, TARGET, TOUCHED),
           "thigh and shank sensors swapped": (swapped, TARGET, TOUCHED),
+          "right and left shank sensors swapped": (crossed, TARGET, ("right_knee", "right_ankle",
+                                                                  "left_knee", "left_ankle")),
           "left and right legs' sensors named for each other": (mirrored_legs, "femur_r_imu",
                                                                  LEGS_TOUCHED),
           "pelvis belt turning 30 deg around the waist halfway": (belt_turning, PELVIS,
@@ -213,7 +222,8 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
     moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
              if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r
-             and "| pelvis" not in r and "| left and right" not in r]  # fmt: skip
+             and "| pelvis" not in r and "| left and right" not in r
+             and "| right and left" not in r]  # fmt: skip
     belt = [(r.split(" | ")[3], heading_turn[r.split(" | ")[0][2:]]) for r in rows
             if r.startswith("| pelvis belt")]  # fmt: skip
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"

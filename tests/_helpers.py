@@ -87,3 +87,23 @@ def knee_truth(sim):
         np.array(k["position_1_m"]), np.array(k["position_2_m"]), j1, j2
     )
     return truth, j1, j2, o1, o2
+
+
+def qmt_recording(data: Path):
+    """The qmt_full_body recording's pelvis and leg sensors (gyroscopes and accelerometers) under
+    our names, or None where ``data`` (the shared data folder) does not hold it."""
+    import scipy.io as sio
+
+    from pipeline.io.recording import Recording, SensorSignals
+
+    path = Path(data) / "qmt_full_body" / "full_body_example_data.mat"
+    if not path.exists():
+        return None
+    d = sio.loadmat(path, squeeze_me=True, struct_as_record=False)
+    names = {"hip": "pelvis_imu", "upper_leg_left": "femur_l_imu",
+             "upper_leg_right": "femur_r_imu", "lower_leg_left": "tibia_l_imu",
+             "lower_leg_right": "tibia_r_imu", "foot_left": "calcn_l_imu",
+             "foot_right": "calcn_r_imu"}  # fmt: skip
+    return Recording(d["t"] - d["t"][0], 100.0, {n: SensorSignals(
+        gyr=np.asarray(d[k].gyr, float), acc=np.asarray(d[k].acc, float))
+        for k, n in names.items()})  # fmt: skip

@@ -216,21 +216,11 @@ def test_a_change_of_gait_on_a_real_recording_is_not_a_slip():
     from hinge-like): at 67-70 s the thighs' gravity at mid-stance steps 21-29 deg, beyond the
     limit, but the shanks step 10-15 deg with them: the movement changed, no sensor slipped; the
     thighs are listed as not checked (a slip there would not be told apart), none excluded."""
-    path = S02.parent / "qmt_full_body" / "full_body_example_data.mat"
-    if not path.exists():
+    from _helpers import qmt_recording
+
+    rec = qmt_recording(S02.parent)
+    if rec is None:
         pytest.skip("../shared/data/qmt_full_body not present")
-    import scipy.io as sio
-
-    from pipeline.io.recording import SensorSignals
-
-    d = sio.loadmat(path, squeeze_me=True, struct_as_record=False)
-    names = {"hip": "pelvis_imu", "upper_leg_left": "femur_l_imu",
-             "upper_leg_right": "femur_r_imu", "lower_leg_left": "tibia_l_imu",
-             "lower_leg_right": "tibia_r_imu", "foot_left": "calcn_l_imu",
-             "foot_right": "calcn_r_imu"}  # fmt: skip
-    rec = Recording(d["t"] - d["t"][0], 100.0, {n: SensorSignals(
-        gyr=np.asarray(d[k].gyr, float), acc=np.asarray(d[k].acc, float))
-        for k, n in names.items()})  # fmt: skip
     thighs = [slip_step(n, rec) for n in ("femur_l_imu", "femur_r_imu")]
     assert all(s.deg > SLIP_DEG and s.others_deg > 9.0 for s in thighs), thighs
     found = [f for f in check_sensors(rec)[1] if f.check == "slipped"]

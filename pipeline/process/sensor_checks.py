@@ -35,10 +35,10 @@ done about it:
   fell off): **excluded** when two or more neighbours move around it, **noted** with one (a foot
   stays on the floor while its shank turns). A still neighbour means a still segment is
   plausible (a thigh on a chair while the shank swings; a pelvis while one hip flexes).
-* ``swapped`` (:mod:`pipeline.process.swap`, after the others, on the legs whose thigh, shank and
-  foot sensors passed them): a leg's thigh and shank sensors exchanged (straps or names), told
-  apart by the foot, whose ankle fits the shank's sensor and not the thigh's: **read as swapped
-  back** (a flag).
+* ``crossed``, ``swapped`` (:mod:`pipeline.process.swap`, on sensors that passed the others): the
+  shanks' or feet's sensors exchanged between the legs (a stride's rhythm), then a leg's thigh and
+  shank (its ankle fits the shank's sensor): **read as swapped back** (a flag); an exchange whose
+  thighs do not tell which: the four **excluded**.
 
 * ``quaternion order`` (:func:`check_quaternion_order`, the whole recording, where it has
   orientations and accelerometers): orientations that keep gravity along a world axis far better
@@ -54,13 +54,11 @@ done about it:
   whose step beyond the limit the leg's other sensors and the other leg's share (the movement
   changed: turns on the spot, shuffles; the x-IMU3 walk's sensors step 20-86 deg so).
 
-* ``read``: what the reader of the sensor's own file repaired or noticed (in a folder of
-  one-sensor files: dropped samples or packets filled, an irregular clock kept as recorded;
-  ``Recording.sensor_notes``): **listed** in the sensor table, so that it shows which sensor's
-  clock jumped (the run's notes already say it: not a flag, ``--strict`` does not stop on it).
+* ``read``: what the reader of a sensor's own file repaired or noticed (dropped samples or
+  packets filled, an irregular clock kept; ``Recording.sensor_notes``): **listed** in the sensor
+  table (the run's notes say it too: not a flag, ``--strict`` does not stop on it).
 
-Magnetometer trust (field strength and dip against the other sensors and over time) is
-:mod:`pipeline.calibration.magnetometer`'s; the summary's sensor table shows both.
+Magnetometer trust is :mod:`pipeline.calibration.magnetometer`'s; the sensor table shows both.
 """
 
 from __future__ import annotations
@@ -74,10 +72,10 @@ from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
-from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
+from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.process.signals import gravity_in_world
 from pipeline.process.slip import slip_step, unchecked
-from pipeline.process.swap import swap_evidence
+from pipeline.process.swap import crossing_evidence, swap_evidence
 
 __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
            "ORDER_RATIO", "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors",
@@ -349,11 +347,10 @@ def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     if step is None:
         why = unchecked(name, rec)
         return None if why is None else Finding(name, "slipped", "listed", why)
-    if step.inconclusive:
-        return Finding(name, "slipped", "listed", step.evidence())
-    if not step.slipped:
-        return None
-    return Finding(name, "slipped", "excluded", step.evidence())
+    if step.inconclusive or step.slipped:
+        return Finding(name, "slipped", "listed" if step.inconclusive else "excluded",
+                       step.evidence())  # fmt: skip
+    return None
 
 
 #: Check name -> function of (sensor name, its signals, the recording).
@@ -365,7 +362,7 @@ CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
     "moves with its segment": _moves_with_segment,
     "slipped": _slipped,
 }
-SWAPPED_BACK = "read as swapped back"  # a shank's sensor and its thigh's (pipeline.process.swap)
+SWAPPED_BACK = "read as swapped back"  # sensors exchanged (pipeline.process.swap, .sides)
 
 
 def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
@@ -382,18 +379,22 @@ def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
                 findings.append(f)
                 if f.action == "excluded":  # one reason is enough
                     break
+    sensors = dict(rec.sensors)  # each sensor's own faults first
+    for f in findings:
+        if f.action == "excluded":
+            sensors.pop(f.sensor, None)
+        elif f.action == "magnetometer not used" and f.sensor in sensors:
+            sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
+    rec = rec.with_sensors(sensors)
     faulty = {f.sensor for f in findings if f.flagged and f.action != "magnetometer not used"}
+    crossing = crossing_evidence(rec, faulty)  # first: eq 1 needs each leg's own sensors
+    if crossing is not None and crossing.crossed:  # read back, or the four excluded
+        action = SWAPPED_BACK if crossing.exchanged else "excluded"
+        findings += [Finding(n, "crossed", action, crossing.evidence()) for n in crossing.sensors]
+        rec = crossing.read_back(rec)
     for side in ("right", "left"):  # a leg whose three sensors passed: its thigh's and shank's
         ev = swap_evidence(side, rec, faulty)
         if ev is not None and ev.swapped:
             findings.append(Finding(ev.shank, "swapped", SWAPPED_BACK, ev.evidence()))
-    sensors = dict(rec.sensors)
-    for f in findings:
-        if f.action == "excluded":
-            sensors.pop(f.sensor, None)
-        elif f.action == SWAPPED_BACK:
-            thigh = SEGMENT_SENSOR[SENSOR_TO_SEGMENT[f.sensor].replace("_tibia", "_femur")]
-            sensors[thigh], sensors[f.sensor] = sensors[f.sensor], sensors[thigh]
-        elif f.action == "magnetometer not used" and f.sensor in sensors:
-            sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
-    return rec.with_sensors(sensors), findings
+            rec = ev.read_back(rec)
+    return rec, findings

@@ -22,8 +22,10 @@ centres a plausible distance apart (within :data:`DISTANCE_FACTOR` of the model'
 one hip flexing, the still hip's centre is free and eq (1) read -0.77 and +0.64 on one simulated
 trial (0.55 m apart), with a still thigh +0.25 (0.09 m); the simulated walk's fits that ended
 0.53 and 0.69 m apart kept the right sign but are not used either. The fits take 0.04 s (S02).
-A thigh named for the other side alone (its shank and foot named right) reads the same as a
-whole leg and is not told apart.
+A thigh named for the other side alone (the shanks and feet as named) reads as the whole legs
+named so: the legs are read mirrored, flagged, and the shanks and feet then sit on the other
+thigh's leg (the stride's rhythm, :mod:`pipeline.process.swap` eq 2-3, is too weak in the thighs
+to tell it).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from pipeline.model.conventions import other_side
 from pipeline.model.geometry import SubjectGeometry
 
 __all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "MIN_STRIDES", "Sides", "mirrored",
-           "side_evidence"]  # fmt: skip
+           "side_evidence", "walked"]  # fmt: skip
 
 #: Eq (1): the cosine below ``-MIN_MARGIN`` reads the legs as mirrored.
 MIN_MARGIN = 0.3
@@ -87,7 +89,7 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
     segments = ("pelvis", "right_femur", "left_femur")
     if any(s not in rotations or not _has_signals(trial, SEGMENT_SENSOR[s]) for s in segments):
         return None
-    if min(sum(s.side == side for s in strides) for side in ("right", "left")) < MIN_STRIDES:
+    if not walked(strides):
         return None
     o = {}
     for side in ("right", "left"):
@@ -99,6 +101,11 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
     margin = float(d_h @ right) / max(float(np.linalg.norm(d_h)), 1e-9)
     model_m = float(np.linalg.norm(geometry.right_hip - geometry.left_hip))
     return Sides(margin, float(np.linalg.norm(o["right"] - o["left"])), model_m)
+
+
+def walked(strides: list[Stride]) -> bool:
+    """Whether each leg walked :data:`MIN_STRIDES` strides."""
+    return min(sum(s.side == side for s in strides) for side in ("right", "left")) >= MIN_STRIDES
 
 
 def _has_signals(trial: Recording, name: str) -> bool:
