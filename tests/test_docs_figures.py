@@ -12,6 +12,16 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 NUM = r"(-?[\d.]+)"
 
+_RESULTS = "docs/results.md"
+
+
+def _realism(quantity: str, column: int) -> tuple[str, str]:
+    """bench_sim_realism's ``quantity`` row, its ``column``-th value (1: S02, 3: the ideal
+    simulated walk, 4: the simulated walk)."""
+    return ("results/bench_sim_realism.txt",
+            rf"\| {re.escape(quantity)} \|" + r" [\d.]+ \|" * (column - 1) + rf" {NUM} \|")
+
+
 #: (document, its regex with the figure as group 1, results file, its regex for the same figure)
 FIGURES = [
     ("docs/results.md", rf"vendor orientations {NUM}°", "results/bench_real_gait.txt",
@@ -102,6 +112,27 @@ FIGURES = [
      rf"## S02[\s\S]*?femur_l_imu's \([\d.]+ m apart, cosine {NUM} with"),
     ("docs/results.md", rf"{NUM} on the simulated walk, with the subject's right",
      "results/bench_faults.txt", rf"femur_l_imu's \([\d.]+ m apart, cosine {NUM} with"),
+    (_RESULTS, rf"thigh swing \({NUM}° against", *_realism("femur swing (deg)", 4)),
+    (_RESULTS, rf"thigh swing \([\d.]+° against {NUM}°", *_realism("femur swing (deg)", 1)),
+    (_RESULTS, rf"S02's\s+\({NUM}° against [\d.]+°, [\d.]+°", *_realism("tibia swing (deg)", 4)),
+    (_RESULTS, rf"S02's\s+\([\d.]+° against {NUM}°,", *_realism("tibia swing (deg)", 1)),
+    (_RESULTS, rf"{NUM}° against [\d.]+°: its knees", *_realism("calcn swing (deg)", 4)),
+    (_RESULTS, rf"[\d.]+° against {NUM}°: its knees", *_realism("calcn swing (deg)", 1)),
+    (_RESULTS, rf"its pelvis through {NUM}° against", *_realism("pelvis swing (deg)", 4)),
+    (_RESULTS, rf"its pelvis through [\d.]+° against {NUM}°", *_realism("pelvis swing (deg)", 1)),
+    (_RESULTS, rf"strides in {NUM} s against", *_realism("stride time (s)", 4)),
+    (_RESULTS, rf"against S02's {NUM} s", *_realism("stride time (s)", 1)),
+    (_RESULTS, rf"knee's centre leaves {NUM} m/s² against", *_realism("knee residual (m/s^2)", 4)),
+    (_RESULTS, rf"m/s² against\s+{NUM}, its hinge", *_realism("knee residual (m/s^2)", 1)),
+    (_RESULTS, rf"its hinge {NUM} rad/s against", *_realism("knee hinge residual (rad/s)", 4)),
+    (_RESULTS, rf"rad/s against {NUM} \(", *_realism("knee hinge residual (rad/s)", 1)),
+    (_RESULTS, rf"\({NUM} and [\d.]+ without the artefacts", *_realism("knee residual (m/s^2)", 3)),
+    (_RESULTS, rf"\([\d.]+ and {NUM} without the",
+     *_realism("knee hinge residual (rad/s)", 3)),
+    (_RESULTS, rf"the hip {NUM}\s+against", *_realism("hip residual (m/s^2)", 4)),
+    (_RESULTS, rf"the hip [\d.]+\s+against {NUM},", *_realism("hip residual (m/s^2)", 1)),
+    (_RESULTS, rf"the ankle {NUM} against", *_realism("ankle residual (m/s^2)", 4)),
+    (_RESULTS, rf"the ankle [\d.]+ against {NUM}\.", *_realism("ankle residual (m/s^2)", 1)),
 ]  # fmt: skip
 
 
