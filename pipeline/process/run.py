@@ -76,7 +76,7 @@ from pipeline.process.pose import (
 from pipeline.process.posture import Posture, lean_pose, standing_posture
 from pipeline.process.sensor_checks import SWAPPED_BACK, Finding, check_sensors
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
-from pipeline.process.sides import Sides, mirrored, side_evidence
+from pipeline.process.sides import Sides, in_one_heading, mirrored, side_evidence
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
 from pipeline.rotations import (
     euler_zxy_from_matrix,
@@ -218,7 +218,8 @@ def process_recording(
             cal = read_pose(rotations, pose_notes := [])
             knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     notes += pose_notes
-    sides = side_evidence(trial, rotations, cal.right, method, geometry, gait.strides)
+    sides = (side_evidence(trial, rotations, cal.right, method, geometry, gait.strides)
+             if in_one_heading(oriented.shared, drifts) else None)
     if sides is not None and sides.mirrored:
         return _read_mirrored(given, given_static, measures, opts, sides)
     posture = None

@@ -21,7 +21,8 @@ below the smallest. Only a walk decides (:data:`MIN_STRIDES` on each leg) and on
 centres a plausible distance apart (within :data:`DISTANCE_FACTOR` of the model's): lying with
 one hip flexing, the still hip's centre is free and eq (1) read -0.77 and +0.64 on one simulated
 trial (0.55 m apart), with a still thigh +0.25 (0.09 m); the simulated walk's fits that ended
-0.53 and 0.69 m apart kept the right sign but are not used either. The fits take 0.04 s (S02).
+0.53 and 0.69 m apart kept the right sign but are not used either; and only with the headings
+in one world (:func:`in_one_heading`). The fits take 0.04 s (S02).
 A thigh named for the other side alone (the shanks and feet as named) reads as the whole legs
 named so: the legs are read mirrored, flagged, and the shanks and feet then sit on the other
 thigh's leg (the stride's rhythm, :mod:`pipeline.process.swap` eq 2-3, is too weak in the thighs
@@ -30,6 +31,7 @@ to tell it).
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -40,7 +42,7 @@ from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
 from pipeline.model.geometry import SubjectGeometry
 
-__all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "MIN_STRIDES", "Sides", "mirrored",
+__all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "MIN_STRIDES", "Sides", "in_one_heading", "mirrored",
            "side_evidence", "walked"]  # fmt: skip
 
 #: Eq (1): the cosine below ``-MIN_MARGIN`` reads the legs as mirrored.
@@ -101,6 +103,22 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
     margin = float(d_h @ right) / max(float(np.linalg.norm(d_h)), 1e-9)
     model_m = float(np.linalg.norm(geometry.right_hip - geometry.left_hip))
     return Sides(margin, float(np.linalg.norm(o["right"] - o["left"])), model_m)
+
+
+def in_one_heading(shared: Collection[str], aligned: Collection[str]) -> bool:
+    """Whether the pelvis's, thighs' and shanks' sensors see one world, so that eq (1)'s
+    ``right`` (from their relative rotations) and ``R_p d`` mean one thing: down each leg every
+    sensor shares its proximal neighbour's heading, both by their own (``shared``: the sensors
+    whose headings are the common world) or turned into it at the joint between them
+    (``aligned``: the heading alignment's ``'<side>_<joint>'``). A 6-D run whose headings stay
+    apart (``--drift none``) read S02 as mirrored (cosine -1.00)."""
+    for side in ("right", "left"):
+        for prox, dist, joint in (("pelvis", "femur", "hip"), ("femur", "tibia", "knee")):
+            pair = {SEGMENT_SENSOR[prox if prox == "pelvis" else f"{side}_{prox}"],
+                    SEGMENT_SENSOR[f"{side}_{dist}"]}  # fmt: skip
+            if f"{side}_{joint}" not in aligned and not pair <= set(shared):
+                return False
+    return True
 
 
 def walked(strides: list[Stride]) -> bool:
