@@ -22,7 +22,8 @@ the default and each alternative, one at a time, on three sources of evidence:
   the pelvis axis nearest our anatomical heading, ``+z``, like for like; skipped without
   ``opensim``).
 
-Each option's rank (1 = best) per score; the default should have the best mean rank. The filter
+Each option's rank (1 = best) per score, options equal as printed (two decimals) sharing their
+mean rank; the default should have the best mean rank. The filter
 applies to raw signals only: its rows are scored over the raw inputs (S02's 9-D and 6-D signals,
 the simulator's VQF 9-D and 6-D inputs), each filter named. Then, per knee and input, how far
 apart the AoR corrections (eq 9-12) of the two halves of the walk are, against
@@ -265,9 +266,11 @@ def report(rows, with_opensense: bool) -> str:
             col = {v: by[labels[v]][k] for v in values}
             if any(np.isnan(x) for x in col.values()):
                 continue
-            order = sorted(values, key=lambda v: col[v])
-            for r, v in enumerate(order, start=1):
-                ranks[v].append(r)
+            shown = {v: round(col[v], 2) for v in values}  # equal as printed: one (mean) rank
+            for v in values:
+                below = sum(shown[u] < shown[v] for u in values)
+                ties = sum(shown[u] == shown[v] for u in values)
+                ranks[v].append(below + (ties + 1) / 2)
         mean = {v: float(np.mean(r)) for v, r in ranks.items()}
         best = min(mean, key=mean.get)
         lines.append(f"- {name}: " + ", ".join(f"{v} {mean[v]:.2f}" for v in values)
