@@ -1,8 +1,8 @@
 """Fault injection: one fault at a time in one sensor's raw signals (the right shank's; with the
 thigh's for the slipping pair and the swap; the pelvis's for its belt turning around the waist;
-both shanks' for their exchange; every leg sensor's name for the legs named left for right),
-on the simulator and on the real S02 walk; was it detected and named, what was done, and how far
-did the joint angles move.
+both shanks', feet's or thighs' for their exchange; every leg sensor's name for the legs named
+left for right), on the simulator and on the real S02 walk; was it detected and named, what was
+done, and how far did the joint angles move.
 
     python scripts/bench_faults.py [--data ../shared/data] [--out results/bench_faults.txt]
 
@@ -134,11 +134,25 @@ def swapped(rec: Recording) -> Recording:
     return rec.with_sensors(sensors)
 
 
+def _exchanged(rec: Recording, segment: str) -> Recording:
+    """The right and left ``segment`` sensors exchanged (their names or straps)."""
+    right, left = f"{segment}_r_imu", f"{segment}_l_imu"
+    return rec.with_sensors({**rec.sensors, right: rec.sensors[left], left: rec.sensors[right]})
+
+
 def crossed(rec: Recording) -> Recording:
-    """The right and left shanks' sensors exchanged (their names or straps)."""
-    sensors = dict(rec.sensors)
-    sensors[TARGET], sensors["tibia_l_imu"] = sensors["tibia_l_imu"], sensors[TARGET]
-    return rec.with_sensors(sensors)
+    """The right and left shanks' sensors exchanged."""
+    return _exchanged(rec, "tibia")
+
+
+def crossed_feet(rec: Recording) -> Recording:
+    """The right and left feet's sensors exchanged."""
+    return _exchanged(rec, "calcn")
+
+
+def crossed_thighs(rec: Recording) -> Recording:
+    """The right and left thighs' sensors exchanged."""
+    return _exchanged(rec, "femur")
 
 
 def mirrored_legs(rec: Recording) -> Recording:
@@ -158,6 +172,11 @@ FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
           "thigh and shank sensors swapped": (swapped, TARGET, TOUCHED),
           "right and left shank sensors swapped": (crossed, TARGET, ("right_knee", "right_ankle",
                                                                   "left_knee", "left_ankle")),
+          "right and left foot sensors swapped": (crossed_feet, "calcn_r_imu", ("right_ankle",
+                                                                             "left_ankle")),
+          "right and left thigh sensors swapped": (crossed_thighs, "femur_r_imu",
+                                                   ("right_hip", "left_hip", "right_knee",
+                                                    "left_knee")),
           "left and right legs' sensors named for each other": (mirrored_legs, "femur_r_imu",
                                                                  LEGS_TOUCHED),
           "pelvis belt turning 30 deg around the waist halfway": (belt_turning, PELVIS,

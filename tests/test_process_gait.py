@@ -141,3 +141,16 @@ def test_s02_the_body_walks_the_room(tmp_path):
     rows = list(csv.DictReader((tmp_path / "imu_landmarks.csv").open()))
     hjc = np.array([[float(r[f"right_HJC_{a}"]) for a in "xz"] for r in rows])
     assert np.ptp(hjc, axis=0).max() > 2.0  # in the room, not relative to the pelvis
+
+
+def test_a_walk_is_min_strides_on_each_leg():
+    from pipeline.analysis.strides import Stride
+    from pipeline.process.gait import MIN_STRIDES, walked
+
+    def stride(side: str) -> Stride:
+        return Stride(side, *([0.0] * (len(Stride.__dataclass_fields__) - 1)))
+
+    both = [stride(s) for s in ("right", "left") for _ in range(MIN_STRIDES)]
+    assert walked(both)
+    assert not walked(both[1:])  # one leg a stride short
+    assert not walked([])

@@ -61,6 +61,9 @@ def test_mirrored_gives_each_leg_sensor_the_other_legs_name():
     assert out.sensors["torso_imu"] is s["torso_imu"]
     assert out.sensor_notes == {"femur_l_imu": ("a gap",)}
     assert mirrored(None) is None
+    thighs = mirrored(rec, ("femur",))
+    assert thighs.sensors["femur_l_imu"] is s["femur_r_imu"]
+    assert thighs.sensors["calcn_r_imu"] is s["calcn_r_imu"]
 
 
 def test_the_hip_centres_say_which_leg_is_which(walk):
@@ -80,6 +83,31 @@ def test_a_mirrored_recording_is_read_back_and_flagged(walk):
     assert not [f for f in run.sensor_findings if f.check == "sides"]
     for name, x in run.joint_angles.items():
         np.testing.assert_allclose(back.joint_angles[name], x, atol=1e-9, err_msg=name)
+
+
+def test_thighs_named_for_the_other_leg_alone_are_read_back_alone(walk):
+    """The hips find the thighs mirrored; the stride's rhythm (swap eq 4) puts each thigh with
+    the other leg's shank and foot: the thighs alone are exchanged back."""
+    crossed = walk.with_sensors({**walk.sensors, "femur_r_imu": walk.sensors["femur_l_imu"],
+                                 "femur_l_imu": walk.sensors["femur_r_imu"]})  # fmt: skip
+    run, back = process_recording(walk, SUBJECT), process_recording(crossed, SUBJECT)
+    (f,) = [f for f in back.sensor_findings if f.check == "sides"]
+    assert "the thighs' sensors are named left for right" in f.evidence
+    for name, x in run.joint_angles.items():
+        np.testing.assert_allclose(back.joint_angles[name], x, atol=1e-9, err_msg=name)
+
+
+def test_where_the_rhythm_does_not_tell_the_run_is_refused(monkeypatch):
+    """Eq (4) between the limits: which sensors to read back is not guessed (one-line error)."""
+    import pipeline.process.swap as swap
+    from pipeline.errors import InputError
+    from pipeline.process.sides import Sides, exchange_of
+
+    monkeypatch.setattr(swap, "crossing_evidence",
+                        lambda rec: swap.Crossing(-3.0, 0.0, swap.MIN_THIGH_GAIN / 2))
+    rec = Recording(np.arange(3.0), 100.0, {})
+    with pytest.raises(InputError, match="does not tell whether the shanks and feet go"):
+        exchange_of(Sides(-1.0, 0.18, 0.18), rec)
 
 
 def test_without_the_thighs_signals_there_is_no_evidence(walk):

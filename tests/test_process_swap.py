@@ -116,7 +116,7 @@ def test_the_check_reads_crossed_sensors_back(walk):
 
 def test_where_the_thighs_do_not_tell_the_four_are_excluded(walk):
     """Eq (3) between the limits: the shanks' and feet's sensors excluded, named, not guessed."""
-    c = Crossing(pairing=2 * MIN_GAIN, thighs=MIN_THIGH_GAIN / 2)
+    c = Crossing(pairing=2 * MIN_GAIN, thighs=MIN_THIGH_GAIN / 2, with_legs=3.0)
     assert c.crossed and c.exchanged is None
     assert sorted(c.sensors) == ["calcn_l_imu", "calcn_r_imu", "tibia_l_imu", "tibia_r_imu"]
     assert "do not tell whether" in c.evidence()

@@ -34,8 +34,11 @@ from pipeline.analysis.strides import Stride, foot_strides
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
-__all__ = ["BLEND_S", "Gait", "gait_of", "with_pelvis_path"]
+__all__ = ["BLEND_S", "MIN_STRIDES", "Gait", "gait_of", "walked", "with_pelvis_path"]
 
+#: Strides each leg walks for a check that needs a walk (the legs' sides and their sensors'
+#: pairings, :mod:`pipeline.process.sides` and :mod:`pipeline.process.swap`).
+MIN_STRIDES = 3
 #: The stance weights' smoothing window (s): the blend from one foot to the other.
 BLEND_S = 0.1
 
@@ -167,3 +170,8 @@ def _held(path: np.ndarray, known: np.ndarray) -> np.ndarray:
     out = path[idx[nearest]]
     out[: idx[0]] = path[idx[0]]
     return out
+
+
+def walked(strides: list[Stride]) -> bool:
+    """Whether each leg walked :data:`MIN_STRIDES` of ``strides``."""
+    return min(sum(s.side == side for s in strides) for side in ("right", "left")) >= MIN_STRIDES

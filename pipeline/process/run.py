@@ -76,7 +76,7 @@ from pipeline.process.pose import (
 from pipeline.process.posture import Posture, lean_pose, standing_posture
 from pipeline.process.sensor_checks import SWAPPED_BACK, Finding, check_sensors
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
-from pipeline.process.sides import Sides, in_one_heading, mirrored, side_evidence
+from pipeline.process.sides import Sides, exchange_of, in_one_heading, mirrored, side_evidence
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
 from pipeline.rotations import (
     euler_zxy_from_matrix,
@@ -249,10 +249,11 @@ def process_recording(
 
 
 def _read_mirrored(trial, static, measures, opts: IKOptions, sides: Sides) -> IKRun:
-    """The run on the recording with its legs' sensor names exchanged
+    """The run on the recording with its legs' (or its thighs') sensor names exchanged
     (:mod:`pipeline.process.sides`), the finding first among its flags."""
-    run = process_recording(mirrored(trial), measures, opts, static=mirrored(static))
-    finding = Finding("femur_r_imu", "sides", SWAPPED_BACK, sides.evidence())
+    parts, evidence = exchange_of(sides, trial)
+    run = process_recording(mirrored(trial, parts), measures, opts, static=mirrored(static, parts))
+    finding = Finding("femur_r_imu", "sides", SWAPPED_BACK, evidence)
     run.sensor_findings.insert(0, finding)
     run.flags.insert(0, finding.line())
     return run

@@ -17,16 +17,16 @@ left and right exchanged when ``m < -MIN_MARGIN`` (the run says so, a flag: ``--
 on it). Measured (``m``, ``|d|``): S02 +0.97-1.00 (vendor, VQF 9-D and 6-D, PI; 0.182 m, Vicon's
 hip centres 0.184 m apart), the x-IMU3 walk +0.99 (9-D) and +0.80 (6-D), the simulated walk
 +0.41-1.00 (seeds 0-7, 9-D and 6-D; below 0.7 on one seed of eight): :data:`MIN_MARGIN` lies
-below the smallest. Only a walk decides (:data:`MIN_STRIDES` on each leg) and only with the
-centres a plausible distance apart (within :data:`DISTANCE_FACTOR` of the model's): lying with
-one hip flexing, the still hip's centre is free and eq (1) read -0.77 and +0.64 on one simulated
-trial (0.55 m apart), with a still thigh +0.25 (0.09 m); the simulated walk's fits that ended
-0.53 and 0.69 m apart kept the right sign but are not used either; and only with the headings
-in one world (:func:`in_one_heading`). The fits take 0.04 s (S02).
-A thigh named for the other side alone (the shanks and feet as named) reads as the whole legs
-named so: the legs are read mirrored, flagged, and the shanks and feet then sit on the other
-thigh's leg (the stride's rhythm, :mod:`pipeline.process.swap` eq 2-3, is too weak in the thighs
-to tell it).
+below the smallest. Only a walk decides (:data:`~pipeline.process.gait.MIN_STRIDES` strides a
+leg) and only with the centres a plausible distance apart (within :data:`DISTANCE_FACTOR` of
+the model's): lying with one hip flexing, the still hip's centre is free and eq (1) read -0.77
+and +0.64 on one simulated trial (0.55 m apart), with a still thigh +0.25 (0.09 m); the
+simulated walk's fits that ended 0.53 and 0.69 m apart kept the right sign but are not used
+either; and only with the headings in one world (:func:`in_one_heading`). The fits take 0.04 s
+(S02). Whether the shanks and feet go with the mirrored thighs, the stride's rhythm tells
+(:mod:`pipeline.process.swap` eq 4, :func:`exchange_of`): the whole legs are read back, or the
+thighs alone (their names exchanged by themselves: S02 -2.03, the simulated walk -3.16, against
++2.03 and +3.16 for the whole legs); where it tells neither the run is refused.
 """
 
 from __future__ import annotations
@@ -37,18 +37,18 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from pipeline.analysis.strides import Stride
+from pipeline.errors import InputError
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
 from pipeline.model.geometry import SubjectGeometry
+from pipeline.process.gait import walked
 
-__all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "MIN_STRIDES", "Sides", "in_one_heading", "mirrored",
-           "side_evidence", "walked"]  # fmt: skip
+__all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "Sides", "exchange_of", "in_one_heading", "mirrored",
+           "side_evidence"]  # fmt: skip
 
 #: Eq (1): the cosine below ``-MIN_MARGIN`` reads the legs as mirrored.
 MIN_MARGIN = 0.3
-#: Strides each leg must walk for eq (1) to decide (both hips then move through their range).
-MIN_STRIDES = 3
 #: The hip centres' fitted distance must lie within this factor of the model's (its pelvis).
 DISTANCE_FACTOR = 2.0
 _UP = np.array([0.0, 1.0, 0.0])
@@ -74,8 +74,33 @@ class Sides:
     def evidence(self) -> str:
         return (f"its hip centre lies on the subject's left of femur_l_imu's "
                 f"({self.separation_m:.2f} m apart, cosine {self.margin:+.2f} with the subject's "
-                "right, from the way hips and knees flex): the legs' sensors are named left for "
-                "right (check the sensor map or the straps)")
+                "right, from the way hips and knees flex)")
+
+
+def exchange_of(sides: Sides, rec: Recording) -> tuple[tuple[str, ...], str]:
+    """What a mirrored reading exchanges between the legs (``('femur', 'tibia', 'foot')``: the
+    whole legs; ``('femur',)``: the thighs alone) and what the finding says, by the thighs'
+    rhythm with their named legs (:mod:`pipeline.process.swap` eq 4: ``W``); an
+    :class:`InputError` where ``W`` tells neither. Without it (a leg sensor's gyroscope missing):
+    the whole legs, the sensor map's usual mistake."""
+    from pipeline.process.swap import MIN_THIGH_GAIN, crossing_evidence
+
+    c = crossing_evidence(rec)
+    w = None if c is None else c.with_legs
+    if w is None or w >= MIN_THIGH_GAIN:
+        said = "" if w is None else f"; each thigh swings with its named leg (swap eq 4: {w:+.2f})"
+        return ("femur", "tibia", "foot"), (f"{sides.evidence()}{said}: the legs' sensors are "
+                                            "named left for right (check the sensor map or the "
+                                            "straps)")  # fmt: skip
+    if w <= -MIN_THIGH_GAIN:
+        return ("femur",), (f"{sides.evidence()}; each thigh swings with the other leg's shank "
+                            f"and foot (swap eq 4: {w:+.2f}): the thighs' sensors are named left "
+                            "for right, the shanks' and feet's rightly (check the sensor map or "
+                            "the straps)")  # fmt: skip
+    raise InputError(f"sensor femur_r_imu: {sides.evidence()}, and the stride's rhythm does not "
+                     f"tell whether the shanks and feet go with the thighs (swap eq 4: {w:+.2f}, "
+                     f"beyond +-{MIN_THIGH_GAIN:g} needed): name the legs' sensors for their "
+                     "sides", file=rec.source, field="sensor_map")  # fmt: skip
 
 
 def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.ndarray,
@@ -85,7 +110,7 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
     orientations (the pelvis's own; each thigh's inclination is what the fit's start uses),
     ``right`` the subject's right at the pose (sample 0), ``geometry`` the model (its hip
     centres), ``strides`` the walk's; None without raw signals of the pelvis's and both
-    thighs' sensors or fewer than :data:`MIN_STRIDES` on a leg."""
+    thighs' sensors or fewer than :data:`~pipeline.process.gait.MIN_STRIDES` on a leg."""
     from pipeline.process.heading_alignment import centre_fit
 
     segments = ("pelvis", "right_femur", "left_femur")
@@ -121,27 +146,24 @@ def in_one_heading(shared: Collection[str], aligned: Collection[str]) -> bool:
     return True
 
 
-def walked(strides: list[Stride]) -> bool:
-    """Whether each leg walked :data:`MIN_STRIDES` strides."""
-    return min(sum(s.side == side for s in strides) for side in ("right", "left")) >= MIN_STRIDES
-
-
 def _has_signals(trial: Recording, name: str) -> bool:
     s = trial.sensors.get(name)
     return (s is not None and s.gyr is not None and s.acc is not None
             and bool(np.isfinite(s.gyr).all() and np.isfinite(s.acc).all()))  # fmt: skip
 
 
-def mirrored(rec: Recording | None) -> Recording | None:
+def mirrored(rec: Recording | None, parts: Collection[str] = ("femur", "tibia", "foot")
+             ) -> Recording | None:  # fmt: skip
     """The recording with every leg sensor's name given to its namesake on the other leg
-    (``femur_r_imu`` <-> ``femur_l_imu``, ...), the readers' notes on them too."""
+    (``femur_r_imu`` <-> ``femur_l_imu``, ...), the readers' notes on them too; ``parts``: the
+    segments whose sensors are exchanged (default: all)."""
     if rec is None:
         return None
 
     def other(name: str) -> str:
         seg = SENSOR_TO_SEGMENT.get(name, "")
         side, _, part = seg.partition("_")
-        if side not in ("right", "left"):
+        if side not in ("right", "left") or part not in parts:
             return name
         return SEGMENT_SENSOR.get(f"{other_side(side)}_{part}", name)
 

@@ -43,11 +43,18 @@ negated. :data:`MIN_GAIN` lies halfway to the smallest ``P``; in running the thi
 (qmt's read the wrong way), and S02's left thigh swings with its leg weakly (0.07 and 0.16,
 0.48 with the other thigh): :data:`MIN_THIGH_GAIN` lies halfway between qmt's 1.39 and S02's
 2.03, so that qmt's four sensors would be excluded and S02's exchange read back.
-Only a walk decides (:data:`~pipeline.process.sides.MIN_STRIDES` strides a leg; the simulator's
+Only a walk decides (:data:`~pipeline.process.gait.MIN_STRIDES` strides a leg; the simulator's
 sinusoidal gait, whose legs do not take turns, has none). The band holds strides of 0.7 to 2 s.
-A thigh named for the other leg alone is not told apart by eq (2)-(3) (the thighs' rhythm is the
-weak one); the hips see it (:mod:`pipeline.process.sides`). Eq (2)-(3) and the strides take
-0.02 s (S02).
+A thigh named for the other leg alone leaves eq (2) as named; the hips see it
+(:mod:`pipeline.process.sides`), and whether the shanks and feet go with the thighs, the thighs'
+rhythm tells:
+
+    W = sum over both legs and (t, f) of r(F_own, t_own) - r(F_own, t_other)               (4)
+
+``W >= MIN_THIGH_GAIN``: each thigh swings with its named leg (S02 2.03, the x-IMU3 walk 5.05,
+the simulated walk 3.16-3.78; the same as eq 3's with a shank exchanged, its terms being
+those), ``W <= -MIN_THIGH_GAIN``: with the other (the thighs alone exchanged). Eq (2)-(4) and the
+strides take 0.02 s (S02).
 """
 
 from __future__ import annotations
@@ -138,11 +145,13 @@ def swap_evidence(side: str, rec: Recording, faulty: Collection[str] = ()) -> Sw
 
 @dataclass(frozen=True)
 class Crossing:
-    """Eq (2)-(3): ``pairing`` the gain of the shanks' and feet's sensors paired across the legs
-    over as named, ``thighs`` the thighs' preference for the shanks' over the feet's exchange."""
+    """Eq (2)-(4): ``pairing`` the gain of the shanks' and feet's sensors paired across the legs
+    over as named, ``thighs`` the thighs' preference for the shanks' over the feet's exchange,
+    ``with_legs`` the thighs' for their named legs' shanks and feet over the other legs'."""
 
     pairing: float
     thighs: float
+    with_legs: float
 
     @property
     def crossed(self) -> bool:
@@ -187,10 +196,9 @@ class Crossing:
 def crossing_evidence(rec: Recording, faulty: Collection[str] = ()) -> Crossing | None:
     """Eq (2)-(3) on the recording; None without the gyroscopes of all six leg sensors,
     complete, when one of them is ``faulty``, or unless each leg walked
-    :data:`~pipeline.process.sides.MIN_STRIDES` strides (:func:`~pipeline.process.gait.gait_of`)."""
+    :data:`~pipeline.process.gait.MIN_STRIDES` strides (:func:`~pipeline.process.gait.gait_of`)."""
     from pipeline.filtering import lowpass
-    from pipeline.process.gait import gait_of
-    from pipeline.process.sides import walked
+    from pipeline.process.gait import gait_of, walked
 
     names = {(side[0], seg): SEGMENT_SENSOR[f"{side}_{seg}"]
              for side in ("right", "left") for seg in ("femur", *_PARTS)}  # fmt: skip
@@ -215,4 +223,6 @@ def crossing_evidence(rec: Recording, faulty: Collection[str] = ()) -> Crossing 
               + r(("l", "femur"), ("r", "tibia")) + r(("l", "femur"), ("l", "foot"))
               - r(("r", "femur"), ("r", "tibia")) - r(("r", "femur"), ("l", "foot"))
               - r(("l", "femur"), ("l", "tibia")) - r(("l", "femur"), ("r", "foot")))
-    return Crossing(pairing, thighs)
+    with_legs = sum(r((x, "femur"), (x, seg)) - r((x, "femur"), (y, seg))
+                    for x, y in (("r", "l"), ("l", "r")) for seg in _PARTS)
+    return Crossing(pairing, thighs, with_legs)
