@@ -29,11 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.calibration.joint_constraints import hinge_residual, joint_data, spherical_residual
 from pipeline.io.formats import read_recording
 from pipeline.io.recording import Recording
 from pipeline.model.measures import Measures
-from pipeline.process.functional import fit_joint
+from pipeline.process.functional import joint_residual
 from pipeline.process.gait import gait_of
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -80,19 +79,11 @@ def residuals(rec: Recording) -> dict[str, float]:
     out: dict[str, list[float]] = {}
     for joint, (prox, dist) in JOINTS.items():
         for side in ("right", "left"):
-            s1, s2 = (rec.sensors[_sensor(seg, side)].low_passed(rec.rate_hz, 6.0)
-                      for seg in (prox, dist))  # fmt: skip
-            kinds = ("spherical", "hinge") if joint == "knee" else ("spherical",)
-            for kind in kinds:
-                fit = fit_joint(rec.time, s1, s2, slice(None, None, 4), "ipopt",
-                                shared_world=False, joint=kind, verify_start=False)  # fmt: skip
-                if kind == "hinge":
-                    e = hinge_residual(fit.axis_1, fit.axis_2, s1.gyr, s2.gyr)
-                else:
-                    e = spherical_residual(fit.position_1_m, fit.position_2_m, joint_data(
-                        rec.time, s1.gyr, s1.acc, s2.gyr, s2.acc))  # fmt: skip
+            s1, s2 = (rec.sensors[_sensor(seg, side)] for seg in (prox, dist))
+            for kind in ("spherical", "hinge") if joint == "knee" else ("spherical",):
                 key = joint if kind == "spherical" else "knee hinge"
-                out.setdefault(key, []).append(float(np.sqrt(np.nanmean(e**2))))
+                out.setdefault(key, []).append(joint_residual(
+                    rec.time, rec.rate_hz, s1, s2, joint=kind, cutoff_hz=6.0, step=4))
     return {k: float(np.median(v)) for k, v in out.items()}
 
 

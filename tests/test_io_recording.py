@@ -67,3 +67,12 @@ def test_low_passed_filters_the_inertial_signals_only():
     assert np.max(np.abs(f.acc[100:300, 1] - 2 * slow)) < 0.1
     assert f.quat is quat and f.mag is wave
     assert SensorSignals(quat=quat).low_passed(100.0, 5.0).gyr is None
+
+
+def test_complete_means_both_inertial_signals_every_sample_finite():
+    x = np.zeros((5, 3))
+    assert SensorSignals(gyr=x, acc=x).complete
+    assert not SensorSignals(gyr=x).complete
+    gap = x.copy()
+    gap[2, 1] = np.nan
+    assert not SensorSignals(gyr=x, acc=gap).complete

@@ -110,3 +110,17 @@ def test_a_long_recording_is_calibrated_on_evenly_spaced_samples(monkeypatch):
         true = trial.knee_axis[f"{c.side}_femur_imu"]
         err = np.degrees(np.arccos(min(1.0, abs(float(c.axis_thigh @ true)))))
         assert err < 1.5 and c.trusted, (c.side, err, c.reason)
+
+
+def test_joint_residual_is_small_across_a_joint_and_not_across_two():
+    """Hu 2021 eq 6 and eq 3 after the fit: the simulated hinge knee leaves a fraction of what
+    the thigh and the foot, a knee and an ankle apart, leave."""
+    from pipeline.process.functional import joint_residual
+
+    trial = simulate_trial(motion="gait", duration_s=12.0, seed=4, standing_s=2.0)
+    s = {f: SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc) for f, i in trial.imus.items()}
+    for joint in ("hinge", "spherical"):
+        knee, across = (joint_residual(trial.time, 100.0, s["right_femur_imu"], s[other],
+                                       joint=joint, cutoff_hz=6.0, step=4)
+                        for other in ("right_tibia_imu", "right_foot_imu"))  # fmt: skip
+        assert knee < 0.2 * across, (joint, knee, across)

@@ -63,6 +63,13 @@ class SensorSignals:
     def replace(self, **changes: np.ndarray | None) -> SensorSignals:
         return dataclasses.replace(self, **changes)
 
+    @property
+    def complete(self) -> bool:
+        """Whether the gyroscope's and the accelerometer's signals are there, every sample
+        finite (what a joint's fit or a stride's view needs)."""
+        return (self.gyr is not None and self.acc is not None
+                and bool(np.isfinite(self.gyr).all() and np.isfinite(self.acc).all()))  # fmt: skip
+
     def low_passed(self, rate_hz: float, cutoff_hz: float) -> SensorSignals:
         """The gyroscope's and the accelerometer's signals low-passed
         (:func:`pipeline.filtering.lowpass`); the orientations and the magnetometer as they are."""

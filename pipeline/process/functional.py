@@ -39,11 +39,12 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.io.recording import Recording
 from pipeline.rotations import angle_between
 
 __all__ = ["MAX_SAMPLES", "MOVING_RAD_S", "RESIDUAL_BOUND_RAD_S", "SPLIT_HALF_DEG",
-           "KneeCalibration", "calibrate_knees", "fit_joint", "with_placements"]
+           "KneeCalibration", "calibrate_knees", "fit_joint", "joint_residual", "with_placements"]
 
 SPLIT_HALF_DEG = 5.0
 #: Samples whose two gyroscopes' speeds add up to more than this (rad/s) are the motion.
@@ -177,3 +178,25 @@ def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joi
         q2 = None if q2 is None else q2[keep]
     return calibrate(d, joint, method, quat_1=q1, quat_2=q2, verify_start=verify_start,
                      **options)  # fmt: skip
+
+
+def joint_residual(time, rate_hz: float, s1, s2, *, joint: str = "spherical", cutoff_hz: float,
+                   step: int, method: str = DEFAULT_METHOD) -> float:  # fmt: skip
+    """RMS residual of :func:`fit_joint` between sensors ``s1`` and ``s2`` on their signals
+    low-passed at ``cutoff_hz``, fitted on every ``step``-th sample and measured on all: Hu 2021
+    eq 3 (``joint='spherical'``, the centre's force, m/s^2) or eq 6 (``'hinge'``, rad/s)."""
+    from pipeline.calibration.joint_constraints import (
+        hinge_residual,
+        joint_data,
+        spherical_residual,
+    )
+
+    s1, s2 = (s.low_passed(rate_hz, cutoff_hz) for s in (s1, s2))
+    fit = fit_joint(time, s1, s2, slice(None, None, step), method, shared_world=False,
+                    joint=joint, verify_start=False)  # fmt: skip
+    if joint == "hinge":
+        e = hinge_residual(fit.axis_1, fit.axis_2, s1.gyr, s2.gyr)
+    else:
+        e = spherical_residual(fit.position_1_m, fit.position_2_m,
+                               joint_data(time, s1.gyr, s1.acc, s2.gyr, s2.acc))  # fmt: skip
+    return float(np.sqrt(np.nanmean(e**2)))

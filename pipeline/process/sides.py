@@ -114,7 +114,7 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
     from pipeline.process.heading_alignment import centre_fit
 
     segments = ("pelvis", "right_femur", "left_femur")
-    if any(s not in rotations or not _has_signals(trial, SEGMENT_SENSOR[s]) for s in segments):
+    if any(s not in rotations or not _complete(trial, SEGMENT_SENSOR[s]) for s in segments):
         return None
     if not walked(strides):
         return None
@@ -146,10 +146,9 @@ def in_one_heading(shared: Collection[str], aligned: Collection[str]) -> bool:
     return True
 
 
-def _has_signals(trial: Recording, name: str) -> bool:
+def _complete(trial: Recording, name: str) -> bool:
     s = trial.sensors.get(name)
-    return (s is not None and s.gyr is not None and s.acc is not None
-            and bool(np.isfinite(s.gyr).all() and np.isfinite(s.acc).all()))  # fmt: skip
+    return s is not None and s.complete
 
 
 def mirrored(rec: Recording | None, parts: Collection[str] = ("femur", "tibia", "foot")

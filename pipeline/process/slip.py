@@ -251,10 +251,6 @@ def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
     return d_axis, d_g
 
 
-def _finite(s) -> bool:
-    return bool(np.isfinite(s.gyr).all() and np.isfinite(s.acc).all())
-
-
 def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Slip:
     """The split with the largest ``max(d_axis, d_g)`` (eq 1, 2)."""
     best = None
@@ -293,7 +289,7 @@ def _mirror_step(other, name: str, time_s: float, time: np.ndarray) -> float:
         return float("nan")
     strides, leg, views = other
     mirror = SEGMENT_SENSOR[f"{other_side(side)}_{segment}"]
-    if mirror not in views or not _finite(leg[mirror]):
+    if mirror not in views or not leg[mirror].complete:
         return float("nan")
     starts = time[[a for a, _ in strides]]
     m = int(np.clip(np.argmin(np.abs(starts - time_s)), MIN_SIDE, len(strides) - MIN_SIDE))
@@ -318,7 +314,7 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
         others = [_larger(*_step_at(*views[n], best.before)) for n in views
-                  if n not in (name, pelvis_name) and _finite(leg[n])]  # fmt: skip
+                  if n not in (name, pelvis_name) and leg[n].complete]  # fmt: skip
         seen = [d for d in others if np.isfinite(d)]
         out[name] = dataclasses.replace(
             best, others_deg=float(max(seen, default=0.0)),

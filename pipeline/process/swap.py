@@ -64,7 +64,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
@@ -118,15 +117,9 @@ class Swap:
 
 
 def _ankle_residual(rec: Recording, leg: SensorSignals, foot: SensorSignals) -> float:
-    from pipeline.calibration.joint_constraints import joint_data, spherical_residual
-    from pipeline.process.functional import fit_joint
+    from pipeline.process.functional import joint_residual
 
-    s1, s2 = (s.low_passed(rec.rate_hz, CUTOFF_HZ) for s in (leg, foot))
-    fit = fit_joint(rec.time, s1, s2, slice(None, None, STEP), DEFAULT_METHOD, shared_world=False,
-                    joint="spherical", verify_start=False)  # fmt: skip
-    e = spherical_residual(fit.position_1_m, fit.position_2_m,
-                           joint_data(rec.time, s1.gyr, s1.acc, s2.gyr, s2.acc))  # fmt: skip
-    return float(np.sqrt(np.nanmean(e**2)))
+    return joint_residual(rec.time, rec.rate_hz, leg, foot, cutoff_hz=CUTOFF_HZ, step=STEP)
 
 
 def swap_evidence(side: str, rec: Recording, faulty: Collection[str] = ()) -> Swap | None:
@@ -135,9 +128,7 @@ def swap_evidence(side: str, rec: Recording, faulty: Collection[str] = ()) -> Sw
     could make either fit the worse)."""
     names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
     sensors = [rec.sensors.get(n) for n in names]
-    if any(n in faulty for n in names) or any(
-            s is None or s.gyr is None or s.acc is None
-            or not (np.isfinite(s.gyr).all() and np.isfinite(s.acc).all()) for s in sensors):
+    if any(n in faulty for n in names) or any(s is None or not s.complete for s in sensors):
         return None
     thigh, shank, foot = sensors
     return Swap(*names, _ankle_residual(rec, shank, foot), _ankle_residual(rec, thigh, foot))
