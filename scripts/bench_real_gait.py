@@ -15,7 +15,9 @@ standing posture and the heading alignment. Scored over samples 1120-2075 (the w
 coordinate the RMSE, the offset-removed RMSE (offset = mean difference over the standing samples
 200-1000), Pearson's r and the range of motion; the knee and ankle joint centres relative to the
 hip centres' midpoint (mm), in each system's pelvis frame and in the pelvis's heading frame
-(vertical and forward; the two systems' pelvis frames differ by their tilt at standing).
+(vertical and forward; the two systems' pelvis frames differ by their tilt at standing); and,
+as the centres' limit, the same centres of the scaled model with its legs set to the optical
+references' own joint angles (what the model's dimensions and frames leave, angles aside).
 
 Written: ``results/bench_real_gait.txt`` and ``results/bench_real_gait.png`` (each sagittal
 angle over the walk, ours against Vicon, per input path with the default options).
@@ -219,6 +221,44 @@ def _lengths(p: dict) -> dict[str, float]:
     return out
 
 
+#: The model's leg joints (``q`` coordinates) -> the optical references' columns; the knee's
+#: adduction and rotation and the ankle's inversion are not in the references (Vicon's knee is a
+#: hinge): driven, they stay at zero.
+DRIVEN = {"hip_Z": "hip_flexion", "hip_X": "hip_adduction", "hip_Y": "hip_rotation",
+          "knee_Z": "knee_angle", "ankle_Z": "ankle_angle"}  # fmt: skip
+
+
+def driven_centres(run, table) -> dict[str, np.ndarray]:
+    """As :func:`our_centres`, pelvis frame only, of ``run``'s scaled model with its legs' joints
+    set to an optical reference's angles (``table``, a read ``.mot``): what the model's
+    dimensions and frames leave of the centres' error when the angles are the optical ones (the
+    model's JCS angles are its ``q`` coordinates, Z-X-Y)."""
+    import types
+
+    sk = run.skeleton
+    n = min(len(run.q), len(table.columns["hip_flexion_r"]))
+    Q = run.q[:n].copy()
+    for side, x in (("right", "r"), ("left", "l")):
+        for joint in (j for g in ("hip", "knee", "ankle") for j in sk.leg_joints(side, g)):
+            Q[:, sk.q_index(joint)] = 0.0
+        for joint, column in DRIVEN.items():
+            Q[:, sk.q_index(f"{side}_{joint}")] = table.columns[f"{column}_{x}"][:n]
+    from pipeline.analysis.joint_angles import joint_angles
+    from pipeline.analysis.landmarks import landmark_trajectories
+
+    check = joint_angles(sk, Q[WALK])  # the JCS angles are the q coordinates, checked
+    for side, x in (("right", "r"), ("left", "l")):
+        for ours, column in (("hip_flexion", "hip_flexion"), ("hip_adduction", "hip_adduction"),
+                             ("hip_rotation", "hip_rotation"), ("knee_flexion", "knee_angle"),
+                             ("ankle_flexion", "ankle_angle")):  # fmt: skip
+            gap = np.abs(check[f"{side}_{ours}"] - table.columns[f"{column}_{x}"][:n][WALK])
+            assert np.nanmax(gap) < 1e-6, (side, ours, np.nanmax(gap))
+    names = [f"{side}_{j}" for side in ("right", "left") for j in ("HJC", "KJC", "AJC")]
+
+    fake = types.SimpleNamespace(skeleton=sk, q=Q, landmarks=landmark_trajectories(sk, Q, names))
+    return {k: v for k, v in our_centres(fake).items() if k.startswith("pelvis")}
+
+
 def centre_offsets(ours: dict, truth: dict) -> dict[str, tuple[float, float]]:
     """Per centre, the walk's mean error's length and the RMS of the error about it (mm): the
     constant part (the model's dimensions and frame definitions) and the moving part."""
@@ -233,7 +273,7 @@ def centre_offsets(ours: dict, truth: dict) -> dict[str, tuple[float, float]]:
 
 def centre_errors(ours: dict, truth: dict) -> dict[str, float]:
     return {k: float(1000 * np.sqrt(np.mean(np.sum((ours[k][WALK] - truth[k][WALK]) ** 2, 1))))
-            for k in truth}  # fmt: skip
+            for k in truth if k in ours}  # fmt: skip
 
 
 def asis_width(data: Path) -> float:
@@ -448,6 +488,17 @@ def limits(rows, refs) -> str:
         lines.append(f"| {path} | " + " | ".join(
             f"{off[f'pelvis {j}_{x}'][0]:.0f} + {off[f'pelvis {j}_{x}'][1]:.0f}"
             for j in ("kjc", "ajc") for x in "rl") + " |")  # fmt: skip
+    lines += ["", "The same centres (RMS 3-D error, pelvis frame, mm) of the scaled model with its "
+              "legs' joints set to each optical reference's angles (the knee a hinge, as Vicon's): "
+              "what the model's dimensions and frames leave when the angles are the optical ones, "
+              "with the template's hip width (defaults) and with the measured one:", "",
+              "| model | angles | kjc_r | kjc_l | ajc_r | ajc_l |", "|---|---|---|---|---|---|"]
+    for label, run in ((r[1], r[5]) for r in rows if r[0] == "vendor"
+                       and r[1] in ("defaults", "pelvis width measured")):  # fmt: skip
+        for ref, table in refs["angles"].items():
+            err = centre_errors(driven_centres(run, table), refs["centres"])
+            lines.append(f"| {label} | {ref} | " + " | ".join(
+                f"{err[f'pelvis {j}_{x}']:.0f}" for j in ("kjc", "ajc") for x in "rl") + " |")
     side = {k: abs(float(np.nanmean(v[STANDING, 2]))) for k, v in refs["centres"].items()
             if k.startswith("heading")}  # fmt: skip
     lines += ["", "The same centres' mean error over the walk in the pelvis's heading frame, "

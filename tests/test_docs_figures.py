@@ -36,6 +36,21 @@ FIGURES = [
      rf"\| vendor \| defaults \|.*\*\*{NUM}\*\* \|"),
     ("README.md", rf"and {NUM}° from raw signals", "results/bench_real_gait.txt",
      rf"\| vqf9 \| defaults \|.*\*\*{NUM}\*\* \|"),
+    *(("docs/results.md", rf"puts the knees {doc} mm and the ankles", "results/bench_real_gait.txt",
+       rf"\| defaults \| {ref} \| {NUM} \|") for doc, ref in (
+        (rf"{NUM}-[\d.]+", "markers"), (rf"[\d.]+-{NUM}", "vicon"))),
+    *(("docs/results.md", rf"and the ankles {doc} mm from Vicon", "results/bench_real_gait.txt",
+       rf"\| defaults \| {ref} \| [\d.]+ \| [\d.]+ \| {col} \|") for doc, ref, col in (
+        (rf"{NUM}-[\d.]+", "vicon", rf"{NUM} \| [\d.]+"),
+        (rf"[\d.]+-{NUM}", "markers", rf"[\d.]+ \| {NUM}"))),
+    *(("docs/results.md", rf"Vicon's centres, and {doc} mm and", "results/bench_real_gait.txt",
+       rf"\| pelvis width measured \| {ref} \| {col} \|") for doc, ref, col in (
+        (rf"{NUM}-[\d.]+", "markers", rf"[\d.]+ \| {NUM}"),
+        (rf"[\d.]+-{NUM}", "vicon", rf"[\d.]+ \| {NUM}"))),
+    *(("docs/results.md", rf"mm and {doc} mm\s+with the subject", "results/bench_real_gait.txt",
+       rf"\| pelvis width measured \| {ref} \| [\d.]+ \| [\d.]+ \| {col} \|")
+      for doc, ref, col in ((rf"{NUM}-[\d.]+", "vicon", rf"[\d.]+ \| {NUM}"),
+                            (rf"[\d.]+-{NUM}", "markers", rf"[\d.]+ \| {NUM}"))),
     ("docs/results.md", rf"error grows by \+{NUM}°", "results/bench_real_gait.txt",
      rf"\| pelvis \| [+-][\d.]+ / \+{NUM} / "),
     ("docs/results.md", rf"the left thigh's by \+{NUM}°", "results/bench_real_gait.txt",
