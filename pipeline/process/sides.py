@@ -16,7 +16,7 @@ is near +1 when the names are right and near -1 when they are mirrored: the legs
 left and right exchanged when ``m < -MIN_MARGIN`` (the run says so, a flag: ``--strict`` stops
 on it). Measured (``m``, ``|d|``): S02 +0.97-1.00 (vendor, VQF 9-D and 6-D, PI; 0.182 m, Vicon's
 hip centres 0.184 m apart), the x-IMU3 walk +0.99 (9-D) and +0.80 (6-D), the simulated walk
-+0.41-1.00 (seeds 0-7, 9-D and 6-D; below 0.7 on one seed of eight): :data:`MIN_MARGIN` lies
++0.43-1.00 (seeds 0-7, 9-D and 6-D; below 0.7 on one seed of eight): :data:`MIN_MARGIN` lies
 below the smallest. Only a walk decides (:data:`~pipeline.process.gait.MIN_STRIDES` strides a
 leg) and only with the centres a plausible distance apart (within :data:`DISTANCE_FACTOR` of
 the model's): lying with one hip flexing, the still hip's centre is free and eq (1) read -0.77
@@ -25,8 +25,8 @@ simulated walk's fits that ended 0.53 and 0.69 m apart kept the right sign but a
 either; and only with the headings in one world (:func:`in_one_heading`). The fits take 0.04 s
 (S02). Whether the shanks and feet go with the mirrored thighs, the stride's rhythm tells
 (:mod:`pipeline.process.swap` eq 4, :func:`exchange_of`): the whole legs are read back, or the
-thighs alone (their names exchanged by themselves: S02 -2.03, the simulated walk -3.16, against
-+2.03 and +3.16 for the whole legs); where it tells neither the run is refused.
+thighs alone (their names exchanged by themselves: S02 -2.03, the simulated walk -3.05, against
++2.03 and +3.05 for the whole legs); where it tells neither the run is refused.
 """
 
 from __future__ import annotations

@@ -39,8 +39,8 @@ mid-stance (eq 2), on the right foot's strides, else the left's. Only strides of
 duration): a lone step, or two strides joined by a missed contact, rock at another rate (on the
 qmt recording such strides put the axis 74-84 deg away). Measured without a slip (the largest step
 of eq 1 for the pelvis): S02 8.0 deg on the right leg's strides (4.7 on the left's), the
-simulated walk 0.6-2.1 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
-belt turning around the waist) 22 deg on S02 and 26-30 on the simulated walk, found; a turn
+simulated walk 0.7-1.7 (seeds 0-3, 5), qmt 8.9; a 30 deg turn about the sensor's vertical (a
+belt turning around the waist) 22 deg on S02 and 26-29 on the simulated walk, found; a turn
 about a horizontal axis turns gravity (27-31 deg). The principal axis of the low-passed (3 Hz)
 horizontal angular velocity, tried first, mixes the rocking with the tilt (principal ratio
 1.2-3.3 against the harmonic's 6-8 on S02 and hundreds on the simulated walk) and stepped 11-15

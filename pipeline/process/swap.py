@@ -38,7 +38,7 @@ read back (before eq 1, which needs each leg's own sensors); between the two the
 are excluded, named. Measured, each exchange injected (``P``; ``T`` for the shanks' exchange, the
 feet's the same negated): S02 2.87 / 2.03, the x-IMU3 walk 3.20 / 5.05, the qmt recording (16
 sensors, no truth; strides of 1 s at 5-7 rad/s: running) 3.04 / -1.22 (its first 65 s 2.89 /
--1.39), the simulated walk 2.47-2.81 / 3.16-3.78 (seeds 0-5); as named ``P`` is the same
+-1.39), the simulated walk 2.45-2.87 / 3.18-4.25 (seeds 0-5); as named ``P`` is the same
 negated. :data:`MIN_GAIN` lies halfway to the smallest ``P``; in running the thighs mislead
 (qmt's read the wrong way), and S02's left thigh swings with its leg weakly (0.07 and 0.16,
 0.48 with the other thigh): :data:`MIN_THIGH_GAIN` lies halfway between qmt's 1.39 and S02's
@@ -52,7 +52,7 @@ rhythm tells:
     W = sum over both legs and (t, f) of r(F_own, t_own) - r(F_own, t_other)               (4)
 
 ``W >= MIN_THIGH_GAIN``: each thigh swings with its named leg (S02 2.03, the x-IMU3 walk 5.05,
-the simulated walk 3.16-3.78; the same as eq 3's with a shank exchanged, its terms being
+the simulated walk 3.18-4.25; the same as eq 3's with a shank exchanged, its terms being
 those), ``W <= -MIN_THIGH_GAIN``: with the other (the thighs alone exchanged). Eq (2)-(4) and the
 strides take 0.02 s (S02).
 """
