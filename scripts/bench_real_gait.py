@@ -140,13 +140,18 @@ def vicon_centres(data: Path) -> dict[str, np.ndarray]:
 
 def our_centres(run) -> dict[str, np.ndarray]:
     """As :func:`vicon_centres`, ours: the model's KJC and AJC landmarks."""
-    (R, p), = frame_trajectories(run.skeleton, run.q, ["pelvis"]).values()
-    lm = run.landmarks
+    return model_centres(run.skeleton, run.q, run.landmarks)
+
+
+def model_centres(skeleton, Q: np.ndarray, lm: dict) -> dict[str, np.ndarray]:
+    """:func:`our_centres` of any configurations ``Q`` of ``skeleton`` with its landmark
+    trajectories ``lm`` (the hip centres' computed where ``lm`` lacks them)."""
+    (R, p), = frame_trajectories(skeleton, Q, ["pelvis"]).values()
     mid = 0.5 * (lm["right_HJC"] + lm["left_HJC"]) if "right_HJC" in lm else None
     if mid is None:
         from pipeline.analysis.landmarks import landmark_trajectories
 
-        h = landmark_trajectories(run.skeleton, run.q, ["right_HJC", "left_HJC"])
+        h = landmark_trajectories(skeleton, Q, ["right_HJC", "left_HJC"])
         mid = 0.5 * (h["right_HJC"] + h["left_HJC"])
     fwd = R[:, :, 0].copy()
     fwd[:, 1] = 0.0
@@ -233,8 +238,6 @@ def driven_centres(run, table) -> dict[str, np.ndarray]:
     set to an optical reference's angles (``table``, a read ``.mot``): what the model's
     dimensions and frames leave of the centres' error when the angles are the optical ones (the
     model's JCS angles are its ``q`` coordinates, Z-X-Y)."""
-    import types
-
     sk = run.skeleton
     n = min(len(run.q), len(table.columns["hip_flexion_r"]))
     Q = run.q[:n].copy()
@@ -255,8 +258,8 @@ def driven_centres(run, table) -> dict[str, np.ndarray]:
             assert np.nanmax(gap) < 1e-6, (side, ours, np.nanmax(gap))
     names = [f"{side}_{j}" for side in ("right", "left") for j in ("HJC", "KJC", "AJC")]
 
-    fake = types.SimpleNamespace(skeleton=sk, q=Q, landmarks=landmark_trajectories(sk, Q, names))
-    return {k: v for k, v in our_centres(fake).items() if k.startswith("pelvis")}
+    centres = model_centres(sk, Q, landmark_trajectories(sk, Q, names))
+    return {k: v for k, v in centres.items() if k.startswith("pelvis")}
 
 
 def centre_offsets(ours: dict, truth: dict) -> dict[str, tuple[float, float]]:
