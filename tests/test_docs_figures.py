@@ -51,6 +51,12 @@ FIGURES = [
        rf"\| pelvis width measured \| {ref} \| [\d.]+ \| [\d.]+ \| {col} \|")
       for doc, ref, col in ((rf"{NUM}-[\d.]+", "vicon", rf"[\d.]+ \| {NUM}"),
                             (rf"[\d.]+-{NUM}", "markers", rf"[\d.]+ \| {NUM}"))),
+    ("docs/results.md", rf"the medians are {NUM}-[\d.]+° \(the two", "results/bench_real_gait.txt",
+     rf"\| vqf9 \| [\d.]+ \| [\d.]+ \| {NUM} \|"),
+    ("docs/results.md", rf"the medians are [\d.]+-{NUM}° \(the two", "results/bench_real_gait.txt",
+     rf"\| pi6 \| [\d.]+ \| [\d.]+ \| {NUM} \|"),
+    ("docs/results.md", rf"optical references' own {NUM}°\)", "results/bench_real_gait.txt",
+     rf"\| optical floor \| [\d.]+ \| [\d.]+ \| {NUM} \|"),
     ("docs/results.md", rf"error grows by \+{NUM}°", "results/bench_real_gait.txt",
      rf"\| pelvis \| [+-][\d.]+ / \+{NUM} / "),
     ("docs/results.md", rf"the left thigh's by \+{NUM}°", "results/bench_real_gait.txt",
