@@ -173,20 +173,25 @@ def _elevation(anterior: np.ndarray, up: np.ndarray) -> np.ndarray:
     return np.degrees(np.arcsin(np.clip(anterior @ up, -1.0, 1.0)))
 
 
-def our_inclinations(run) -> dict[str, np.ndarray]:
+#: ISB axis (0 anterior, 2 the subject's right) -> the Vicon segment's column and sign (Vicon's
+#: axes: x the subject's left, z anterior, for both legs).
+VICON_AXIS = {0: (2, 1.0), 2: (0, -1.0)}
+
+
+def our_inclinations(run, axis: int = 0) -> dict[str, np.ndarray]:
     """Each segment's sagittal inclination (deg): its anterior axis's elevation above the
-    horizontal (positive: the segment's front up), free of the heading."""
+    horizontal (positive: the segment's front up), free of the heading; ``axis=2``: its
+    frontal roll, the elevation of its axis to the subject's right (the pelvis's obliquity)."""
     frames = frame_trajectories(run.skeleton, run.q, list(SEGMENTS))
-    return {s: _elevation(R[:, :, 0], np.array([0.0, 1.0, 0.0])) for s, (R, _) in frames.items()}
+    return {s: _elevation(R[:, :, axis], np.array([0.0, 1.0, 0.0]))
+            for s, (R, _) in frames.items()}  # fmt: skip
 
 
-def vicon_inclinations(data: Path) -> dict[str, np.ndarray]:
-    """As :func:`our_inclinations`, of the Vicon segments (anterior ``z``, lab ``z`` up)."""
-    out = {}
-    for ours, seg in SEGMENTS.items():
-        R = vicon_rotations(data, seg)
-        out[ours] = _elevation(R[:, :, 2], np.array([0.0, 0.0, 1.0]))
-    return out
+def vicon_inclinations(data: Path, axis: int = 0) -> dict[str, np.ndarray]:
+    """As :func:`our_inclinations`, of the Vicon segments (lab ``z`` up)."""
+    column, sign = VICON_AXIS[axis]
+    return {ours: _elevation(sign * vicon_rotations(data, seg)[:, :, column],
+                             np.array([0.0, 0.0, 1.0])) for ours, seg in SEGMENTS.items()}
 
 
 def inclination_errors(ours: np.ndarray, truth: np.ndarray) -> tuple[float, float, float]:
@@ -332,7 +337,8 @@ def main() -> None:
     vicon = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_vicon_ik.mot")
     markers = read_mot(args.data / "vicon" / "S02-Trial-Walk-1_markers_ik.mot")
     refs = {"angles": {"vicon": vicon, "markers": markers}, "centres": vicon_centres(args.data),
-            "lengths": vicon_lengths(args.data), "inclinations": vicon_inclinations(args.data)}
+            "lengths": vicon_lengths(args.data), "inclinations": vicon_inclinations(args.data),
+            "rolls": vicon_inclinations(args.data, axis=2)}
     variants = VARIANTS[:1] if args.quick else VARIANTS
     rows, curves = [], {}
     for path in INPUTS:
@@ -487,6 +493,22 @@ def limits(rows, refs) -> str:
         lines.append(f"| {seg} | " + " | ".join(
             "{:+.1f} / {:+.1f} / {:.1f}".format(*inclination_errors(incl[p][seg], truth))
             for p in incl) + " |")  # fmt: skip
+    lines += ["", "**Frontal plane** (the hip ab/adduction's r target): each segment's frontal "
+              "roll (its lateral axis's elevation, free of the heading; the pelvis's obliquity) "
+              "against the Vicon segment's over the walk: Pearson r and range, ours / Vicon "
+              "(deg), defaults. Hip ab/adduction is the femur's roll less the pelvis's (near "
+              "the standing pose); a segment that correlates weakly on every input disagrees "
+              "with the markers in the frontal plane whatever the filter. The roll also takes in "
+              "a segment's axial rotation as it flexes, and Vicon's femur and tibia share their "
+              "lateral axis (its knee is a hinge): the pelvis's row is the cleanest.", "",
+              "| segment | " + " | ".join(p for p, *_ in defaults) + " |",
+              "|---|" + "---|" * len(defaults)]  # fmt: skip
+    rolls = {p: our_inclinations(run, axis=2) for p, _, _, _, _, run in defaults}
+    for seg in ("pelvis", "right_femur", "left_femur", "right_tibia", "left_tibia"):
+        truth = refs["rolls"][seg][WALK]
+        lines.append(f"| {seg} | " + " | ".join(
+            f"{np.corrcoef(rolls[p][seg][WALK], truth)[0, 1]:.2f}, "
+            f"{np.ptp(rolls[p][seg][WALK]):.1f} / {np.ptp(truth):.1f}" for p in rolls) + " |")
     lines += ["", "**Joint centres**: the walk's mean error (length, mm) and the RMS about it, "
               "pelvis frame, defaults; then the dimensions (m) of the scaled model (from height "
               "and sex, no measurement of this subject) against Vicon's:", "",
