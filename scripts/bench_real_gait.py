@@ -36,11 +36,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.landmarks import frame_trajectories
+from pipeline.analysis.joint_angles import joint_angles
+from pipeline.analysis.landmarks import frame_trajectories, landmark_trajectories
 from pipeline.io.formats import read_recording
 from pipeline.io.mot import read_mot
 from pipeline.model.measures import Measures
-from pipeline.process import mot_columns, process_recording
+from pipeline.process import MOT_NAMES, mot_columns, process_recording
 from pipeline.process.options import IKOptions
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -151,8 +152,6 @@ def model_centres(skeleton, Q: np.ndarray, lm: dict) -> dict[str, np.ndarray]:
     (R, p), = frame_trajectories(skeleton, Q, ["pelvis"]).values()
     mid = 0.5 * (lm["right_HJC"] + lm["left_HJC"]) if "right_HJC" in lm else None
     if mid is None:
-        from pipeline.analysis.landmarks import landmark_trajectories
-
         h = landmark_trajectories(skeleton, Q, ["right_HJC", "left_HJC"])
         mid = 0.5 * (h["right_HJC"] + h["left_HJC"])
     fwd = R[:, :, 0].copy()
@@ -216,8 +215,6 @@ def vicon_lengths(data: Path) -> dict[str, float]:
 
 def our_lengths(run) -> dict[str, float]:
     """As :func:`vicon_lengths`, of the scaled model."""
-    from pipeline.analysis.landmarks import landmark_trajectories
-
     names = [f"{side}_{j}" for side in ("right", "left") for j in ("HJC", "KJC", "AJC")]
     return _lengths(landmark_trajectories(run.skeleton, run.q[WALK], names))
 
@@ -253,18 +250,13 @@ def driven_centres(run, table) -> dict[str, np.ndarray]:
             Q[:, sk.q_index(joint)] = 0.0
         for joint, column in DRIVEN.items():
             Q[:, sk.q_index(f"{side}_{joint}")] = table.columns[f"{column}_{x}"][:n]
-    from pipeline.analysis.joint_angles import joint_angles
-    from pipeline.analysis.landmarks import landmark_trajectories
-
     check = joint_angles(sk, Q[WALK])  # the JCS angles are the q coordinates, checked
     for side, x in (("right", "r"), ("left", "l")):
-        for ours, column in (("hip_flexion", "hip_flexion"), ("hip_adduction", "hip_adduction"),
-                             ("hip_rotation", "hip_rotation"), ("knee_flexion", "knee_angle"),
-                             ("ankle_flexion", "ankle_angle")):  # fmt: skip
-            gap = np.abs(check[f"{side}_{ours}"] - table.columns[f"{column}_{x}"][:n][WALK])
-            assert np.nanmax(gap) < 1e-6, (side, ours, np.nanmax(gap))
+        for ours, theirs in MOT_NAMES.items():
+            if f"{theirs}_{x}" in table.columns:
+                gap = np.abs(check[f"{side}_{ours}"] - table.columns[f"{theirs}_{x}"][:n][WALK])
+                assert np.nanmax(gap) < 1e-6, (side, ours, np.nanmax(gap))
     names = [f"{side}_{j}" for side in ("right", "left") for j in ("HJC", "KJC", "AJC")]
-
     centres = model_centres(sk, Q, landmark_trajectories(sk, Q, names))
     return {k: v for k, v in centres.items() if k.startswith("pelvis")}
 
