@@ -12,6 +12,33 @@ from pipeline.rotations import exp3, normalize, quat_from_matrix
 #: Reflection through the sagittal plane (z -> -z), right leg <-> left leg.
 MIRROR = np.diag([1.0, 1.0, -1.0])
 RATE = 100.0
+#: The shared data folder and the real walk S02's sensor map (its README).
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+S02 = DATA / "gaittoolbox_s02"
+S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
+           "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
+           "calcn_r_imu": "00B40C48"}  # fmt: skip
+
+
+def s02_cut(start: int, stop: int | None = None, path: str = "vendor"):
+    """S02 (read with its map) cut to samples ``[start, stop)``, its time from 0, as a recording
+    that starts or ends there; ``path``: ``'vendor'`` (its orientations, in its z-up world) or
+    ``'vqf6'`` (raw signals without the orientations and magnetometers). None without the data."""
+    import dataclasses
+
+    from pipeline.io.formats import read_recording
+
+    if not S02.exists():
+        return None
+    rec = read_recording(S02 / "imu", S02_MAP)
+    rows = slice(start, stop)
+    sensors = {n: dataclasses.replace(s, **{k: None if getattr(s, k) is None else
+                                            getattr(s, k)[rows]
+                                            for k in ("quat", "gyr", "acc", "mag")})
+               for n, s in rec.sensors.items()}  # fmt: skip
+    if path == "vqf6":
+        sensors = {n: s.replace(quat=None, mag=None) for n, s in sensors.items()}
+    return dataclasses.replace(rec, time=rec.time[rows] - rec.time[start], sensors=sensors)
 
 
 def asymmetric_subject(**over: object) -> SubjectGeometry:

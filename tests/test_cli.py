@@ -56,14 +56,12 @@ def _bad_files():
         "empty": ("", "empty"),
         "header only": (HEADER, "column"),
         "truncated": (full[: len(full) - 20], "truncated"),  # cut mid-row
-        "missing pelvis": (_sto([(t, q[1:]) for t, q in rows], COLUMNS[1:]), "pelvis"),
         "unsorted time": (_sto(unsorted), "time"),
         "repeated time": (_sto(repeated), "time"),
         "zero quaternion": (_sto(zero_q), "quaternion"),
         "non-unit quaternion": (_sto(big_q), "unit"),
         "long NaN gap": (_sto(nan_gap), "gap"),
         "rate mismatch": (_sto(_rows(dt=0.02)), "rate"),
-        "barely moving knee": (_sto(rows), "barely move"),
     }
 
 
@@ -80,6 +78,22 @@ def test_bad_sto_refused_with_one_line(tmp_path, capsys, case):
     assert len(err.splitlines()) == 1 and "Traceback" not in err
     assert expected.lower() in err.lower(), err
     assert not out.exists() or not any(out.iterdir())  # nothing half-written
+
+
+@pytest.mark.parametrize("columns", [COLUMNS, COLUMNS[1:]])
+def test_a_still_recording_runs_and_says_what_it_could_not_observe(tmp_path, capsys, columns):
+    """Half a second of one pose (with the pelvis, or a knee alone): no heading to find from a
+    motion, none needed; the pose read in its still window, unchecked (no walk), no flag."""
+    rows = [(t, q[-len(columns):]) for t, q in _rows()]
+    path = tmp_path / "still.sto"
+    path.write_text(_sto(rows, columns))
+    code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
+                 "--out", str(tmp_path / "out")])  # fmt: skip
+    assert code == 0
+    summary = (tmp_path / "out" / "still_summary.md").read_text()
+    assert "the subject's heading is not observed" in summary
+    assert "read in the still window 0.00-0.49 s (not checked: no walk to check it by)" in summary
+    assert "warning" not in capsys.readouterr().err
 
 
 def test_units_hint_for_height_in_cm(tmp_path, capsys):

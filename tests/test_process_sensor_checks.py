@@ -10,7 +10,8 @@ from pipeline.errors import InputError
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.model.measures import Measures
-from pipeline.process.sensor_checks import CHECKS, check_sensors, check_units
+from pipeline.process.recording_checks import check_units
+from pipeline.process.sensor_checks import CHECKS, check_sensors
 
 SUBJECT = Measures("m", 1.75)
 NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
@@ -169,7 +170,7 @@ def test_quaternions_in_x_y_z_w_order_are_refused(walk):
     the same in the right order pass."""
     from pipeline.model.scaling import geometry_from_measures
     from pipeline.model.skeleton import Skeleton
-    from pipeline.process.sensor_checks import check_quaternion_order
+    from pipeline.process.recording_checks import check_quaternion_order
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
@@ -220,9 +221,29 @@ def test_a_repair_of_one_sensors_file_is_named_on_that_sensor(tmp_path):
     assert f.evidence.startswith("its file's reader: 2 dropped packet(s) (PacketCounter jumps)")
 
 
-def test_the_registry_names_every_check():
-    assert set(CHECKS) == {"dead", "dropout", "saturation", "moves with its segment", "slipped",
-                           "read"}
+def test_the_registry_names_every_check_with_its_scope():
+    from pipeline.process.sensor_checks import SCOPES
+
+    assert {n: c.scope for n, c in CHECKS.items()} == {
+        "units": "recording", "quaternion order": "recording", "read": "sensor",
+        "dead": "sensor", "dropout": "sensor", "saturation": "sensor",
+        "moves with its segment": "sensor", "slipped": "sensor", "crossed": "legs",
+        "swapped": "legs"}
+    assert {c.scope for c in CHECKS.values()} == set(SCOPES)
+
+
+def test_an_unchanged_recording_keeps_its_context_the_strides_computed_once():
+    from pipeline.process.check_context import CheckContext
+    from pipeline.process.sensor_checks import run_checks
+
+    t = np.arange(300) / 100.0
+    rng = np.random.default_rng(3)
+    s = SensorSignals(gyr=rng.normal(0, 0.01, (300, 3)), acc=np.tile([0, 0, 9.81], (300, 1))
+                      + rng.normal(0, 0.01, (300, 3)))
+    ctx = CheckContext(Recording(t, 100.0, {"calcn_r_imu": s}))
+    checked, findings = run_checks(ctx)
+    assert findings == [] and checked is ctx and checked.rec is ctx.rec
+    assert ctx.gait is checked.gait  # computed once, shared
 
 
 @pytest.mark.dataset

@@ -9,6 +9,7 @@ import pytest
 from pipeline.io.recording import Recording
 from pipeline.model.measures import Measures
 from pipeline.process import process_recording
+from pipeline.process.check_context import CheckContext
 from pipeline.process.gait import gait_of
 from pipeline.process.sensor_checks import check_sensors
 from pipeline.process.slip import ALONE_DEG, SLIP_DEG, slip_step, walking_strides
@@ -53,7 +54,8 @@ def _slipped(rec: Recording, name: str, axis: int, at: int, deg: float = 30.0) -
 
 
 def test_sensors_that_stay_put_do_not_step(walk):
-    steps = {n: slip_step(n, walk) for n in walk.sensors}
+    ctx = CheckContext(walk)
+    steps = {n: slip_step(n, ctx) for n in walk.sensors}
     assert len(steps) == 7 and all(s.deg < SLIP_DEG / 1.5 for s in steps.values()), steps
     assert steps["pelvis_imu"].axis_deg < 5.0  # the axis it rocks about (eq 3)
     assert not [f for f in check_sensors(walk)[1] if f.check == "slipped"]
@@ -63,7 +65,7 @@ def test_sensors_that_stay_put_do_not_step(walk):
 @pytest.mark.parametrize("axis", [0, 1, 2])
 def test_a_30_deg_slip_about_any_axis_is_found_where_it_happened(walk, name, axis):
     at = _mid_walk(walk)
-    step = slip_step(name, _slipped(walk, name, axis, at))
+    step = slip_step(name, CheckContext(_slipped(walk, name, axis, at)))
     assert step.slipped and step.deg > 20.0, step
     stride = 1.4  # s, about; the stride the slip happened in goes to either side
     assert abs(step.time_s - walk.time[at]) <= stride, (step.time_s, walk.time[at])
@@ -85,12 +87,12 @@ def test_the_pelvis_tipping_on_its_belt_or_turning_around_the_waist_is_found(wal
     at = _mid_walk(walk)
     horizontal, vertical = _horizontal_axes(walk, "pelvis_imu")
     for axis in horizontal:
-        step = slip_step("pelvis_imu", _slipped(walk, "pelvis_imu", axis, at))
+        step = slip_step("pelvis_imu", CheckContext(_slipped(walk, "pelvis_imu", axis, at)))
         assert step.slipped and step.gravity_deg > 20.0, (axis, step)
         assert step.others_deg < ALONE_DEG, (axis, step)
         assert "gravity at mid-stance turned by" in step.evidence()
         assert "flexion axis" not in step.evidence()
-    step = slip_step("pelvis_imu", _slipped(walk, "pelvis_imu", vertical, at))
+    step = slip_step("pelvis_imu", CheckContext(_slipped(walk, "pelvis_imu", vertical, at)))
     assert step.slipped and step.axis_deg > 20.0, step
     assert step.gravity_deg < SLIP_DEG / 2, step  # the sensor's axis is off the vertical a little
     assert "the axis it rocks about once a stride turned by" in step.evidence()
@@ -112,10 +114,11 @@ def test_a_step_both_legs_take_is_not_a_slip(walk):
             "calcn_l_imu")  # fmt: skip
     for name in legs:
         rec = _slipped(rec, name, 0, at)
-    steps = [slip_step(n, rec) for n in legs]
+    ctx = CheckContext(rec)
+    steps = [slip_step(n, ctx) for n in legs]
     assert all(s.deg > SLIP_DEG and s.others_deg > 20.0 and s.mirror_deg > 20.0
                and not s.slipped for s in steps), steps  # fmt: skip
-    alone = slip_step("tibia_r_imu", _slipped(walk, "tibia_r_imu", 0, at))
+    alone = slip_step("tibia_r_imu", CheckContext(_slipped(walk, "tibia_r_imu", 0, at)))
     assert alone.slipped and alone.others_deg < ALONE_DEG, alone
 
 
@@ -129,7 +132,7 @@ def test_two_sensors_slipping_at_once_are_both_named(walk, pair):
     for name in pair:
         rec = _slipped(rec, name, 0, at)
     for name in pair:
-        step = slip_step(name, rec)
+        step = slip_step(name, CheckContext(rec))
         assert step.slipped and step.others_deg > 20.0 and step.mirror_deg < 5.0, (name, step)
     found = {f.sensor for f in check_sensors(rec)[1] if f.check == "slipped"}
     assert found == set(pair)
@@ -137,11 +140,12 @@ def test_two_sensors_slipping_at_once_are_both_named(walk, pair):
 
 def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     at = _mid_walk(walk)
-    assert not slip_step("tibia_r_imu", _slipped(walk, "tibia_r_imu", 0, at, deg=3.0)).slipped
+    small = CheckContext(_slipped(walk, "tibia_r_imu", 0, at, deg=3.0))
+    assert not slip_step("tibia_r_imu", small).slipped
     n = int(round(gait_of(walk, []).events["right"].ic[2]))  # two strides: nothing to compare
     short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
         gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
-    assert slip_step("tibia_r_imu", short) is None
+    assert slip_step("tibia_r_imu", CheckContext(short)) is None
     listed = {f.sensor: f for f in check_sensors(short)[1] if f.check == "slipped"}
     assert {"femur_r_imu", "tibia_r_imu", "calcn_r_imu"} <= set(listed), listed
     assert not any(f.flagged for f in listed.values())
@@ -189,13 +193,14 @@ def test_s02_no_sensor_steps_and_a_mid_walk_slip_is_found():
 
     rec = read_recording(S02 / "imu", S02_MAP)
     for name in rec.sensors:
-        step = slip_step(name, rec)
+        step = slip_step(name, CheckContext(rec))
         assert step is None or not step.slipped, (name, step)
     at = _mid_walk(rec)
     for name in ("femur_r_imu", "tibia_r_imu", "calcn_r_imu"):
-        assert slip_step(name, _slipped(rec, name, 0, at)).slipped, name
+        assert slip_step(name, CheckContext(_slipped(rec, name, 0, at))).slipped, name
     for axis in range(3):
-        assert slip_step("pelvis_imu", _slipped(rec, "pelvis_imu", axis, at)).slipped, axis
+        turned = CheckContext(_slipped(rec, "pelvis_imu", axis, at))
+        assert slip_step("pelvis_imu", turned).slipped, axis
 
 
 def test_a_neighbour_with_missing_samples_is_left_out_of_the_comparison(walk):
@@ -206,7 +211,7 @@ def test_a_neighbour_with_missing_samples_is_left_out_of_the_comparison(walk):
     gyr[500:1000], acc[500:1000] = np.nan, np.nan
     rec = walk.with_sensors({**walk.sensors, "femur_r_imu": s.replace(gyr=gyr, acc=acc)})
     rec = _slipped(rec, "tibia_r_imu", 0, _mid_walk(walk))
-    step = slip_step("tibia_r_imu", rec)
+    step = slip_step("tibia_r_imu", CheckContext(rec))
     assert step.slipped and np.isfinite(step.others_deg), step
 
 
@@ -221,7 +226,8 @@ def test_a_change_of_gait_on_a_real_recording_is_not_a_slip():
     rec = qmt_recording(S02.parent)
     if rec is None:
         pytest.skip("../shared/data/qmt_full_body not present")
-    thighs = [slip_step(n, rec) for n in ("femur_l_imu", "femur_r_imu")]
+    ctx = CheckContext(rec)
+    thighs = [slip_step(n, ctx) for n in ("femur_l_imu", "femur_r_imu")]
     assert all(s.deg > SLIP_DEG and s.others_deg > 9.0 for s in thighs), thighs
     found = [f for f in check_sensors(rec)[1] if f.check == "slipped"]
     assert {f.action for f in found} == {"listed"}
@@ -245,5 +251,5 @@ def test_a_dropout_over_a_legs_rests_gives_no_warning():
     rec = dropout(s02(S02.parent)[0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        steps = {n: slip_step(n, rec) for n in rec.sensors}
+        steps = {n: slip_step(n, CheckContext(rec)) for n in rec.sensors}
     assert steps["femur_r_imu"] is not None and not steps["femur_r_imu"].slipped

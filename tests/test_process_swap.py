@@ -9,6 +9,7 @@ import pytest
 
 from pipeline.io.recording import Recording
 from pipeline.model.measures import Measures
+from pipeline.process.check_context import CheckContext
 from pipeline.process.sensor_checks import SWAPPED_BACK, check_sensors
 from pipeline.process.swap import (
     MIN_GAIN,
@@ -87,16 +88,16 @@ def test_a_still_leg_decides_nothing(motion, standing_s):
     named = _trial(motion, standing_s, knee="hinge")
     ev = swap_evidence("right", _swapped(named, "r"))
     assert max(ev.shank_residual, ev.thigh_residual) < MIN_RESIDUAL and not ev.swapped
-    assert crossing_evidence(named) is None  # no strides: not a walk
+    assert crossing_evidence(CheckContext(named)) is None  # no strides: not a walk
 
 
 def test_the_legs_take_turns(walk):
     """Eq (2)-(3): as named each leg's shank and foot pair (P < 0); each exchange injected is
     found and told (module docstring's figures)."""
-    c = crossing_evidence(walk)
+    c = crossing_evidence(CheckContext(walk))
     assert c.pairing < -2 * MIN_GAIN and not c.crossed and c.exchanged is None
     for segment, exchanged in EXCHANGED.items():
-        c = crossing_evidence(_crossed(walk, segment))
+        c = crossing_evidence(CheckContext(_crossed(walk, segment)))
         assert c.crossed and c.exchanged == exchanged, (segment, c)
         assert abs(c.thighs) > MIN_THIGH_GAIN * 1.5, (segment, c)
 
@@ -143,10 +144,10 @@ def test_the_real_walks():
             ev = swap_evidence(side, rec)
             assert ev.thigh_residual > 2.0 * ev.shank_residual, ev
             assert swap_evidence(side, _swapped(rec, side[0])).swapped
-        c = crossing_evidence(rec)
+        c = crossing_evidence(CheckContext(rec))
         assert c.pairing < -2 * MIN_GAIN and not c.crossed, c
         for segment, exchanged in EXCHANGED.items():
-            c = crossing_evidence(_crossed(rec, segment))
+            c = crossing_evidence(CheckContext(_crossed(rec, segment)))
             assert c.crossed and c.exchanged == exchanged, (segment, c)
 
 
@@ -176,8 +177,8 @@ def test_running_thighs_do_not_guess():
     rec = qmt_recording(DATA)
     if rec is None:
         pytest.skip("../shared/data/qmt_full_body not present")
-    assert not crossing_evidence(rec).crossed
-    c = crossing_evidence(_crossed(rec, "tibia"))
+    assert not crossing_evidence(CheckContext(rec)).crossed
+    c = crossing_evidence(CheckContext(_crossed(rec, "tibia")))
     assert c.crossed and c.thighs < 0 and c.exchanged is None, c
     assert set(c.read_back(rec).sensors) == {"pelvis_imu", "femur_r_imu", "femur_l_imu"}
     # the sensor check itself does not decide here: four of qmt's gyroscopes pass a human

@@ -7,14 +7,13 @@
   Likely causes: the quaternion order, the sensor-to-segment mapping, ``--sensor-to-model``.
 * **Joint limits:** a joint at one of its limits for more than :data:`AT_LIMIT_SHARE` of the
   frames: the IK pushes against the model (a mis-mounted sensor, a wrong heading, or a knee
-  model that cannot follow the data).
+  model that cannot follow the data). A straight knee at its extension limit while the subject
+  stands still (the ``still`` samples: a standing trial's knees rest there) is not counted.
 * **A leg at its limits:** on one leg, some joint at a limit in more than
   :data:`AT_LIMIT_LEG_SHARE` of the frames (a knee's ab/adduction swinging between its limits
   while the ankle sits at one, each joint alone below :data:`AT_LIMIT_SHARE`; a straight knee,
   at its extension limit, is not counted): that leg's sensors are likely faulty, mis-mounted or
   mis-mapped.
-* **Calibration pose:** a lying or seated calibration pose given for a recording in which the
-  subject walks (``strides`` found), whose first seconds are then standing.
 * **Heading:** the hip and knee flexion axes disagree (see
   :func:`pipeline.calibration.heading.anatomical_right`), or a thigh's heading could not be put
   in the pelvis's (6-D, neither its hip nor the other thigh could align it:
@@ -43,14 +42,13 @@ def quality_flags(
     residual_rms: np.ndarray,
     notes: list[str] = (),
     joints: list[str] | None = None,
-    calibration_pose: str = "standing",
-    strides: int = 0,
+    still: np.ndarray | None = None,
 ) -> list[str]:
     """The flags of the module docstring, one line each (empty when the run looks plausible).
 
     ``joints``: the joints whose limits are checked (default all; unobserved joints held at a
-    fixed value are better left out); ``calibration_pose`` and the number of ``strides`` found
-    (:mod:`pipeline.process.gait`) for the pose check."""
+    fixed value are better left out); ``still``: (N,) bool, the samples in which every sensor
+    rests (:mod:`pipeline.process.still`)."""
     flags = []
     res = np.degrees(nanmedian(residual_rms))
     if not res <= RESIDUAL_BOUND_DEG:
@@ -61,6 +59,7 @@ def quality_flags(
             "--sensor-to-model"
         )
     ok = np.isfinite(q).all(axis=1)
+    moving = ok if still is None else ok & ~np.asarray(still, dtype=bool)
     at_limit, legs = [], {}
     for joint in skeleton.joint_names if joints is None else joints:
         jm = skeleton.model.joints[skeleton.model.getJointId(joint)]
@@ -69,6 +68,8 @@ def quality_flags(
         i = jm.idx_q
         lo, hi = skeleton.lower_limits[i], skeleton.upper_limits[i]
         held = (q[ok, i] <= lo + AT_LIMIT_TOL) | (q[ok, i] >= hi - AT_LIMIT_TOL)
+        if joint.endswith(("_knee_Z", "_knee")):  # straight while standing still: the pose
+            held &= moving[ok] | (q[ok, i] >= hi - AT_LIMIT_TOL)
         share = float(np.mean(held))
         if share > AT_LIMIT_SHARE:
             at_limit.append(f"{joint} ({100 * share:.0f}% of frames)")
@@ -83,10 +84,6 @@ def quality_flags(
             names = ", ".join(j for j, h in held if h.any())
             flags.append(f"the {side} leg has a joint at its limit in {100 * share:.0f}% of the "
                          f"frames ({names}): its sensors may be faulty, mis-mounted or mis-mapped")
-    if calibration_pose in ("supine", "seated") and strides >= 2:
-        flags.append(f"--calibration-pose {calibration_pose}, but the subject walks ({strides} "
-                     "strides): a walk starts standing; give --calibration-pose standing (or a "
-                     "static trial of that pose)")  # fmt: skip
     if at_limit:
         flags.append(
             "joints at their limits for a long share of the trial: " + ", ".join(at_limit)

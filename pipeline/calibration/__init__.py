@@ -22,6 +22,7 @@ _EXPORTS = {
     "AorCorrection": "aor_ipopt",
     "calibrate": "calibrate",
     "CALIBRATION_POSES": "conventions",
+    "CALIBRATIONS": "conventions",
     "CalibrationResult": "solvers",
     "correct_knee": "correction",
     "correction_rotations": "aor",

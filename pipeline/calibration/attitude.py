@@ -221,9 +221,36 @@ def filter_orientations(
     return _FILTERS[method](t, gyr, acc, mag)
 
 
+#: A recording that does not start still gets its first attitude from the filter run backwards
+#: over at most this long (s) from there: several of the filter's time constants.
+BACKWARD_START_S = 20.0
+
+
+def _starts_moving(gyr: np.ndarray, acc: np.ndarray, period: float) -> bool:
+    """Whether the sensor moves over its first half second: faster than 0.2 rad/s, or its
+    specific force more than 1 m/s^2 from 1 g (a standing subject's sway stays well within)."""
+    k = max(1, int(round(0.5 / period)))
+    moving = np.linalg.norm(gyr[:k], axis=1) > 0.2
+    return bool(moving.any() or np.any(np.abs(np.linalg.norm(acc[:k], axis=1) - _GRAVITY) > 1.0))
+
+
 def _pi(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:
-    """Hu 2021's PI filter (eq 43-50) with :data:`TUNED` gains; 6-D (``mag`` is not used)."""
-    return mahony_filter(t, gyr, acc, **TUNED).quat
+    """Hu 2021's PI filter (eq 43-50) with :data:`TUNED` gains; 6-D (``mag`` is not used).
+
+    Its first attitude: the still start's (``rest_start``) or the first accelerometer sample's
+    where the sensor starts at rest (:func:`_starts_moving`), else the filter's own estimate at
+    the first sample from a backward pass (time reversed: the gyroscope negated) over the first
+    :data:`BACKWARD_START_S`. A recording that starts mid-walk otherwise starts from one
+    accelerometer sample, which a swinging shank's centripetal and linear accelerations turn
+    tens of degrees from the vertical, and the filter's gains take seconds to correct it (S02
+    cut to start mid-walk: a leg's angles 17-50 deg RMS off)."""
+    period = float(np.median(np.diff(t)))
+    if not _starts_moving(gyr, acc, period) or len(t) < 3:
+        return mahony_filter(t, gyr, acc, **TUNED).quat
+    k = min(len(t), max(2, int(BACKWARD_START_S / period)))
+    back = mahony_filter(t[:k], -gyr[:k][::-1], acc[:k][::-1],
+                         **{**TUNED, "rest_start": False})  # fmt: skip
+    return mahony_filter(t, gyr, acc, q0=back.quat[-1], **TUNED).quat
 
 
 def _vqf(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 __all__ = [
     "CALIBRATION_POSES",
+    "CALIBRATIONS",
     "CORRECTIONS",
     "DEFAULT_CALIBRATION_POSE",
     "DEFAULT_CORRECTION",
@@ -37,6 +38,10 @@ DEFAULT_CORRECTION = "none"
 #: Poses the first sample (or a static trial) may show: the model's neutral standing pose,
 #: lying on the back with the same joint angles, or sitting (hips and knees flexed 90 deg).
 CALIBRATION_POSES = ("standing", "supine", "seated")
+#: The ``calibration_pose`` option's choices: a pose held in a still window (found in the
+#: recording, :mod:`pipeline.process.pose_source`), or ``walking``: no pose, each sensor's
+#: placement from the walk itself (:mod:`pipeline.process.walking_pose`).
+CALIBRATIONS = (*CALIBRATION_POSES, "walking")
 DEFAULT_CALIBRATION_POSE = "standing"
 #: Attitude filters for raw signals: VQF (Laidig & Seel 2023, the default) and Hu's PI filter.
 FILTERS = ("vqf", "pi")

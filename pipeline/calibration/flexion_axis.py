@@ -23,15 +23,25 @@ a segment flexing in one plane); ``moving`` the fraction of samples used.
 **Signs** (:func:`leg_flexion_axes`): a principal axis has no sign, and the two sensors of a joint
 must agree on one. The knee flexes one way only: with each segment's pitch ``p_s(t)``, the turn
 of the world's vertical seen in its sensor's frame about ``j_s`` since the first sample (the
-sensor turns the other way), the knee's flexion ``p_shank - p_thigh`` spans some 60 deg on one
-side of zero in gait and almost nothing on the other (a wrong relative sign gives the thigh's and
-the shank's pitches added, two-sided); of the four sign pairs the one that makes it most positive
-(``P98 + P2``) points both axes to the subject's right. The foot turns with the shank through
-most of the stride: its axis takes the sign that correlates its angular rate with the shank's
-(measured correlation 0.92-0.94 on a real walk, 0.87-0.91 on the simulator's). A shank alone is
-signed by its swing: the swing forward of the distal end (positive about the subject's right in
-ISB: ``+z`` turns ``x`` towards ``y``), its fastest rotation in real gait, gives ``w_h . j`` a
-positive skew (not the simulator's sinusoidal gait, whose skew is near zero).
+sensor turns the other way), the knee's flexion ``p_shank - p_thigh`` rests near extension through
+the stance and reaches some 60 deg in the swing. From an extended knee's first sample (a still
+start, standing: both sensors' verticals within :data:`STILL_START_DEG` over its first half second)
+it spans far more on the flexion side than on the other (a wrong relative sign gives the thigh's
+and the shank's pitches added, two-sided): of the four sign pairs the one that makes it most
+positive (``P98 + P2 - 2 k_0``) points both axes to the subject's right. A recording that starts
+moving (mid-swing, the knee flexed 60 deg) has no such sample (from it, S02 cut to start at
+sample 1300 read both axes pointing left); there the shank is signed by its swing (below: its
+rotation rate about the axis skewed to the positive side, 1.0-1.2 on S02, 1.5 on the simulated
+walk) and the thigh alike with it, the pair whose knee flexion spans less (alike: the knee's
+60-70 deg; unlike: the thigh's and the shank's swings added). The knee's own skew would not do:
+the simulated walk's knee flexes as much in stance as it extends (its ``P98 + P2 - 2 P50``
+-5 to 1 deg, S02's +31).
+The foot turns with the shank through most of the stride: its axis takes the sign that
+correlates its angular rate with the shank's (measured correlation 0.92-0.94 on a real walk,
+0.87-0.91 on the simulator's). A shank alone is signed by its swing: the swing forward of the
+distal end (positive about the subject's right in ISB: ``+z`` turns ``x`` towards ``y``), its
+fastest rotation in real gait, gives ``w_h . j`` a positive skew (not the simulator's sinusoidal
+gait, whose skew is near zero).
 
 **The pelvis** barely flexes, but in walking it lists (obliquity, a few degrees) once per stride
 about its antero-posterior axis and tilts twice per stride about its medio-lateral one (Perry &
@@ -53,9 +63,9 @@ import numpy as np
 from pipeline.errors import InputError
 from pipeline.filtering import lowpass
 
-__all__ = ["CUTOFF_HZ", "MIN_LIST_RATE", "MIN_SPEED", "MIN_STRIDE_SHARE", "STRIDE_BAND_HZ",
-           "FlexionAxis", "flexion_axis", "knee_signs", "leg_flexion_axes", "pelvis_lateral_line",
-           "stride_frequency"]
+__all__ = ["CUTOFF_HZ", "MIN_LIST_RATE", "MIN_SPEED", "MIN_STRIDE_SHARE", "STILL_START_DEG",
+           "STRIDE_BAND_HZ", "FlexionAxis", "flexion_axis", "knee_signs", "leg_flexion_axes",
+           "pelvis_lateral_line", "stride_frequency"]
 
 #: Low-pass cut-off of the angular velocity (Hz): gait's rotations, not the soft tissue's.
 CUTOFF_HZ = 3.0
@@ -111,20 +121,47 @@ def _pitch(up: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return np.arctan2(np.cross(u[0], u) @ axis, u @ u[0])
 
 
+#: A knee whose two sensors' verticals keep within this (deg) over the first half second starts
+#: still: its flexion is read from its first sample (a standing start: extended).
+STILL_START_DEG = 2.0
+
+
 def knee_signs(
-    up_thigh: np.ndarray, up_shank: np.ndarray, axis_thigh: np.ndarray, axis_shank: np.ndarray
+    up_thigh: np.ndarray,
+    up_shank: np.ndarray,
+    axis_thigh: np.ndarray,
+    axis_shank: np.ndarray,
+    rate_hz: float,
 ) -> tuple[float, float]:
     """The signs ``(s_thigh, s_shank)`` that point a knee's two axes (each in its sensor's
-    frame) alike and to the subject's right: the pair that makes the knee's flexion from the
-    segments' pitches, ``s_shank p_shank - s_thigh p_thigh``, most positive (``P98 + P2``; module
-    docstring). ``up_*``: the world's vertical in each sensor's frame per sample."""
+    frame) alike and to the subject's right: the pair that skews the knee's flexion from the
+    segments' pitches, ``s_shank p_shank - s_thigh p_thigh``, most to the positive side
+    (``P98 + P2 - 2 k_0``, ``k_0`` the first sample's or the median: module docstring).
+    ``up_*``: the world's vertical in each sensor's frame per sample; ``rate_hz`` their rate."""
     p_f, p_t = _pitch(up_thigh, axis_thigh), _pitch(up_shank, axis_shank)
+    first = slice(0, max(2, int(round(0.5 * rate_hz))))
+    if max(np.ptp(p_f[first]), np.ptp(p_t[first])) >= np.radians(STILL_START_DEG):
+        return _moving_knee_signs(p_f, p_t, rate_hz)
 
     def positive(s_f: float, s_t: float) -> float:
         k = s_t * p_t - s_f * p_f
-        return float(np.percentile(k, 98) + np.percentile(k, 2))
+        return float(np.percentile(k, 98) + np.percentile(k, 2) - 2 * k[0])
 
     return max(((a, b) for a in (1.0, -1.0) for b in (1.0, -1.0)), key=lambda s: positive(*s))
+
+
+def _moving_knee_signs(p_f: np.ndarray, p_t: np.ndarray, rate_hz: float) -> tuple[float, float]:
+    """:func:`knee_signs` of a recording that starts moving (module docstring): the shank's by
+    its swing (its rotation rate about its axis, ``-dp/dt``, skewed to the positive side), the
+    thigh's alike with it (the knee's flexion the narrower of ``s_t p_t -+ p_f``)."""
+    rate = -np.gradient(lowpass(p_t, rate_hz, CUTOFF_HZ)) * rate_hz
+    s_t = 1.0 if np.mean(rate**3) >= 0 else -1.0
+
+    def spread(s_f: float) -> float:
+        k = s_t * p_t - s_f * p_f
+        return float(np.percentile(k, 98) - np.percentile(k, 2))
+
+    return min((1.0, -1.0), key=spread), s_t
 
 
 def _flip(a: FlexionAxis, sign: float) -> FlexionAxis:
@@ -141,7 +178,7 @@ def leg_flexion_axes(
     axes = {seg: flexion_axis(g, u, rate_hz) for seg, (g, u) in segments.items()}
     if "femur" in axes and "tibia" in axes:
         s_f, s_t = knee_signs(segments["femur"][1], segments["tibia"][1], axes["femur"].axis,
-                              axes["tibia"].axis)  # fmt: skip
+                              axes["tibia"].axis, rate_hz)  # fmt: skip
         axes["femur"], axes["tibia"] = _flip(axes["femur"], s_f), _flip(axes["tibia"], s_t)
     if "foot" in axes and "tibia" in axes:
         rates = [lowpass(segments[seg][0], rate_hz, CUTOFF_HZ) @ axes[seg].axis

@@ -27,16 +27,14 @@ def summary_text(run: IKRun) -> str:
     if run.filtered:
         by = (o.filter or DEFAULT_FILTER).upper()
         what = f"raw signals, orientations by {by} ({run.filtered})"
-    static = run.inputs.static_trial if run.inputs else None
-    pose = f"{o.calibration_pose} pose " + (f"from {Path(static).name}" if static
-                                             else "at the first sample")  # fmt: skip
     lines = [
         f"# IK of {source.name}",
         "",
         *(f"**WARNING: {flag}**\n" for flag in run.flags),
         f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf "
         f"(knee {o.knee})",
-        f"- sensors observe: {', '.join(run.sensors.joints)}; input: {what}; calibration: {pose}",
+        f"- sensors observe: {', '.join(run.sensors.joints)}; input: {what}",
+        f"- calibration: {run.calibration}",
         f"- {len(run.time)} frames, {run.time[-1] - run.time[0]:.2f} s; IK {run.seconds_ik:.2f} s "
         f"({fps:.0f} frames/s)",
         f"- heading: {run.heading_method}; subject's right at the calibration pose (world): "

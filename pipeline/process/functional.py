@@ -75,7 +75,7 @@ class KneeCalibration:
 
 def calibrate_knees(
     trial: Recording,
-    placements: dict[str, np.ndarray],
+    placements: dict[str, np.ndarray] | None,
     model_axes: dict[str, tuple[np.ndarray, np.ndarray]],
     method: str = "ipopt",
     min_samples: int = 200,
@@ -84,7 +84,8 @@ def calibrate_knees(
 ) -> list[KneeCalibration]:
     """Every knee whose two sensors have gyroscope and accelerometer (module docstring).
 
-    ``placements``: IMU frame (``right_femur_imu``, ...) -> 4x4 placement on its segment;
+    ``placements``: IMU frame (``right_femur_imu``, ...) -> 4x4 placement on its segment (None:
+    not yet known, ``vs_model_deg`` nan until :func:`with_placements`);
     ``model_axes``: side -> the model's knee axis in the femoral and tibial frames.
     ``shared_world``: the sensors' orientations share one world (vendor fusion, 9-D), so they
     may sign the two axes alike; False (6-D filters: a heading of each sensor's own) signs them
@@ -117,7 +118,8 @@ def calibrate_knees(
         r = (np.linalg.norm(np.cross(s1.gyr, full.axis_1), axis=1)
              - np.linalg.norm(np.cross(s2.gyr, full.axis_2), axis=1))  # fmt: skip
         residual = float(np.sqrt(np.mean(r**2)))
-        vs_model = _vs_model(full.axis_1, full.axis_2, placements, side, model_axes[side])
+        vs_model = (float("nan") if placements is None else
+                    _vs_model(full.axis_1, full.axis_2, placements, side, model_axes[side]))
         reasons = []
         if not full.observability.determined:
             reasons.append("not determined: " + "; ".join(full.observability.undetermined))

@@ -318,7 +318,7 @@ def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[Headi
     c = next((k for k in knees if k.side == side and k.axes_trusted), None)
     if c is not None:  # the fit leaves each axis's sign free: the knee's flexion signs them
         s_1, s_2 = knee_signs(*(np.einsum("nji,j->ni", R, _UP) for R in (R_1, R_2)),
-                              c.axis_thigh, c.axis_shank)  # fmt: skip
+                              c.axis_thigh, c.axis_shank, trial.rate_hz)  # fmt: skip
         drift = hinge_heading(R_1, R_2, s_1 * c.axis_thigh, s_2 * c.axis_shank, trial.rate_hz,
                               up=_UP, window_s=WINDOW_S)  # fmt: skip
         if drift.residual_deg <= MAX_HINGE_RESIDUAL_DEG:

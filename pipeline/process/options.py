@@ -25,7 +25,7 @@ from numbers import Real
 from pathlib import Path
 
 from pipeline.calibration.conventions import (
-    CALIBRATION_POSES,
+    CALIBRATIONS,
     CORRECTIONS,
     DEFAULT_CALIBRATION_POSE,
     DEFAULT_CORRECTION,
@@ -82,9 +82,11 @@ class IKOptions:
     segment_orientations: bool = option(False, "bool", "the orientations are segment frames "
                                         "(ISB), e.g. an Xsens MVN suit export: no sensor "
                                         "placement is estimated")  # fmt: skip
-    calibration_pose: str = option(DEFAULT_CALIBRATION_POSE, "choice", "the pose at the first "
-                                   "sample (or in --static-trial)",
-                                   choices=CALIBRATION_POSES)  # fmt: skip
+    calibration_pose: str = option(DEFAULT_CALIBRATION_POSE, "choice", "the pose the subject "
+                                   "holds still somewhere in the recording (or in "
+                                   "--static-trial), found and checked; walking: none, each "
+                                   "sensor calibrated from the walk (also where no still "
+                                   "window shows the pose)", choices=CALIBRATIONS)  # fmt: skip
     filter: str | None = option(None, "choice", "attitude filter for raw gyroscope and "
                                 "accelerometer (and magnetometer) signals; also replaces "
                                 "orientations the recording has (default: the recording's own "

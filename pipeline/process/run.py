@@ -44,45 +44,37 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.joint_angles import joint_angles
-from pipeline.analysis.landmarks import frame_trajectories, landmark_trajectories
+from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import KneeCorrection
 from pipeline.calibration.heading import check_vertical
 from pipeline.calibration.heading_offset import HeadingDrift
 from pipeline.calibration.magnetometer import FieldTrust
-from pipeline.calibration.placement import pose_configuration
 from pipeline.errors import InputError
-from pipeline.ik.bounds import remove_limits
-from pipeline.ik.solver import IKResult, solve_ik
 from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
 from pipeline.io.recording import Recording
-from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
+from pipeline.process.check_context import CheckContext
+from pipeline.process.findings import Action, Finding
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.gait import Gait, gait_of, with_pelvis_path
+from pipeline.process.gait import Gait, with_pelvis_path
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import correct_knees
 from pipeline.process.options import IKOptions, InputOptions
-from pipeline.process.pose import (
-    CalibrationPose,
-    read_calibration_pose,
-    static_orientations,
-    still_gravity,
-)
+from pipeline.process.pose import CalibrationPose, PoseInputs, static_orientations
+from pipeline.process.pose_source import PoseSource, calibrate, source_of
 from pipeline.process.posture import Posture, lean_pose, standing_posture
-from pipeline.process.sensor_checks import SWAPPED_BACK, Finding, check_sensors
+from pipeline.process.sensor_checks import run_checks
 from pipeline.process.sensors import SensorSet, known_segments, sensor_set
 from pipeline.process.sides import Sides, exchange_of, in_one_heading, mirrored, side_evidence
 from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
+from pipeline.process.solve import PELVIS_ANGLES, joint_angles_of, landmarks_of, observed, solve
+from pipeline.process.still import StillWindow
 from pipeline.rotations import (
-    euler_zxy_from_matrix,
     matrix_from_quat,
-    quat_xyzw_from_matrix,
-    unwrap_angles,
 )
 
 __all__ = ["MOT_NAMES", "IKRun", "mot_columns", "process_recording"]
@@ -99,7 +91,6 @@ MOT_NAMES = {
     "ankle_flexion": "ankle_angle",
     "ankle_inversion": "subtalar_angle",
 }
-_PELVIS_ANGLES = ("pelvis_tilt", "pelvis_list", "pelvis_rotation")
 
 
 @dataclass
@@ -122,7 +113,9 @@ class IKRun:
     signals here, else None; ``measures``: the subject; ``source``: the recording's file or
     folder; ``inputs``: what ``pipeline ik`` read (None from the Python API);
     ``sensor_findings``: the sensor check's :class:`~pipeline.process.sensor_checks.Finding` s
-    (each also a flag); ``gait``: events and strides (:class:`~pipeline.process.gait.Gait`)."""
+    (each also a flag); ``gait``: events and strides (:class:`~pipeline.process.gait.Gait`);
+    ``calibration``: where and how the sensors were calibrated
+    (:mod:`pipeline.process.pose_source`)."""
 
     time: np.ndarray
     q: np.ndarray
@@ -149,6 +142,7 @@ class IKRun:
     inputs: InputOptions | None = None
     sensor_findings: list[Finding] = field(default_factory=list)
     gait: Gait = field(default_factory=Gait)
+    calibration: str = ""
 
     def segment_orientations(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
         """Segment name -> (N, 3, 3) world orientation of the solved model (default: the
@@ -170,17 +164,93 @@ def process_recording(
 
     ``options`` (default :class:`IKOptions`) with any of its fields overridden by keyword, e.g.
     ``process_recording(rec, Measures("m", 1.8), correction="none", knee="hinge")``. ``static``:
-    the static recording that gives the calibration pose.
+    the static recording that gives the calibration pose. Where the legs' sensors turn out named
+    left for right (:mod:`pipeline.process.sides`), a second pass runs on the names read back.
     """
+    if not isinstance(trial, Recording):
+        raise InputError(f"expected a read Recording (pipeline.read_recording), got "
+                         f"{type(trial).__name__}", field="trial")  # fmt: skip
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
-    given, given_static = trial, static
+    run = _one_pass(trial, measures, opts, static, check_sides=True)
+    if not isinstance(run, Sides):
+        return run
+    parts, evidence = exchange_of(run, trial)  # the second pass: the legs' names read back
+    again = _one_pass(mirrored(trial, parts), measures, opts, mirrored(static, parts),
+                      check_sides=False)  # fmt: skip
+    finding = Finding("femur_r_imu", "sides", Action.SWAPPED_BACK, evidence)
+    again.sensor_findings.insert(0, finding)
+    again.flags.insert(0, finding.line())
+    return again
+
+
+def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) -> IKRun | Sides:
+    """One pass of steps 1-6; the :class:`Sides` evidence instead of a run where ``check_sides``
+    and the legs' sensors read as named left for right."""
+    s = _prepared(trial, static, opts)
+    geometry = _geometry(measures, opts)
+    legs, method = s.sensors.legs, _method(opts)
+    inputs = PoseInputs(Skeleton.build(geometry, knee=opts.knee, legs=legs), geometry, legs,
+                        opts)  # fmt: skip
+    knee_axes = {side: (geometry.for_side(side).knee_axis_femur,
+                        geometry.for_side(side).knee_axis_tibia)
+                 for side in legs if s.sensors.observes(side, "knee")}  # fmt: skip
+    align = sensors_to_align(opts.drift, list(s.rotations), s.oriented.shared)
+    knee_cal = []
+    if opts.calibration_method != "none":
+        thighs_shanks = {f"{side}_{seg}" for side in legs for seg in ("femur", "tibia")}
+        knee_cal = calibrate_knees(s.trial, None, knee_axes, opts.calibration_method,
+                                   shared_world=not align & thighs_shanks)  # fmt: skip
+    rotations, drifts = s.rotations, {}
+    if align:
+        rotations, drifts = align_headings(s.trial, rotations, legs, align, knee_cal, method,
+                                           s.notes)  # fmt: skip
+    cal = _calibration(s, rotations, inputs)
+    knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    if check_sides and in_one_heading(s.oriented.shared, drifts):
+        sides = side_evidence(s.trial, rotations, cal, method, geometry, s.gait.strides)
+        if sides is not None and sides.mirrored:
+            return sides
+    posture = None
+    if opts.posture == "measured" and opts.calibration_pose == "standing" and not cal.walked:
+        posture = _measured_posture(s.trial, rotations, cal, geometry, legs, s.notes)
+        cal = cal.with_pose(lean_pose(cal.pose, posture), geometry, legs)
+        knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
+    unaligned = {f"{side}_tibia" for side in legs
+                 if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
+    placements, corrections = correct_knees(rotations, cal, knee_axes, knee_cal, opts.correction,
+                                            unaligned, s.trial.rate_hz, s.notes)  # fmt: skip
+    run = _solved(s, geometry, opts, placements, rotations, cal)
+    run.measures, run.posture, run.corrections = measures, posture, corrections
+    run.knee_calibrations, run.heading_drifts = knee_cal, drifts
+    return run
+
+
+@dataclass
+class _Prepared:
+    """Steps 1-2 of a pass: the checked recording in the model's world and what it holds."""
+
+    trial: Recording
+    oriented: object
+    rotations: dict[str, np.ndarray]
+    sensors: SensorSet
+    findings: list[Finding]
+    gait: Gait
+    windows: list[StillWindow]
+    static_pose: dict[str, np.ndarray] | None
+    notes: list[str]
+    flags: list[str] = field(default_factory=list)
+
+
+def _prepared(trial: Recording, static, opts: IKOptions) -> _Prepared:
+    """Step 1-2: the sensor check, the strides and the still windows (computed once), the
+    orientations in the model's y-up world, and the static trial's mean pose."""
     notes = list(trial.notes)
-    trial, findings = check_sensors(trial)
-    gait = gait_of(trial, notes)
+    ctx, findings = run_checks(CheckContext(trial))
+    trial, gait, windows = ctx.rec, ctx.gait, ctx.windows
+    notes += ctx.gait_notes
     trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
-    filtered = oriented.filtered
     rotations, sensors = _segment_rotations(trial, notes)
-    if sensors.pelvis and not filtered:  # the filter's world is vertical by construction
+    if sensors.pelvis and not oriented.filtered:  # the filter's world is vertical by construction
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
     elif not sensors.pelvis:
         notes.append("no pelvis sensor: hip and pelvis angles are not observed; landmarks are "
@@ -190,73 +260,49 @@ def process_recording(
                          file=trial.source, field="heading")  # fmt: skip
     static_pose = None
     if static is not None:
-        static_pose = static_orientations(static, list(rotations), notes, opts.calibration_pose)
-    geometry = _geometry(measures, opts)
-    legs = sensors.legs
-    method = DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
-    align = sensors_to_align(opts.drift, list(rotations), oriented.shared)
-    pose_model = Skeleton.build(geometry, knee=opts.knee, legs=legs)
-    gravity = still_gravity(trial, rotations)
+        static_pose = static_orientations(static, list(rotations), notes,
+                                          opts.calibration_pose)  # fmt: skip
+    return _Prepared(trial, oriented, rotations, sensors, findings, gait, windows, static_pose,
+                     notes)  # fmt: skip
 
-    def read_pose(rotations, notes) -> CalibrationPose:
-        return read_calibration_pose(rotations, static_pose, opts, pose_model, geometry, legs,
-                                     notes, gravity)  # fmt: skip
 
-    pose_notes: list[str] = []  # the pose read again after the headings' alignment says its own
-    cal = read_pose(rotations, pose_notes)
-    knee_axes = {s: (geometry.for_side(s).knee_axis_femur, geometry.for_side(s).knee_axis_tibia)
-                 for s in legs if sensors.observes(s, "knee")}  # fmt: skip
-    knee_cal = []
-    if opts.calibration_method != "none":
-        thighs_shanks = {f"{s}_{seg}" for s in legs for seg in ("femur", "tibia")}
-        knee_cal = calibrate_knees(trial, cal.placements, knee_axes, opts.calibration_method,
-                                   shared_world=not align & thighs_shanks)  # fmt: skip
-    drifts: dict[str, HeadingDrift] = {}
-    if align:
-        rotations, drifts = align_headings(trial, rotations, legs, align, knee_cal, method, notes)
-        if drifts:  # the calibration pose read again from the aligned orientations
-            cal = read_pose(rotations, pose_notes := [])
-            knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
-    notes += pose_notes
-    sides = (side_evidence(trial, rotations, cal.right, method, geometry, gait.strides)
-             if in_one_heading(oriented.shared, drifts) else None)
-    if sides is not None and sides.mirrored:
-        return _read_mirrored(given, given_static, measures, opts, sides)
-    posture = None
-    if opts.posture == "measured" and opts.calibration_pose == "standing":
-        posture = _measured_posture(trial, rotations, cal, geometry, legs, notes)
-        cal = cal.with_pose(lean_pose(cal.pose, posture), geometry, legs)
-        knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
-    unaligned = {f"{side}_tibia" for side in legs
-                 if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
-    placements, corrections = correct_knees(rotations, cal, knee_axes, knee_cal,
-                                            opts.correction, unaligned, trial.rate_hz, notes)
+def _calibration(s: _Prepared, rotations, inputs: PoseInputs) -> CalibrationPose:
+    """Steps 3-4: the calibration pose where the recording shows it, else from the walk
+    (:mod:`pipeline.process.pose_source`); ``cal.how`` says which."""
+    if s.static_pose is not None:
+        source = PoseSource(tuple(s.windows), None, static=s.static_pose)
+    else:
+        source = source_of(s.trial, rotations, s.windows, s.gait, inputs)
+    return calibrate(s.trial, rotations, source, inputs, s.notes, s.flags)
+
+
+def _method(opts: IKOptions) -> str:
+    return DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
+
+
+def _solved(s: _Prepared, geometry, opts: IKOptions, placements, rotations, cal) -> IKRun:
+    """Step 6 and what follows it: the IK, the angles, the pelvis's path, the landmarks and the
+    flags, as an :class:`IKRun` (its calibration's fields filled by the caller)."""
     t0 = _time.perf_counter()
-    sk, Q, result = _solve(geometry, opts, legs, placements, rotations, cal, sensors.pelvis)
+    sk, Q, result = solve(geometry, opts, s.sensors.legs, placements, rotations, cal,
+                           s.sensors.pelvis)  # fmt: skip
     seconds = _time.perf_counter() - t0
+    notes = s.notes
     if not np.all(result.converged):
         notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
-    angles = _angles(sk, Q, sensors, rotations, placements, cal.H)
-    gait = with_pelvis_path(gait, trial, sk, Q, notes)
-    landmarks = _landmarks(sk, Q, sensors)
-    flags = [f.line() for f in findings if f.flagged] + quality_flags(
-        sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if _observed(j, sensors)],
-        opts.calibration_pose, len(gait.strides))  # fmt: skip
-    return IKRun(trial.time, Q, angles, landmarks, cal.right, opts.heading, result.residual_rms,
-                 sk, seconds, notes, flags, opts, sensors, placements, corrections, knee_cal,
-                 drifts, filtered, oriented.magnetometers, posture, measures,
-                 trial.source, sensor_findings=findings, gait=gait)  # fmt: skip
-
-
-def _read_mirrored(trial, static, measures, opts: IKOptions, sides: Sides) -> IKRun:
-    """The run on the recording with its legs' (or its thighs') sensor names exchanged
-    (:mod:`pipeline.process.sides`), the finding first among its flags."""
-    parts, evidence = exchange_of(sides, trial)
-    run = process_recording(mirrored(trial, parts), measures, opts, static=mirrored(static, parts))
-    finding = Finding("femur_r_imu", "sides", SWAPPED_BACK, evidence)
-    run.sensor_findings.insert(0, finding)
-    run.flags.insert(0, finding.line())
-    return run
+    angles = joint_angles_of(sk, Q, s.sensors, rotations, placements, cal.H)
+    gait = with_pelvis_path(s.gait, s.trial, sk, Q, notes)
+    still = np.zeros(len(Q), dtype=bool)
+    for w in s.windows:
+        still[w.rows] = True
+    flags = [f.line() for f in s.findings if f.flagged] + s.flags + quality_flags(
+        sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if observed(j, s.sensors)],
+        still)  # fmt: skip
+    return IKRun(s.trial.time, Q, angles, landmarks_of(sk, Q, s.sensors), cal.right, opts.heading,
+                 result.residual_rms, sk, seconds, notes, flags, opts, s.sensors, placements,
+                 filtered=s.oriented.filtered, magnetometers=s.oriented.magnetometers,
+                 source=s.trial.source, sensor_findings=s.findings, gait=gait,
+                 calibration=cal.how)  # fmt: skip
 
 
 def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:
@@ -310,6 +356,10 @@ def _segment_rotations(trial: Recording, notes: list[str]):
     return rotations, sensors
 
 
+def _side(segment: str) -> str:
+    return segment.split("_", 1)[0]
+
+
 def _geometry(measures: Measures, opts: IKOptions):
     axes = {}
     if opts.knee_axis_femur is not None:
@@ -319,73 +369,9 @@ def _geometry(measures: Measures, opts: IKOptions):
     return geometry
 
 
-def _solve(geometry, opts: IKOptions, legs, placements, rotations, cal: CalibrationPose,
-           pelvis: bool) -> tuple[Skeleton, np.ndarray, IKResult]:  # fmt: skip
-    """Step 6: the IK of every sensor frame; ``(skeleton, Q, result)`` with Q the spherical-root
-    configurations. Without a pelvis sensor the pelvis is held in its calibration-pose
-    orientation and the hips absorb the thighs' whole orientation, so they are not limited."""
-    targets = {f"{seg}_imu": R for seg, R in rotations.items()}
-    if pelvis:
-        sk = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements,
-                            root="spherical")  # fmt: skip
-        q0 = _pose_q(sk, opts.calibration_pose, cal.pose["pelvis"])
-        result = solve_ik(sk.model, targets, q0=q0, limits=opts.joint_limits)
-        return sk, result.q, result
-    fixed = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements)
-    remove_limits(fixed.model, [f"{s}_hip_{a}" for s in legs for a in "ZXY"])
-    q0 = _pose_q(fixed, opts.calibration_pose, None)
-    result = solve_ik(fixed.model, targets, q0=q0, root=cal.pose["pelvis"],
-                      limits=opts.joint_limits)  # fmt: skip
-    root = np.tile(quat_xyzw_from_matrix(cal.pose["pelvis"]), (len(result.q), 1))
-    return fixed.with_root("spherical"), np.hstack([root, result.q]), result
-
-
-def _angles(sk, Q, sensors: SensorSet, rotations, placements, H) -> dict[str, np.ndarray]:
-    """The observed joints' ISB angles and, with a pelvis sensor, the pelvis' ZXY angles in the
-    subject's heading; continuous (a subject turning round must not jump by 360 deg)."""
-    angles = {k: v for k, v in joint_angles(sk, Q).items() if _observed(k, sensors)}
-    if sensors.pelvis:
-        pelvis_world = rotations["pelvis"] @ placements["pelvis_imu"][:3, :3].T
-        zxy = euler_zxy_from_matrix(np.einsum("ij,njk->nik", H.T, pelvis_world))
-        angles.update(zip(_PELVIS_ANGLES, zxy.T, strict=True))
-    return {name: unwrap_angles(a) for name, a in angles.items()}
-
-
-def _side(segment: str) -> str:
-    return segment.split("_", 1)[0]
-
-
-def _observed(name: str, sensors: SensorSet) -> bool:
-    """Whether an angle (``right_knee_flexion``) or joint (``right_knee_Z``) is observed."""
-    side, rest = name.split("_", 1)
-    return sensors.observes(side, rest.split("_", 1)[0])
-
-
-def _pose_q(sk: Skeleton, pose: str, pelvis: np.ndarray | None) -> np.ndarray:
-    q = pose_configuration(sk, pose)
-    if pelvis is not None:
-        q[:4] = quat_xyzw_from_matrix(pelvis)
-    return q
-
-
-def _landmarks(sk: Skeleton, Q: np.ndarray, sensors: SensorSet) -> dict[str, np.ndarray]:
-    def segment(frame: str) -> str:
-        side, landmark = frame.split("_", 1)
-        return f"{side}_{LANDMARK_SEGMENT[landmark]}"
-
-    names = [f for f in sk.landmark_frames if segment(f) in sensors.landmark_segments]
-    if not names:
-        return {}
-    hips = [f"{s}_HJC" for s in sensors.legs]
-    traj = landmark_trajectories(sk, Q, names + [h for h in hips if h not in names])
-    if not sensors.pelvis:
-        traj = {n: traj[n] - traj[f"{_side(n)}_HJC"] for n in names}
-    return {n: traj[n] for n in names}
-
-
 def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
     """OpenSim-style coordinate columns (radians; :func:`write_mot` converts to degrees)."""
-    cols = {k: run.joint_angles[k] for k in _PELVIS_ANGLES if k in run.joint_angles}
+    cols = {k: run.joint_angles[k] for k in PELVIS_ANGLES if k in run.joint_angles}
     for side, suffix in (("right", "r"), ("left", "l")):
         for ours, theirs in MOT_NAMES.items():
             key = f"{side}_{ours}"

@@ -1,9 +1,19 @@
 """The sensor check of :func:`pipeline.process.process_recording`: each sensor's raw signals
 checked before anything is estimated, every fault named and handled.
 
-The checks are a registry (:data:`CHECKS`: name -> a function of one sensor's signals returning a
-:class:`Finding` or None); adding one is one function and one entry. What each finds and what is
-done about it:
+The checks are a registry (:data:`CHECKS`: name -> a :class:`Check`, its scope and its function);
+adding one is one function (in a module of its own where it is more than a few lines) and one
+entry. A check's scope says what it sees: ``recording`` (the whole recording: it refuses it,
+:mod:`pipeline.process.recording_checks`), ``sensor`` (one sensor's signals, in the recording's
+:class:`~pipeline.process.check_context.CheckContext`; returns a
+:class:`~pipeline.process.findings.Finding` or None; a sensor's checks stop at its first
+exclusion) and ``legs`` (the leg sensors that passed their own checks, taken together: their
+findings and the recording read back). Every finding's action is one of
+:class:`~pipeline.process.findings.Action`, applied in one place
+(:func:`~pipeline.process.findings.apply_findings`). What each finds and what is done about it:
+
+* ``units``, ``quaternion order`` (:mod:`pipeline.process.recording_checks`): gyroscopes not in
+  rad/s, quaternions scalar last: the recording is **refused**.
 
 * ``dead``: a gyroscope or accelerometer axis that never changes (all zero, or frozen at one
   value) cannot give an orientation: the sensor is **excluded** (its joints are not written). A
@@ -19,16 +29,6 @@ done about it:
   on. Gyroscope: **excluded** when more than :data:`MAX_SATURATED` of the samples are, else
   **noted**; accelerometer (heel strikes clip a +-8 g range for a sample or two): **noted**
   unless more than :data:`MAX_SATURATED`, then excluded.
-* ``units`` (:func:`check_units`, the whole recording): the gyroscopes against the
-  accelerometers, which show each sensor's inclination whatever the unit: the rate at which
-  gravity's direction turns in the sensor frame, ``|du/dt| = |w x u|`` (``u = a/|a|``
-  low-passed), is compared with the gyroscope's own ``|w x u|``. The ratio is 1 for rad/s and
-  57.3 for deg/s given as rad/s, whatever the speed (slow trials too, where the magnitude test of
-  :func:`pipeline.io.checks.check_gyro_units` passes deg/s). Linear accelerations turn ``a`` too:
-  a sensor's ratio ranges 0.01-1.7 (measured: a still leg's, a foot's in gait), the median over
-  a recording's sensors 0.33 (x-IMU3 walk), 0.65 (S02) and 0.75-1.0 (simulated gait, supine,
-  seated), 57 times that with the wrong unit: a median outside :data:`UNIT_RATIO` is
-  **refused**.
 * ``moves with its segment``: a sensor whose median angular speed (a foot's: its upper quartile,
   :data:`FOOT_QUANTILE`, as a walking foot rests through mid-stance) stays below
   :data:`MIN_SPEED_RATIO` of the slowest of its neighbours' while all of them move (a sensor that
@@ -40,19 +40,18 @@ done about it:
   shank (its ankle fits the shank's sensor): **read as swapped back** (a flag); an exchange whose
   thighs do not tell which: the four **excluded**.
 
-* ``quaternion order`` (:func:`check_quaternion_order`, the whole recording, where it has
-  orientations and accelerometers): orientations that keep gravity along a world axis far better
-  read as x, y, z, w than as w, x, y, z are **refused** (median tilt: S02's vendor quaternions
-  0.2-1.0 deg, 3.4-40 deg read the other way; the simulator's 0.3-8 deg, 7-88 deg).
-
 * ``slipped`` (:mod:`pipeline.process.slip`): a leg or pelvis sensor whose own view of its
   segment (the flexion axis or the pelvis's once-a-stride rocking axis, gravity at mid-stance)
   turns between the strides before and after some stride by more than
-  :data:`~pipeline.process.slip.SLIP_DEG`: it slipped on its segment, its placement is wrong from
-  then on: **excluded**. Checked in walking (four strides or more on its leg); a leg
-  that walked fewer has its sensors **listed** as not checked (not a flag), and so has a sensor
-  whose step beyond the limit the leg's other sensors and the other leg's share (the movement
-  changed: turns on the spot, shuffles; the x-IMU3 walk's sensors step 20-86 deg so).
+  :data:`~pipeline.process.slip.SLIP_DEG`: it may have slipped on its segment, its placement
+  wrong from then on: **noted** (a flag, the sensor kept); a leg sensor alone on its leg beyond
+  :data:`~pipeline.process.slip.CERTAIN_SLIP_DEG` is **excluded**. The pelvis is never
+  excluded: nothing else turns with its rocking to tell a slip from a walk that starts, stops or
+  turns (which step it by 8-11 deg on S02 and 20-21 deg on other labs' walkways). Checked in
+  walking (four strides or more on its leg); a leg that walked fewer has its sensors **listed**
+  as not checked (not a flag), and so has a sensor whose step beyond the limit the leg's other
+  sensors and the other leg's share (the movement changed: turns on the spot, shuffles; the
+  x-IMU3 walk's sensors step 20-86 deg so).
 
 * ``read``: what the reader of a sensor's own file repaired or noticed (dropped samples or
   packets filled, an irregular clock kept; ``Recording.sensor_notes``): **listed** in the sensor
@@ -68,18 +67,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.errors import InputError
-from pipeline.filtering import lowpass
 from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
-from pipeline.process.signals import gravity_in_world
+from pipeline.process.check_context import CheckContext
+from pipeline.process.findings import Action, Finding, apply_findings
+from pipeline.process.recording_checks import check_quaternion_order, check_units
 from pipeline.process.slip import slip_step, unchecked
 from pipeline.process.swap import crossing_evidence, swap_evidence
 
 __all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
-           "ORDER_RATIO", "PLATEAU_SAMPLES", "Finding", "check_quaternion_order", "check_sensors",
-           "check_units", "gyro_unit_ratio"]
+           "PLATEAU_SAMPLES", "SCOPES", "SWAPPED_BACK", "Action", "Check", "Finding",
+           "check_sensors", "run_checks"]
 
 #: A plateau: at least this many consecutive samples, lasting at least PLATEAU_S, within
 #: PLATEAU_TOL (relative) of a channel's largest magnitude. A smooth peak of human motion stays
@@ -103,28 +102,6 @@ MOVING_SPEED = 0.3
 #: the simulated walk 0.10-0.18, the x-IMU3 walk 0.37-0.42; the foot's upper quartile instead:
 #: 2.4-3.2 on all three), where a fallen sensor rests at every quantile.
 FOOT_QUANTILE = 0.75
-#: The accepted range of the gyroscope's to the accelerometer's turn of gravity.
-UNIT_RATIO = (0.1, 10.0)
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One fault of one sensor: ``check`` (a :data:`CHECKS` name), ``action`` (``'excluded'``,
-    ``'magnetometer not used'``, ``'read as swapped back'``, ``'noted'`` or ``'listed'``) and the
-    ``evidence`` a summary prints. Every action but ``'listed'`` is also a flag (:attr:`flagged`);
-    a listed finding is the sensor table's only (the reader's repairs, among the run's notes)."""
-
-    sensor: str
-    check: str
-    action: str
-    evidence: str
-
-    @property
-    def flagged(self) -> bool:
-        return self.action != "listed"
-
-    def line(self) -> str:
-        return f"sensor {self.sensor}: {self.check}: {self.evidence} ({self.action})"
 
 
 def _constant_axes(x: np.ndarray | None) -> list[str]:
@@ -136,14 +113,15 @@ def _constant_axes(x: np.ndarray | None) -> list[str]:
     return [a for a, k in zip("xyz", range(3), strict=True) if np.ptp(finite[:, k]) == 0.0]
 
 
-def _dead(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+def _dead(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
     for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
         axes = _constant_axes(getattr(s, field))
         if axes:
-            return Finding(name, "dead", "excluded", f"{what} axes {''.join(axes)} never change")
+            return Finding(name, "dead", Action.EXCLUDED,
+                           f"{what} axes {''.join(axes)} never change")  # fmt: skip
     axes = _constant_axes(s.mag)
     if axes:
-        return Finding(name, "dead", "magnetometer not used",
+        return Finding(name, "dead", Action.MAGNETOMETER_NOT_USED,
                        f"magnetometer axes {''.join(axes)} never change")  # fmt: skip
     return None
 
@@ -168,7 +146,8 @@ def _plateau_share(x: np.ndarray, min_peak: float, rate_hz: float) -> tuple[floa
     return float(np.mean(held)), level
 
 
-def _saturation(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+def _saturation(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    rec = ctx.rec
     if s.gyr is None or s.acc is None:
         return None
     speed = np.linalg.norm(np.nan_to_num(s.gyr), axis=1)
@@ -188,84 +167,8 @@ def _saturation(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
     if not found:
         return None
     share, what = max(found)
-    action = "excluded" if share > MAX_SATURATED else "noted"
+    action = Action.EXCLUDED if share > MAX_SATURATED else Action.NOTED
     return Finding(name, "saturation", action, f"{what} in {100 * share:.2f}% of the samples")
-
-
-def _turn_rates(s: SensorSignals, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(|du/dt|, |w x u|)`` per sample, ``u`` gravity's direction in the sensor frame."""
-    cut = min(2.0, 0.2 * rate_hz)
-    a = lowpass(np.nan_to_num(s.acc), rate_hz, cut)
-    u = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-9)
-    du = np.linalg.norm(np.gradient(u, axis=0), axis=1) * rate_hz
-    w = lowpass(np.nan_to_num(s.gyr), rate_hz, cut)
-    return du, np.linalg.norm(np.cross(w, u), axis=1)
-
-
-def gyro_unit_ratio(rec: Recording) -> tuple[float, dict[str, float]]:
-    """The median over the sensors of ``|w x u| / |du/dt|`` (module docstring) and each sensor's,
-    over its samples near 1 g whose gravity direction turns faster than 5 deg/s (nan without
-    enough of them)."""
-    each = {}
-    for name, s in rec.sensors.items():
-        if s.gyr is None or s.acc is None or len(rec.time) < 20:
-            continue
-        du, wu = _turn_rates(s, rec.rate_hz)
-        a = np.linalg.norm(np.nan_to_num(s.acc), axis=1)
-        calm = (np.abs(a - 9.81) < 0.2 * 9.81) & (du > np.radians(5.0))
-        if np.sum(calm) >= 10:
-            each[name] = float(np.median(wu[calm]) / np.median(du[calm]))
-    return (float(np.median(list(each.values()))) if each else float("nan")), each
-
-
-def check_units(rec: Recording) -> None:
-    """Refuse gyroscopes whose unit is not rad/s (module docstring, ``units``)."""
-    ratio, each = gyro_unit_ratio(rec)
-    if not np.isfinite(ratio) or UNIT_RATIO[0] <= ratio <= UNIT_RATIO[1]:
-        return
-    hint = "deg/s read as rad/s" if ratio > UNIT_RATIO[1] else "rad/s read as deg/s"
-    per = ", ".join(f"{n} {r:.3g}" for n, r in each.items())
-    raise InputError(f"the gyroscopes turn {ratio:.3g} times as fast as gravity's direction "
-                     f"turns in the accelerometers (median; {per}; 0.3-1.7 in rad/s, 57.3 times "
-                     f"that for deg/s): they look like {hint}", file=rec.source,
-                     field="gyr")  # fmt: skip
-
-
-#: Quaternion order: refused as x, y, z, w when, read that way, the orientations keep gravity
-#: along a world axis this much better (the median over the sensors of the ratio of the tilts,
-#: :func:`_gravity_tilt`) than read as w, x, y, z.
-ORDER_RATIO = 0.5
-
-
-def _gravity_tilt(quat: np.ndarray, acc: np.ndarray) -> float:
-    """The median angle (deg) between ``R(q) a`` over the samples near 1 g and the vertical
-    world axis (y or z, the one nearest its median direction: every world the readers know):
-    small when the orientations agree with the accelerometer."""
-    up = gravity_in_world(quat, acc)
-    if up is None:
-        return float("nan")
-    mid = np.median(up, axis=0)
-    k = 1 + int(np.argmax(np.abs(mid[1:])))
-    return float(np.median(np.degrees(np.arccos(np.clip(np.sign(mid[k]) * up[:, k], -1, 1)))))
-
-
-def check_quaternion_order(rec: Recording) -> None:
-    """Refuse orientations that are x, y, z, w read as w, x, y, z (:data:`ORDER_RATIO`), where
-    the recording has both orientations and accelerometers."""
-    ratios, each = [], []
-    for name, s in rec.sensors.items():
-        if s.quat is None or s.acc is None:
-            continue
-        given = _gravity_tilt(s.quat, s.acc)
-        other = _gravity_tilt(s.quat[:, [3, 0, 1, 2]], s.acc)
-        if np.isfinite(given) and np.isfinite(other) and given > 0:
-            ratios.append(other / given)
-            each.append(f"{name} {given:.0f} vs {other:.0f}")
-    if ratios and np.median(ratios) < ORDER_RATIO:
-        raise InputError("the orientations keep gravity vertical far better read as x, y, z, w "
-                         f"than as w, x, y, z (median tilt, deg: {', '.join(each)}): "
-                         "give the quaternions scalar first (w, x, y, z)", file=rec.source,
-                         field="quat")  # fmt: skip
 
 
 def _speed(s: SensorSignals, quantile: float = 0.5) -> float:
@@ -293,7 +196,8 @@ def _neighbours(name: str, rec: Recording) -> list[str]:
     return [n for n, g in seg.items() if g in want and rec.sensors[n].gyr is not None]
 
 
-def _moves_with_segment(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+def _moves_with_segment(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    rec = ctx.rec
     if s.gyr is None:
         return None
     near = _neighbours(name, rec)
@@ -311,13 +215,14 @@ def _moves_with_segment(name: str, s: SensorSignals, rec: Recording) -> Finding 
                    "not follow a segment (loose or fallen off?)")  # fmt: skip
 
 
-def _action_on_stillness(neighbours: list[str]) -> str:
+def _action_on_stillness(neighbours: list[str]) -> Action:
     """Excluded when two or more neighbours move around it; with one neighbour (a foot) only
     noted: a foot rests on the floor while its shank turns (squats, sit-to-stand)."""
-    return "excluded" if len(neighbours) >= 2 else "noted"
+    return Action.EXCLUDED if len(neighbours) >= 2 else Action.NOTED
 
 
-def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+def _dropout(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    rec = ctx.rec
     for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
         x = getattr(s, field)
         if x is None:
@@ -326,75 +231,117 @@ def _dropout(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
         long = [(a, b) for a, b in runs if (b - a) / rec.rate_hz > DEFAULT_MAX_GAP_S]
         if long:
             a, b = max(long, key=lambda r: r[1] - r[0])
-            return Finding(name, "dropout", "excluded",
+            return Finding(name, "dropout", Action.EXCLUDED,
                            f"{what} missing for {(b - a) / rec.rate_hz:.1f} s (t = "
                            f"{rec.time[a]:.2f}-{rec.time[b - 1]:.2f} s; {len(long)} gap(s) "
                            f"longer than {DEFAULT_MAX_GAP_S:g} s)")  # fmt: skip
     return None
 
 
-def _repaired_on_reading(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
+def _repaired_on_reading(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    rec = ctx.rec
     said = rec.sensor_notes.get(name, ())
     if not said:
         return None
-    return Finding(name, "read", "listed", "its file's reader: " + "; ".join(
+    return Finding(name, "read", Action.LISTED, "its file's reader: " + "; ".join(
         n.split(": ", 1)[1] if rec.source and n.startswith(str(rec.source)) else n
         for n in said))  # fmt: skip
 
 
-def _slipped(name: str, s: SensorSignals, rec: Recording) -> Finding | None:
-    step = slip_step(name, rec)
+def _slipped(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    step = slip_step(name, ctx)
     if step is None:
-        why = unchecked(name, rec)
-        return None if why is None else Finding(name, "slipped", "listed", why)
-    if step.inconclusive or step.slipped:
-        return Finding(name, "slipped", "listed" if step.inconclusive else "excluded",
+        why = unchecked(name, ctx)
+        return None if why is None else Finding(name, "slipped", Action.LISTED, why)
+    if step.inconclusive:
+        return Finding(name, "slipped", Action.LISTED, step.evidence())
+    if step.slipped:
+        return Finding(name, "slipped", Action.EXCLUDED if step.certain else Action.NOTED,
                        step.evidence())  # fmt: skip
     return None
 
 
-#: Check name -> function of (sensor name, its signals, the recording).
-CHECKS: dict[str, Callable[[str, SensorSignals, Recording], Finding | None]] = {
-    "read": _repaired_on_reading,  # first: an exclusion below stops the sensor's checks
-    "dead": _dead,
-    "dropout": _dropout,
-    "saturation": _saturation,
-    "moves with its segment": _moves_with_segment,
-    "slipped": _slipped,
+def _crossed(ctx: CheckContext, faulty: set[str]) -> tuple[list[Finding], Recording]:
+    """The shanks' or the feet's sensors exchanged between the legs
+    (:func:`~pipeline.process.swap.crossing_evidence`): read back, or the four excluded where
+    the thighs do not tell which."""
+    crossing = crossing_evidence(ctx, faulty)
+    if crossing is None or not crossing.crossed:
+        return [], ctx.rec
+    action = Action.SWAPPED_BACK if crossing.exchanged else Action.EXCLUDED
+    found = [Finding(n, "crossed", action, crossing.evidence()) for n in crossing.sensors]
+    return found, crossing.read_back(ctx.rec)
+
+
+def _swapped(ctx: CheckContext, faulty: set[str]) -> tuple[list[Finding], Recording]:
+    """A leg's thigh and shank sensors swapped (:func:`~pipeline.process.swap.swap_evidence`),
+    on the legs whose three sensors passed: read back."""
+    rec, found = ctx.rec, []
+    for side in ("right", "left"):
+        ev = swap_evidence(side, rec, faulty)
+        if ev is not None and ev.swapped:
+            found.append(Finding(ev.shank, "swapped", Action.SWAPPED_BACK, ev.evidence()))
+            rec = ev.read_back(rec)
+    return found, rec
+
+
+@dataclass(frozen=True)
+class Check:
+    """A check's ``scope`` (:data:`SCOPES`) and its function: ``recording``: of the context,
+    refusing with an :class:`~pipeline.errors.InputError`; ``sensor``: of (sensor name, its
+    signals, the context), a finding or None; ``legs``: of (the context, the sensors already
+    found faulty), the findings and the recording read back."""
+
+    scope: str
+    run: Callable
+
+
+#: The scopes, in the order the checks run.
+SCOPES = ("recording", "sensor", "legs")
+#: Check name -> :class:`Check` (module docstring); within a scope in this order.
+CHECKS: dict[str, Check] = {
+    "units": Check("recording", lambda ctx: check_units(ctx.rec)),
+    "quaternion order": Check("recording", lambda ctx: check_quaternion_order(ctx.rec)),
+    "read": Check("sensor", _repaired_on_reading),  # first: an exclusion stops the sensor's
+    "dead": Check("sensor", _dead),
+    "dropout": Check("sensor", _dropout),
+    "saturation": Check("sensor", _saturation),
+    "moves with its segment": Check("sensor", _moves_with_segment),
+    "slipped": Check("sensor", _slipped),
+    "crossed": Check("legs", _crossed),  # first: ``swapped`` needs each leg's own sensors
+    "swapped": Check("legs", _swapped),
 }
-SWAPPED_BACK = "read as swapped back"  # sensors exchanged (pipeline.process.swap, .sides)
+#: Kept for the names' users: the action of sensors read under their right names.
+SWAPPED_BACK = Action.SWAPPED_BACK
 
 
 def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
-    """The gyroscopes' unit (refused when wrong), then every check on every sensor with raw
-    signals; the recording without the excluded sensors and with the unused magnetometers
-    removed, and the findings."""
-    check_units(rec)
-    check_quaternion_order(rec)
-    findings = []
-    for name, s in rec.sensors.items():
-        for fn in CHECKS.values():
-            f = fn(name, s, rec)
+    """Every check of :data:`CHECKS` on ``rec`` (:func:`run_checks`): the checked recording and
+    the findings."""
+    ctx, findings = run_checks(CheckContext(rec))
+    return ctx.rec, findings
+
+
+def run_checks(ctx: CheckContext) -> tuple[CheckContext, list[Finding]]:
+    """Every check of :data:`CHECKS` by scope (module docstring) on the context's recording;
+    the context of the checked recording (the excluded sensors left out, the unused
+    magnetometers removed, the swapped sensors read back) and the findings."""
+    of = {scope: [c for c in CHECKS.values() if c.scope == scope] for scope in SCOPES}
+    for check in of["recording"]:
+        check.run(ctx)
+    findings: list[Finding] = []
+    for name, s in ctx.rec.sensors.items():
+        for check in of["sensor"]:
+            f = check.run(name, s, ctx)
             if f is not None:
                 findings.append(f)
-                if f.action == "excluded":  # one reason is enough
+                if f.action == Action.EXCLUDED:  # one reason is enough
                     break
-    sensors = dict(rec.sensors)  # each sensor's own faults first
-    for f in findings:
-        if f.action == "excluded":
-            sensors.pop(f.sensor, None)
-        elif f.action == "magnetometer not used" and f.sensor in sensors:
-            sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
-    rec = rec.with_sensors(sensors)
-    faulty = {f.sensor for f in findings if f.flagged and f.action != "magnetometer not used"}
-    crossing = crossing_evidence(rec, faulty)  # first: eq 1 needs each leg's own sensors
-    if crossing is not None and crossing.crossed:  # read back, or the four excluded
-        action = SWAPPED_BACK if crossing.exchanged else "excluded"
-        findings += [Finding(n, "crossed", action, crossing.evidence()) for n in crossing.sensors]
-        rec = crossing.read_back(rec)
-    for side in ("right", "left"):  # a leg whose three sensors passed: its thigh's and shank's
-        ev = swap_evidence(side, rec, faulty)
-        if ev is not None and ev.swapped:
-            findings.append(Finding(ev.shank, "swapped", SWAPPED_BACK, ev.evidence()))
-            rec = ev.read_back(rec)
-    return rec, findings
+    ctx = ctx.of(apply_findings(ctx.rec, findings))  # each sensor's own faults first
+    faulty = {f.sensor for f in findings
+              if f.flagged and f.action != Action.MAGNETOMETER_NOT_USED}  # fmt: skip
+    for check in of["legs"]:
+        found, rec = check.run(ctx, faulty)
+        findings += found
+        ctx = ctx.of(apply_findings(rec, found))
+    return ctx, findings

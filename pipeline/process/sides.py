@@ -83,9 +83,10 @@ def exchange_of(sides: Sides, rec: Recording) -> tuple[tuple[str, ...], str]:
     rhythm with their named legs (:mod:`pipeline.process.swap` eq 4: ``W``); an
     :class:`InputError` where ``W`` tells neither. Without it (a leg sensor's gyroscope missing):
     the whole legs, the sensor map's usual mistake."""
+    from pipeline.process.check_context import CheckContext
     from pipeline.process.swap import MIN_THIGH_GAIN, crossing_evidence
 
-    c = crossing_evidence(rec)
+    c = crossing_evidence(CheckContext(rec))
     w = None if c is None else c.with_legs
     if w is None or w >= MIN_THIGH_GAIN:
         said = "" if w is None else f"; each thigh swings with its named leg (swap eq 4: {w:+.2f})"
@@ -103,14 +104,15 @@ def exchange_of(sides: Sides, rec: Recording) -> tuple[tuple[str, ...], str]:
                      "sides", file=rec.source, field="sensor_map")  # fmt: skip
 
 
-def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.ndarray,
-                  method: str, geometry: SubjectGeometry, strides: list[Stride]
-                  ) -> Sides | None:  # fmt: skip
+def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], cal, method: str,
+                  geometry: SubjectGeometry, strides: list[Stride]) -> Sides | None:  # fmt: skip
     """Eq (1) on a recording in the model's world: ``rotations`` segment -> (N, 3, 3) sensor
     orientations (the pelvis's own; each thigh's inclination is what the fit's start uses),
-    ``right`` the subject's right at the pose (sample 0), ``geometry`` the model (its hip
-    centres), ``strides`` the walk's; None without raw signals of the pelvis's and both
-    thighs' sensors or fewer than :data:`~pipeline.process.gait.MIN_STRIDES` on a leg."""
+    ``cal`` the calibration (:class:`~pipeline.process.pose.CalibrationPose`: the subject's
+    right and the pelvis sensor's orientation at the pose, wherever in the recording it was
+    read), ``geometry`` the model (its hip centres), ``strides`` the walk's; None without raw
+    signals of the pelvis's and both thighs' sensors or fewer than
+    :data:`~pipeline.process.gait.MIN_STRIDES` on a leg."""
     from pipeline.process.heading_alignment import centre_fit
 
     segments = ("pelvis", "right_femur", "left_femur")
@@ -123,9 +125,9 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], right: np.
         fit, _, _ = centre_fit(trial, rotations["pelvis"], rotations[f"{side}_femur"], "pelvis",
                                f"{side}_femur", method)  # fmt: skip
         o[side] = fit.position_1_m
-    d = rotations["pelvis"][0] @ (o["right"] - o["left"])
+    d = cal.at_pose["pelvis"] @ (o["right"] - o["left"])
     d_h = d - (d @ _UP) * _UP
-    margin = float(d_h @ right) / max(float(np.linalg.norm(d_h)), 1e-9)
+    margin = float(d_h @ cal.right) / max(float(np.linalg.norm(d_h)), 1e-9)
     model_m = float(np.linalg.norm(geometry.right_hip - geometry.left_hip))
     return Sides(margin, float(np.linalg.norm(o["right"] - o["left"])), model_m)
 

@@ -62,28 +62,40 @@ the split (a right thigh, shank or foot sensor slipped on S02, on the simulated 
 others and the other leg's share (:attr:`Slip.inconclusive`) cannot be told from such a change:
 the sensor is listed as not checked (the x-IMU3 walk, two short walks with turns on the spot and
 shuffles: every leg sensor steps 20-86 deg with the others, the pelvis 19; qmt's thighs).
+
+**Certain or a flag.** A step beyond :data:`SLIP_DEG` is a flag (the sensor kept, the run says
+where); only a leg sensor's step beyond :data:`CERTAIN_SLIP_DEG`, alone on its leg, excludes it
+(:attr:`Slip.certain`). The pelvis's is never certain: its rocking changes where a walk starts,
+speeds up, slows, stops or turns, and no other sensor turns with it to tell (S02 cut to its
+strides, with the turn and the stop: 8.0-10.9 deg; other labs' walkways: 20-21 deg, as much as the
+22 deg of a belt turned by 30 deg on S02).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.analysis.gait_events import gait_events
 from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
 
-__all__ = ["ALONE_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG", "STRIDE_TOL",
-           "Slip", "leg_slips", "slip_step", "unchecked", "walking_strides"]
+__all__ = ["ALONE_DEG", "CERTAIN_SLIP_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG",
+           "STRIDE_TOL", "Slip", "leg_slips", "legs_slips", "slip_step", "unchecked",
+           "walking_strides"]
 
 #: A step beyond this (deg) is a slip: half as much again as the largest step measured without
 #: one (9.8, module docstring), under the 19-35 deg a 30 deg slip gives.
 SLIP_DEG = 15.0
+#: Beyond this step (deg) a leg sensor's slip is certain and the sensor excluded (below, a flag
+#: that keeps it): half as much again as the largest step a leg sensor alone on its leg made on
+#: a faultless recording (12.6 deg: S02's left foot, the recording cut to start at samples
+#: 1150-1225; the simulated walks' 10-11.5), under the 23-35 deg a 30 deg slip gives. The pelvis's
+#: slip is never certain (module docstring).
+CERTAIN_SLIP_DEG = 19.0
 #: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
 #: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
 ALONE_DEG = 0.5 * SLIP_DEG
@@ -133,6 +145,12 @@ class Slip:
                                         or self.mirror_deg < ALONE_DEG)  # fmt: skip
 
     @property
+    def certain(self) -> bool:
+        """A slip beyond :data:`CERTAIN_SLIP_DEG` of a leg sensor: the pelvis's rocking axis is
+        turned as much by a walk that starts, stops or turns (module docstring)."""
+        return self.slipped and self.deg > CERTAIN_SLIP_DEG and self.axis_name != ROCKING_AXIS
+
+    @property
     def inconclusive(self) -> bool:
         """Beyond :data:`SLIP_DEG` with the leg's other sensors and the other leg's stepping as
         well: the movement changed (turns, shuffles), and a slip there would not be told apart."""
@@ -153,7 +171,11 @@ class Slip:
         if self.inconclusive:
             return ("not checked for a slip: " + seen + ": the movement itself changed (turns, "
                     "shuffles?), and a slip would not be told from it")
-        return seen + ": it slipped on its segment (a loose strap?)"
+        if self.certain:
+            return seen + ": it slipped on its segment (a loose strap?)"
+        return seen + (f": it may have slipped on its segment (a loose strap?; certain beyond "
+                       f"{CERTAIN_SLIP_DEG:g} deg for a leg sensor, never for the pelvis's, "
+                       "which a walk's start, stop or turn turns as much)")
 
 
 def _larger(*steps: float) -> float:
@@ -175,17 +197,17 @@ def _principal(C: np.ndarray) -> np.ndarray:
     return np.linalg.eigh(C)[1][:, -1]
 
 
-def _strides(rec: Recording, side: str) -> tuple[list[tuple[int, int]], np.ndarray]:
-    """The leg's strides as sample ranges and its foot's rests (none from a shank)."""
-    for segment, kind in ((f"{side}_foot", "foot"), (f"{side}_tibia", "shank")):
-        s = rec.sensors.get(SEGMENT_SENSOR[segment])
-        if s is not None and s.gyr is not None and s.acc is not None:
-            ev = gait_events(s.gyr, s.acc, rec.rate_hz, kind)
-            ics = np.round(ev.ic).astype(int)
-            longest = MAX_STRIDE_S * rec.rate_hz
-            strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True) if b - a <= longest]
-            return strides, (ev.rests if kind == "foot" else np.zeros((0, 2), int))
-    return [], np.zeros((0, 2), int)
+def _strides(ctx, side: str) -> tuple[list[tuple[int, int]], np.ndarray]:
+    """The leg's strides as sample ranges and its foot's rests (none from a shank), from the
+    recording's gait events (the context's ``gait``: the foot's, else the shank's)."""
+    ev = ctx.gait.events.get(side)
+    if ev is None:
+        return [], np.zeros((0, 2), int)
+    ics = np.round(ev.ic).astype(int)
+    longest = MAX_STRIDE_S * ctx.rec.rate_hz
+    strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True) if b - a <= longest]
+    foot = ctx.gait.sources[side].startswith("foot")
+    return strides, (ev.rests if foot else np.zeros((0, 2), int))
 
 
 def _horizontal(w: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray:
@@ -261,10 +283,11 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
     return best
 
 
-def _leg_views(rec: Recording, side: str, pelvis: bool):
+def _leg_views(ctx, side: str, pelvis: bool):
     """The leg's strides, its sensors with raw signals (the pelvis's too when asked, its ``C_k``
     by eq 3) and each one's ``(C_k, g_k)``; no sensors for a leg with too few strides."""
-    strides, rests = _strides(rec, side)
+    rec = ctx.rec
+    strides, rests = _strides(ctx, side)
     if len(strides) < 2 * MIN_SIDE:
         return strides, {}, {}
     names = [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in ("femur", "tibia", "foot")]
@@ -296,14 +319,14 @@ def _mirror_step(other, name: str, time_s: float, time: np.ndarray) -> float:
     return _larger(*_step_at(*views[mirror], m))
 
 
-def leg_slips(rec: Recording, side: str, pelvis: bool = False) -> dict[str, Slip]:
+def leg_slips(ctx, side: str, pelvis: bool = False) -> dict[str, Slip]:
     """Sensor -> its largest step (module docstring) for each sensor of the ``side`` leg with raw
     signals, with the leg's other sensors' steps at the same split (those with every sample
     finite: a sensor with a dropout is excluded by its own check) and the other leg's same
-    sensor's; empty for a leg with too few strides. ``pelvis``: the pelvis's sensor too, on this
-    leg's strides (eq 2, 3), the leg's sensors its others. The leg's events and each sensor's
-    view are computed once."""
-    return _slips(rec, _leg_views(rec, side, pelvis), _leg_views(rec, other_side(side), False))
+    sensor's; empty for a leg with too few strides. ``ctx``: the recording's
+    :class:`~pipeline.process.check_context.CheckContext`; ``pelvis``: the pelvis's sensor too,
+    on this leg's strides (eq 2, 3), the leg's sensors its others."""
+    return _slips(ctx.rec, _leg_views(ctx, side, pelvis), _leg_views(ctx, other_side(side), False))
 
 
 def _slips(rec: Recording, this, other) -> dict[str, Slip]:
@@ -323,60 +346,44 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
     return out
 
 
-#: The last recording's legs (a weak reference to it; side -> :func:`leg_slips` with the pelvis
-#: and the leg's stride count): the sensor check asks for each sensor in turn, and each leg's
-#: events and views are computed once, for its own check and the other leg's.
-_LAST: dict[str, tuple[weakref.ref, dict[str, tuple[dict[str, Slip], int]]]] = {}
+def legs_slips(ctx) -> dict[str, tuple[dict[str, Slip], int]]:
+    """Side -> (:func:`leg_slips` with the pelvis, the leg's stride count), each leg's views
+    computed once for its own check and the other leg's (the context keeps the result)."""
+    views = {side: _leg_views(ctx, side, pelvis=True) for side in ("right", "left")}
+    return {side: (_slips(ctx.rec, views[side], views[other_side(side)]), len(views[side][0]))
+            for side in views}  # fmt: skip
 
 
-def slip_step(name: str, rec: Recording) -> Slip | None:
+def slip_step(name: str, ctx) -> Slip | None:
     """Sensor ``name``'s entry of :func:`leg_slips` (the pelvis's: on the right leg's strides,
-    else the left's); None for a torso sensor, one without raw signals, or too few strides."""
-    s, segment = rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
+    else the left's); None for a torso sensor, one without raw signals, or too few strides.
+    ``ctx``: the recording's :class:`~pipeline.process.check_context.CheckContext`."""
+    s, segment = ctx.rec.sensors[name], SENSOR_TO_SEGMENT.get(name, "")
     if s.gyr is None or s.acc is None:
         return None
     if segment == "pelvis":
         return next((found for side in ("right", "left")
-                     if (found := _leg(rec, side).get(name)) is not None), None)  # fmt: skip
+                     if (found := ctx.slips[side][0].get(name)) is not None), None)  # fmt: skip
     if not segment.startswith(("right_", "left_")):
         return None
-    return _leg(rec, segment.split("_", 1)[0]).get(name)
+    return ctx.slips[segment.split("_", 1)[0]][0].get(name)
 
 
-def unchecked(name: str, rec: Recording) -> str | None:
+def unchecked(name: str, ctx) -> str | None:
     """Why sensor ``name`` was not checked although the recording walks: its leg has fewer than
     ``2 MIN_SIDE`` strides (one stride a side is too few: without a slip S02's left shank
     steps 15.3 deg between single strides, beyond the limit, with the leg's others at 11.7 and the
     other leg's at 1.2: it would be named); None when it was checked or neither leg walked."""
-    segment, s = SENSOR_TO_SEGMENT.get(name, ""), rec.sensors[name]
+    segment, s = SENSOR_TO_SEGMENT.get(name, ""), ctx.rec.sensors[name]
     sides = ("right", "left") if segment == "pelvis" else (segment.split("_", 1)[0],)
     if s.gyr is None or s.acc is None or sides[0] not in ("right", "left") \
-            or slip_step(name, rec) is not None:
+            or slip_step(name, ctx) is not None:
         return None
-    found = max(_leg_strides(rec, side) for side in sides)
-    walked = max(_leg_strides(rec, side) for side in ("right", "left"))
-    if walked == 0 or found >= 2 * MIN_SIDE:
+    strides = {side: ctx.slips[side][1] for side in ("right", "left")}
+    found = max(strides[side] for side in sides)
+    if max(strides.values()) == 0 or found >= 2 * MIN_SIDE:
         return None
     where = ("on either leg" if len(sides) == 2 else
-             f"on its leg (the other leg: {_leg_strides(rec, other_side(sides[0]))})")
+             f"on its leg (the other leg: {strides[other_side(sides[0])]})")
     return (f"not checked for a slip: {found} stride(s) found {where}, {2 * MIN_SIDE} are needed "
             "to compare before and after")
-
-
-def _leg(rec: Recording, side: str) -> dict[str, Slip]:
-    """:func:`leg_slips` with the pelvis, kept for the last recording."""
-    return _cached(rec)[side][0]
-
-
-def _leg_strides(rec: Recording, side: str) -> int:
-    return _cached(rec)[side][1]
-
-
-def _cached(rec: Recording) -> dict[str, tuple[dict[str, Slip], int]]:
-    cached = _LAST.get("legs")
-    if cached is None or cached[0]() is not rec:
-        views = {side: _leg_views(rec, side, pelvis=True) for side in ("right", "left")}
-        cached = _LAST["legs"] = (weakref.ref(rec), {
-            side: (_slips(rec, views[side], views[other_side(side)]), len(views[side][0]))
-            for side in views})  # fmt: skip
-    return cached[1]

@@ -184,20 +184,22 @@ class Crossing:
                 "(check the straps or the sensor map)")
 
 
-def crossing_evidence(rec: Recording, faulty: Collection[str] = ()) -> Crossing | None:
-    """Eq (2)-(3) on the recording; None without the gyroscopes of all six leg sensors,
-    complete, when one of them is ``faulty``, or unless each leg walked
-    :data:`~pipeline.process.gait.MIN_STRIDES` strides (:func:`~pipeline.process.gait.gait_of`)."""
+def crossing_evidence(ctx, faulty: Collection[str] = ()) -> Crossing | None:
+    """Eq (2)-(3) on the recording of ``ctx`` (its
+    :class:`~pipeline.process.check_context.CheckContext`); None without the gyroscopes of all six
+    leg sensors, complete, when one of them is ``faulty``, or unless each leg walked
+    :data:`~pipeline.process.gait.MIN_STRIDES` strides (the context's gait)."""
     from pipeline.filtering import lowpass
-    from pipeline.process.gait import gait_of, walked
+    from pipeline.process.gait import walked
 
+    rec = ctx.rec
     names = {(side[0], seg): SEGMENT_SENSOR[f"{side}_{seg}"]
              for side in ("right", "left") for seg in ("femur", *_PARTS)}  # fmt: skip
     sensors = {k: rec.sensors.get(n) for k, n in names.items()}
     if any(n in faulty for n in names.values()) or any(
             s is None or s.gyr is None or not np.isfinite(s.gyr).all() for s in sensors.values()):
         return None
-    if not walked(gait_of(rec, []).strides):
+    if not walked(ctx.gait.strides):
         return None
     low, high = RHYTHM_BAND_HZ
     rhythm = {}
