@@ -128,7 +128,8 @@ def _leg_axes(trial: Recording, rotations, side: str) -> dict[str, np.ndarray]:
 def _long_axis(line: np.ndarray | None, length: float, fallback: np.ndarray, what: str):
     """``(y, how, assumed)``: the centre ``line``, or the mean vertical ``fallback`` where a
     sensor it needs is absent (``line`` None); refused where the centres' distance is not within
-    :data:`~pipeline.process.posture.LENGTH_TOL` of the model's ``length`` (the signals do not locate the joints)."""
+    :data:`~pipeline.process.posture.LENGTH_TOL` of the model's ``length`` (the signals do not
+    locate the joints)."""
     if line is None:
         return fallback, f"its mean vertical over the strides (no sensor locates {what}: " \
                          "assumed)", True
