@@ -17,7 +17,9 @@ coordinate the RMSE, the offset-removed RMSE (offset = mean difference over the 
 hip centres' midpoint (mm), in each system's pelvis frame and in the pelvis's heading frame
 (vertical and forward; the two systems' pelvis frames differ by their tilt at standing); and,
 as the centres' limit, the same centres of the scaled model with its legs set to the optical
-references' own joint angles (what the model's dimensions and frames leave, angles aside).
+references' own joint angles (what the model's dimensions and frames leave, angles aside). Then
+the recordings users bring (``scripts/real_gait_cuts.py``): S02 cut to start as the walk starts
+or mid-walk, and with its other shank sensors, on every input path.
 
 Written: ``results/bench_real_gait.txt`` and ``results/bench_real_gait.png`` (each sagittal
 angle over the walk, ours against Vicon, per input path with the default options).
@@ -35,6 +37,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from real_gait_cuts import section
 
 from pipeline.analysis.joint_angles import joint_angles
 from pipeline.analysis.landmarks import frame_trajectories, landmark_trajectories
@@ -343,7 +346,8 @@ def main() -> None:
             med = np.median([scores["vicon"][c]["rmse"] for c in SAGITTAL])
             print(f"{path:7s} {label:22s} median sagittal RMSE {med:.1f} deg ({seconds:.1f} s)",
                   flush=True)  # fmt: skip
-    text = report(rows) + limits(rows, refs)
+    text = report(rows) + section(args.data, SENSOR_MAP, SUBJECT, INPUTS, SAGITTAL,
+                                  refs["angles"]) + limits(rows, refs)  # fmt: skip
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_real_gait.txt").write_text(text)
     figure(curves, vicon, args.out / "bench_real_gait.png")

@@ -22,8 +22,42 @@ def _realism(quantity: str, column: int) -> tuple[str, str]:
             rf"\| {re.escape(quantity)} \|" + r" [\d.]+ \|" * (column - 1) + rf" {NUM} \|")
 
 
+def _brought(path: str, recording: str, column: str = "median") -> tuple[str, str]:
+    """bench_real_gait's "recordings users bring" row: its median against Vicon (``median``)
+    or the markers (``markers``)."""
+    tail = rf"\*\*{NUM}\*\* \|" if column == "median" else rf"\*\*[\d.]+\*\* \| {NUM} \|"
+    return ("results/bench_real_gait.txt",
+            rf"\| {path} \| {recording} \| [^|]+ \|" + r" [\d.]+ \|" * 6 + " " + tail)
+
+
 #: (document, its regex with the figure as group 1, results file, its regex for the same figure)
 FIGURES = [
+    ("README.md", rf"the median is {NUM}-[\d.]+°\s+from the vendor's",
+     *_brought("vendor", "from 1300")),
+    ("README.md", rf"the median is [\d.]+-{NUM}°\s+from the vendor's",
+     *_brought("vendor", "from 1500")),
+    ("README.md", rf"and {NUM}-[\d.]+° on every input", *_brought("pi6", "from 1120")),
+    ("README.md", rf"and [\d.]+-{NUM}° on every input", *_brought("vqf6", "from 1500")),
+    ("docs/results.md", rf"walk itself \(`docs/methods.md`, \"Calibrating from the walk\"\): "
+     rf"median {NUM}°", *_brought("vendor", "from 1120")),
+    ("docs/results.md", rf"median [\d.]+°, {NUM}° and [\d.]+°\s+from the vendor",
+     *_brought("vendor", "from 1300")),
+    ("docs/results.md", rf"median [\d.]+°, [\d.]+° and {NUM}°\s+from the vendor",
+     *_brought("vendor", "from 1500")),
+    ("docs/results.md", rf"\(VQF 6-D {NUM}-[\d.]+°, the PI", *_brought("vqf6", "from 1120")),
+    ("docs/results.md", rf"\(VQF 6-D [\d.]+-{NUM}°, the PI", *_brought("vqf6", "from 1500")),
+    ("docs/results.md", rf"the PI filter {NUM}-[\d.]+°\), no leg", *_brought("pi6", "from 1120")),
+    ("docs/results.md", rf"the PI filter [\d.]+-{NUM}°\), no leg", *_brought("pi6", "from 1300")),
+    ("docs/results.md", rf"cut recordings' medians are {NUM}-[\d.]+°",
+     *_brought("vendor", "from 1120", "markers")),
+    ("docs/results.md", rf"lower than as recorded \({NUM}-[\d.]+°\)",
+     *_brought("vendor", "as recorded", "markers")),
+    ("docs/results.md", rf"lower than as recorded \([\d.]+-{NUM}°\)",
+     *_brought("pi6", "as recorded", "markers")),
+    ("docs/results.md", rf"the medians are {NUM}-[\d.]+° against",
+     *_brought("vqf9", "other shanks")),
+    ("docs/results.md", rf"the medians are [\d.]+-{NUM}° against",
+     *_brought("vendor", "other shanks")),
     ("docs/results.md", rf"vendor orientations {NUM}°", "results/bench_real_gait.txt",
      rf"\| vendor \| defaults \|.*\*\*{NUM}\*\* \|"),
     ("docs/results.md", rf"VQF 9-D {NUM}°", "results/bench_real_gait.txt",

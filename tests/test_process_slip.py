@@ -12,7 +12,13 @@ from pipeline.process import process_recording
 from pipeline.process.check_context import CheckContext
 from pipeline.process.gait import gait_of
 from pipeline.process.sensor_checks import check_sensors
-from pipeline.process.slip import ALONE_DEG, SLIP_DEG, slip_step, walking_strides
+from pipeline.process.slip import (
+    ALONE_DEG,
+    CERTAIN_SLIP_DEG,
+    SLIP_DEG,
+    slip_step,
+    walking_strides,
+)
 from pipeline.rotations import exp3
 
 S02 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "gaittoolbox_s02"
@@ -37,9 +43,11 @@ def _mid_walk(rec: Recording, side: str = "right") -> int:
     return int(round((ic[0] + ic[-1]) / 2))
 
 
-def _slipped(rec: Recording, name: str, axis: int, at: int, deg: float = 30.0) -> Recording:
-    """From sample ``at`` on, the sensor turned by ``deg`` about its own ``axis``."""
-    R = exp3(np.radians(deg) * np.eye(3)[axis])
+def _slipped(rec: Recording, name: str, axis, at: int, deg: float = 30.0) -> Recording:
+    """From sample ``at`` on, the sensor turned by ``deg`` about its own ``axis`` (an index, or a
+    direction in its frame)."""
+    u = np.eye(3)[axis] if isinstance(axis, int) else np.asarray(axis) / np.linalg.norm(axis)
+    R = exp3(np.radians(deg) * u)
     s = rec.sensors[name]
 
     def turned(x):
@@ -120,6 +128,34 @@ def test_a_step_both_legs_take_is_not_a_slip(walk):
                and not s.slipped for s in steps), steps  # fmt: skip
     alone = slip_step("tibia_r_imu", CheckContext(_slipped(walk, "tibia_r_imu", 0, at)))
     assert alone.slipped and alone.others_deg < ALONE_DEG, alone
+
+
+def test_only_a_leg_sensors_turned_axis_is_certain_the_rest_are_flags(walk):
+    """A shank sensor's 30 deg slip about its x axis turns its flexion axis: certain, excluded.
+    The pelvis's belt turning 30 deg: never certain (its rocking changes with the walk itself):
+    noted, the sensor kept. A slip about the shank's flexion axis turns gravity alone, as a
+    change of the movement does: noted."""
+    from pipeline.process.findings import Action
+
+    at = _mid_walk(walk)
+    _, vertical = _horizontal_axes(walk, "pelvis_imu")
+    cases = {("tibia_r_imu", 0): Action.EXCLUDED, ("pelvis_imu", vertical): Action.NOTED}
+    for (name, axis), action in cases.items():
+        rec = _slipped(walk, name, axis, at)
+        (f,) = [f for f in check_sensors(rec)[1] if f.check == "slipped"]
+        assert (f.sensor, f.action) == (name, action), f
+    flexion = _flexion_axis_of(walk, "tibia_r_imu")
+    turned = _slipped(walk, "tibia_r_imu", flexion, at)
+    step = slip_step("tibia_r_imu", CheckContext(turned))
+    assert step.slipped and step.axis_deg < CERTAIN_SLIP_DEG and not step.certain, step
+    (f,) = [f for f in check_sensors(turned)[1] if f.check == "slipped"]
+    assert f.action == Action.NOTED and "may have slipped" in f.evidence
+
+
+def _flexion_axis_of(rec: Recording, name: str) -> np.ndarray:
+    """The sensor's flexion axis in its own frame (the principal axis of its angular velocity)."""
+    gyr = rec.sensors[name].gyr
+    return np.linalg.svd(gyr - gyr.mean(0), full_matrices=False)[2][0]
 
 
 @pytest.mark.parametrize("pair", [("femur_r_imu", "tibia_r_imu"), ("tibia_l_imu", "calcn_l_imu")])

@@ -23,10 +23,12 @@ the foot (S02's right foot at its 180 deg turn: 30 cm with a peak of 1.3 rad/s, 
 Vicon's); standing still or shuffling gives no event (the largest such movements: 5 cm on the
 x-IMU3 walk, 1 cm on S02), nor does a movement whose largest lobe turns the foot backwards (the
 x-IMU3 walk's turns have two, of 22 and 40 cm: steps sideways or back, not found). A shank
-sensor never rests in stance: its swings are the peaks of ``w``
-(Salarian et al. 2004, IEEE TBME 51(8)), its FC the minimum within :data:`CONTACT_SEARCH_S`
+sensor never rests in stance: its swings are the peaks of ``w`` (Salarian et al. 2004, IEEE TBME
+51(8)) beyond a share of the walk's own (:data:`SHANK_PEAK_SHARE`; a turn's pivot step swings
+the shank slowly), its FC the minimum within :data:`CONTACT_SEARCH_S`
 before each peak, its IC, as the foot's, where the swing's rotation ends (``w`` crosses zero
-downwards after the peak; else the minimum within :data:`CONTACT_SEARCH_S` after it).
+downwards after the peak, or its first trough, whichever comes first; else the minimum within
+:data:`CONTACT_SEARCH_S` after it).
 """
 
 from __future__ import annotations
@@ -39,8 +41,9 @@ from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import true_runs
 
-__all__ = ["SEGMENTS", "GaitEvents", "MIN_STEP_M", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO",
-           "gait_events", "rest_periods", "rest_vertical", "sagittal_rate"]  # fmt: skip
+__all__ = ["MIN_SHANK_PEAK", "SEGMENTS", "SHANK_PEAK_SHARE", "GaitEvents", "MIN_STEP_M",
+           "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events", "rest_periods",
+           "rest_vertical", "sagittal_rate"]  # fmt: skip
 
 #: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
 #: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
@@ -158,22 +161,42 @@ def _crossing(w: np.ndarray, k: int) -> float:
 CONTACT_SEARCH_S = 0.35
 
 
+#: A shank's swing peak counts from this share of the walk's typical peak (the median of those
+#: beyond :data:`MIN_SWING_RATE`), down to :data:`MIN_SHANK_PEAK` rad/s: a pivot step in a turn
+#: swings the shank at a third of a straight stride's rate (S02's right shank at its 180 deg turn:
+#: 1.6 rad/s, its straight strides 4.5-5.4), standing and shuffling at a tenth.
+SHANK_PEAK_SHARE = 0.25
+MIN_SHANK_PEAK = 1.0
+
+
 def _shank_events(w: np.ndarray, rate_hz: float):
     from scipy.signal import find_peaks
 
-    peaks, _ = find_peaks(w, height=MIN_SWING_RATE, distance=max(1, int(0.6 * rate_hz)))
-    peaks = peaks[peaks > 0]
+    distance = max(1, int(0.6 * rate_hz))
+    peaks, props = find_peaks(w, height=MIN_SHANK_PEAK, distance=distance)
+    strong = props["peak_heights"][props["peak_heights"] >= MIN_SWING_RATE]
+    least = max(MIN_SHANK_PEAK, SHANK_PEAK_SHARE * float(np.median(strong))) if len(strong) \
+        else np.inf
+    peaks = peaks[(peaks > 0) & (w[peaks] >= least)]
     reach = int(CONTACT_SEARCH_S * rate_hz)
     fc = [max(0, p - reach) + int(np.argmin(w[max(0, p - reach):p])) for p in peaks]
-    ic = []
-    for p in peaks:
-        after = w[p:p + 2 * reach]
-        below = np.flatnonzero(after < 0)
-        if len(below):  # the swing's forward rotation ends: the heel lands
-            ic.append(_crossing(w, p + int(below[0])))
-        else:
-            ic.append(float(p + np.argmin(after[:reach + 1])))
+    ic = [_swing_end(w, p, 2 * reach) for p in peaks]
     return peaks, np.asarray(ic, float), np.asarray(fc, float)
+
+
+def _swing_end(w: np.ndarray, peak: int, reach: int) -> float:
+    """Where a shank's swing rotation ends after its ``peak`` (the heel lands): ``w`` crossing
+    zero downwards, or sooner its first trough below a quarter of the peak (a stopping step:
+    the shank keeps turning slowly forward after the heel lands, S02's last left stride crossed
+    zero 270 ms after the foot's contact, its trough within 10 ms of it); without either, the
+    minimum within ``reach`` samples."""
+    after = w[peak:peak + reach]
+    below = np.flatnonzero(after < 0)
+    low = after < 0.25 * after[0]
+    trough = np.flatnonzero(low[1:-1] & (after[1:-1] <= after[:-2]) & (after[1:-1] < after[2:]))
+    ends = ([_crossing(w, peak + int(below[0]))] if len(below) else []) + \
+        ([float(peak + 1 + trough[0])] if len(trough) else [])
+    return min(ends) if ends else float(peak + np.argmin(after[:reach // 2 + 1]))
 
 
 #: The segments whose sensor gives events: a foot's rests in stance, a shank's swing peaks.

@@ -44,13 +44,13 @@ findings and the recording read back). Every finding's action is one of
   segment (the flexion axis or the pelvis's once-a-stride rocking axis, gravity at mid-stance)
   turns between the strides before and after some stride by more than
   :data:`~pipeline.process.slip.SLIP_DEG`: it may have slipped on its segment, its placement
-  wrong from then on: **noted** (a flag, the sensor kept); a leg sensor alone on its leg beyond
-  :data:`~pipeline.process.slip.CERTAIN_SLIP_DEG` is **excluded**. The pelvis is never
-  excluded: nothing else turns with its rocking to tell a slip from a walk that starts, stops or
-  turns (which step it by 8-11 deg on S02 and 20-21 deg on other labs' walkways). Checked in
-  walking (four strides or more on its leg); a leg that walked fewer has its sensors **listed**
-  as not checked (not a flag), and so has a sensor whose step beyond the limit the leg's other
-  sensors and the other leg's share (the movement changed: turns on the spot, shuffles; the
+  wrong from then on: **noted** (a flag, the sensor kept); a leg sensor alone on its leg whose
+  flexion axis turned beyond :data:`~pipeline.process.slip.CERTAIN_SLIP_DEG` is **excluded**. The
+  pelvis is never excluded: nothing else turns with its rocking to tell a slip from a walk that
+  starts, stops or turns (which step it by 8-11 deg on S02 and 20-21 deg on other labs' walkways).
+  Checked in walking (four strides or more on its leg); a leg that walked fewer has its sensors
+  **listed** as not checked (not a flag), and so has a sensor whose step beyond the limit the leg's
+  other sensors and the other leg's share (the movement changed: turns on the spot, shuffles; the
   x-IMU3 walk's sensors step 20-86 deg so).
 
 * ``read``: what the reader of a sensor's own file repaired or noticed (dropped samples or

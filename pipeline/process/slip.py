@@ -64,11 +64,11 @@ the sensor is listed as not checked (the x-IMU3 walk, two short walks with turns
 shuffles: every leg sensor steps 20-86 deg with the others, the pelvis 19; qmt's thighs).
 
 **Certain or a flag.** A step beyond :data:`SLIP_DEG` is a flag (the sensor kept, the run says
-where); only a leg sensor's step beyond :data:`CERTAIN_SLIP_DEG`, alone on its leg, excludes it
-(:attr:`Slip.certain`). The pelvis's is never certain: its rocking changes where a walk starts,
-speeds up, slows, stops or turns, and no other sensor turns with it to tell (S02 cut to its
-strides, with the turn and the stop: 8.0-10.9 deg; other labs' walkways: 20-21 deg, as much as the
-22 deg of a belt turned by 30 deg on S02).
+where); only a leg sensor's flexion axis turned beyond :data:`CERTAIN_SLIP_DEG`, alone on its
+leg, excludes it (:attr:`Slip.certain`). The pelvis's is never certain: its rocking changes
+where a walk starts, speeds up, slows, stops or turns, and no other sensor turns with it to tell
+(S02 cut to its strides, with the turn and the stop: 8.0-10.9 deg; other labs' walkways: 20-21
+deg, as much as the 22 deg of a belt turned by 30 deg on S02).
 """
 
 from __future__ import annotations
@@ -90,12 +90,15 @@ __all__ = ["ALONE_DEG", "CERTAIN_SLIP_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING
 #: A step beyond this (deg) is a slip: half as much again as the largest step measured without
 #: one (9.8, module docstring), under the 19-35 deg a 30 deg slip gives.
 SLIP_DEG = 15.0
-#: Beyond this step (deg) a leg sensor's slip is certain and the sensor excluded (below, a flag
-#: that keeps it): half as much again as the largest step a leg sensor alone on its leg made on
-#: a faultless recording (12.6 deg: S02's left foot, the recording cut to start at samples
-#: 1150-1225; the simulated walks' 10-11.5), under the 23-35 deg a 30 deg slip gives. The pelvis's
-#: slip is never certain (module docstring).
-CERTAIN_SLIP_DEG = 19.0
+#: Beyond this step of its flexion axis (eq 1, deg) a leg sensor's slip is certain and the sensor
+#: excluded (below, and for a step of gravity alone, a flag that keeps it): half as much again as
+#: the largest axis step a leg sensor alone on its leg made on a faultless recording (S02 7.1,
+#: cut to start mid-walk; qmt 10.0; the simulated walks, cut short, 11.5), under the 24-30 deg of
+#: a 30 deg slip (S02, the simulated walk). Gravity at mid-stance steps with the movement itself
+#: (qmt's 10-30 s windows: 17-40 deg as its walk turns to a run, the axis 1-3 deg), and a slip
+#: about the flexion axis turns gravity alone: a flag. The pelvis's slip is never certain (module
+#: docstring).
+CERTAIN_SLIP_DEG = 18.0
 #: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
 #: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
 ALONE_DEG = 0.5 * SLIP_DEG
@@ -146,9 +149,11 @@ class Slip:
 
     @property
     def certain(self) -> bool:
-        """A slip beyond :data:`CERTAIN_SLIP_DEG` of a leg sensor: the pelvis's rocking axis is
-        turned as much by a walk that starts, stops or turns (module docstring)."""
-        return self.slipped and self.deg > CERTAIN_SLIP_DEG and self.axis_name != ROCKING_AXIS
+        """A slip whose flexion axis (eq 1) turned beyond :data:`CERTAIN_SLIP_DEG`, of a leg
+        sensor: gravity at mid-stance turns with the movement, and the pelvis's rocking axis as
+        much where a walk starts, stops or turns (module docstring)."""
+        return (self.slipped and self.axis_name != ROCKING_AXIS
+                and self.axis_deg > CERTAIN_SLIP_DEG)  # fmt: skip
 
     @property
     def inconclusive(self) -> bool:
@@ -174,8 +179,8 @@ class Slip:
         if self.certain:
             return seen + ": it slipped on its segment (a loose strap?)"
         return seen + (f": it may have slipped on its segment (a loose strap?; certain beyond "
-                       f"{CERTAIN_SLIP_DEG:g} deg for a leg sensor, never for the pelvis's, "
-                       "which a walk's start, stop or turn turns as much)")
+                       f"{CERTAIN_SLIP_DEG:g} deg of a leg sensor's axis, never for the "
+                       "pelvis's, which a walk's start, stop or turn turns as much)")
 
 
 def _larger(*steps: float) -> float:
