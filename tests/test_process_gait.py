@@ -177,3 +177,17 @@ def test_s02_without_its_feet_the_shanks_find_every_stride():
         for f, s in zip(by_foot, by_shank, strict=True):
             if f.straight:
                 assert abs(f.start_s - s.start_s) < 0.03, (side, f, s)
+
+
+def test_a_short_walk_says_what_it_could_not_check():
+    from pipeline.analysis.strides import Stride
+    from pipeline.process.gait import too_short
+
+    def stride(side):
+        return Stride(side, 0.0, 1.0, 1.0, 0.6, 1.3, 1.3, 120.0, 0.02, 0.0, True)
+
+    assert too_short([]) is None
+    assert too_short([stride("right")] * 3 + [stride("left")] * 3) is None
+    said = too_short([stride("right")] * 2 + [stride("left")] * 3)
+    assert said.startswith("a short walk (right 2, left 3 strides, 3 a leg needed)")
+    assert "was not checked" in said

@@ -34,7 +34,8 @@ from pipeline.analysis.strides import Stride, foot_strides
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
-__all__ = ["BLEND_S", "MIN_STRIDES", "Gait", "gait_of", "walked", "with_pelvis_path"]
+__all__ = ["BLEND_S", "MIN_STRIDES", "Gait", "gait_of", "too_short", "walked",
+           "with_pelvis_path"]
 
 #: Strides each leg walks for a check that needs a walk (the legs' sides and their sensors'
 #: pairings, :mod:`pipeline.process.sides` and :mod:`pipeline.process.swap`).
@@ -175,3 +176,16 @@ def _held(path: np.ndarray, known: np.ndarray) -> np.ndarray:
 def walked(strides: list[Stride]) -> bool:
     """Whether each leg walked :data:`MIN_STRIDES` of ``strides``."""
     return min(sum(s.side == side for s in strides) for side in ("right", "left")) >= MIN_STRIDES
+
+
+def too_short(strides: list[Stride]) -> str | None:
+    """What the checks that need a walk (the legs' sides, the shanks' and feet's pairings across
+    the legs) could not check on a walk of fewer than :data:`MIN_STRIDES` strides a leg; None
+    for a walk long enough, or none at all."""
+    if not strides or walked(strides):
+        return None
+    counts = ", ".join(f"{side} {sum(s.side == side for s in strides)}"
+                       for side in ("right", "left"))  # fmt: skip
+    return (f"a short walk ({counts} strides, {MIN_STRIDES} a leg needed): whether the legs' "
+            "sensors are named for their sides, and the shanks' and feet's for their legs, was "
+            "not checked")

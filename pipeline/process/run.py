@@ -60,7 +60,7 @@ from pipeline.model.skeleton import Skeleton
 from pipeline.process.check_context import CheckContext
 from pipeline.process.findings import Action, Finding
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.gait import Gait, with_pelvis_path
+from pipeline.process.gait import Gait, too_short, with_pelvis_path
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import correct_knees
 from pipeline.process.options import IKOptions, InputOptions
@@ -247,7 +247,7 @@ def _prepared(trial: Recording, static, opts: IKOptions) -> _Prepared:
     notes = list(trial.notes)
     ctx, findings = run_checks(CheckContext(trial))
     trial, gait, windows = ctx.rec, ctx.gait, ctx.windows
-    notes += ctx.gait_notes
+    notes += ctx.gait_notes + ([short] if (short := too_short(gait.strides)) else [])
     trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
     rotations, sensors = _segment_rotations(trial, notes)
     if sensors.pelvis and not oriented.filtered:  # the filter's world is vertical by construction
