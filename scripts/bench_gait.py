@@ -1,6 +1,8 @@
 """Gait events and strides against truth: the real S02 walk (Vicon heel, toe and pelvis markers),
 the simulated foot (pipeline.simulate.foot_walk: three seeds, walks with turns) and the simulated
-skeleton walking through the room (pipeline.simulate.walk: three seeds, a turn each).
+skeleton walking through the room (pipeline.simulate.walk: three seeds, a turn each); then, from
+scripts/gait_speeds.py, the simulated foot at every speed from 0.6 m/s to a run, S02 after 10 s
+of shuffling in place, and qmt's walk and run.
 
     python scripts/bench_gait.py [--data ../shared/data] [--out results/bench_gait.txt]
 
@@ -20,6 +22,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from gait_speeds import qmt_run, shuffling, speeds
 
 from pipeline.analysis.foot_trajectory import foot_trajectory
 from pipeline.analysis.gait_events import gait_events
@@ -273,6 +276,8 @@ def main() -> None:
     lines += simulated() + simulated_walk() + [""]
     data = args.data / "gaittoolbox_s02"
     lines += s02(data) if data.exists() else [f"S02 not found in {data}: skipped"]
+    lines += speeds() + shuffling(read_recording(data / "imu", S02_MAP) if data.exists()
+                                  else None) + qmt_run(args.data)  # fmt: skip
     lines += plausibility()
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -15,7 +15,7 @@ from pipeline.analysis.strides import (
     stride_table,
     strides_csv,
 )
-from pipeline.simulate.foot_walk import foot_walk
+from pipeline.simulate.foot_walk import Pace, foot_walk
 
 
 def _strides(**kw):
@@ -26,7 +26,7 @@ def _strides(**kw):
 
 
 def test_the_simulated_strides():
-    w, strides = _strides(strides=7, stride_time_s=1.2, length_m=1.4, clearance_m=0.1,
+    w, strides = _strides(strides=7, pace=Pace(1.2, 1.4), clearance_m=0.1,
                           turns_deg=(0, 0, 70), seed=4)  # fmt: skip
     assert len(strides) == 6  # 7 swings: 7 detected ICs, 6 strides between them
     for s in strides:
@@ -53,17 +53,39 @@ def test_the_csv_has_exactly_the_issues_columns():
     rows = list(csv.reader(io.StringIO(strides_csv(strides))))
     assert tuple(rows[0]) == STRIDE_COLUMNS == (
         "side", "start_s", "end_s", "stride_time_s", "stance_share", "stride_length_m",
-        "speed_m_s", "cadence_steps_min", "clearance_m", "turn_deg", "straight")  # fmt: skip
+        "speed_m_s", "cadence_steps_min", "clearance_m", "turn_deg", "straight",
+        "steady")  # fmt: skip
     assert len(rows) == 1 + len(strides) and {r[0] for r in rows[1:]} == {"left"}
-    assert {r[-1] for r in rows[1:]} == {"true"}
+    assert {r[-2] for r in rows[1:]} == {"true"}
+    assert [r[-1] for r in rows[1:]] == ["false", "true", "false"]  # the walk's start and stop
     assert abs(float(rows[1][5]) - 1.3) < 0.02
 
 
-def test_the_summary_by_side():
-    _, left = _strides(strides=4, seed=1)
+def test_the_summary_by_side_over_the_straight_steady_strides():
+    """Six strides, the third turning 70 deg: the first and the last start and stop the walk,
+    the turning one is left out: three in the means, each reason counted."""
+    _, left = _strides(strides=7, seed=1, turns_deg=(0, 0, 70))
     summary = stride_summary(left)
     mean, sd, n = summary["left"]["stride_length_m"]
     assert n == 3 and abs(mean - 1.3) < 0.02 and sd < 0.01
     assert summary["right"]["stride_length_m"][2] == 0
     text = "\n".join(stride_table(left))
     assert "| stride length (m) |  | 1.30 ± 0.00 | 1.30 ± 0.00 |" in text
+    assert "| strides turning 20 deg or more | | | 1 |" in text
+    assert "| strides starting or stopping a walk | | | 2 |" in text
+
+
+def test_a_missed_contact_is_left_out_of_the_means():
+    """Two strides merged by a missed contact (2.2 s among strides of 1.1): not steady, counted
+    as such, not averaged."""
+    from dataclasses import replace
+
+    from pipeline.analysis.strides import left_out, mark_steady
+
+    _, left = _strides(strides=8, seed=1)
+    merged = replace(left[2], end_s=left[3].end_s, stride_time_s=2.2)
+    joined = mark_steady(left[:2] + [merged] + left[4:])
+    assert [s.steady for s in joined] == [False, True, False, True, True, False]
+    assert left_out(joined) == {"turning": 0, "starting or stopping": 2, "merged": 1}
+    mean = stride_summary(joined)["left"]["stride_time_s"][0]
+    assert abs(mean - 1.1) < 0.01

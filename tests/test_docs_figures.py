@@ -32,6 +32,16 @@ def _brought(path: str, recording: str, column: str = "median") -> tuple[str, st
 
 #: (document, its regex with the figure as group 1, results file, its regex for the same figure)
 FIGURES = [
+    ("docs/results.md", rf"contacts\s+within {NUM} ms, stride time", "results/bench_gait.txt",
+     rf"largest errors {NUM} ms"),
+    ("docs/results.md", rf"stride time within {NUM} ms, length within", "results/bench_gait.txt",
+     rf"largest errors [\d.]+ ms, {NUM} ms"),
+    ("docs/results.md", rf"length within {NUM} %\. Each stance", "results/bench_gait.txt",
+     rf"largest errors [\d.]+ ms, [\d.]+ ms, {NUM} %"),
+    ("docs/results.md", rf"at up to {NUM}-[\d.]+ rad/s", "results/bench_gait.txt",
+     rf"\| walk 1.8 m/s \| 200 \|.* \| {NUM} \|"),
+    ("docs/results.md", rf"at up to [\d.]+-{NUM} rad/s", "results/bench_gait.txt",
+     rf"\| walk 2.2 m/s \| 200 \|.* \| {NUM} \|"),
     ("README.md", rf"the median is {NUM}-[\d.]+°\s+from the vendor's",
      *_brought("vendor", "from 1300")),
     ("README.md", rf"the median is [\d.]+-{NUM}°\s+from the vendor's",

@@ -191,3 +191,34 @@ def test_a_short_walk_says_what_it_could_not_check():
     said = too_short([stride("right")] * 2 + [stride("left")] * 3)
     assert said.startswith("a short walk (right 2, left 3 strides, 3 a leg needed)")
     assert "was not checked" in said
+
+
+def test_swings_without_a_stride_are_not_called_no_walking():
+    """One swing of each foot (a step each): no stride, and the notes say the swings were found."""
+    w = foot_walk(strides=1, seed=0)
+    s = SensorSignals(gyr=w.gyr, acc=w.acc)
+    notes: list[str] = []
+    gait = gait_of(Recording(w.time, w.rate_hz, {"calcn_r_imu": s, "calcn_l_imu": s}), notes)
+    assert gait.strides == []
+    assert notes[-1].startswith("no strides: swings found (right 1, left 1) but no two contacts")
+
+
+@pytest.mark.dataset
+def test_s02_after_shuffling_in_place_keeps_its_strides():
+    """Ten shuffles before the walk (a heel lifted and set down, its larger turn backwards): the
+    swing's sign is the walk's, not the shuffles' (by sign they outvoted it: both feet flipped,
+    no stride found), every stride found again, none invented."""
+    import sys
+
+    from _helpers import s02_cut
+
+    rec = s02_cut(0)
+    if rec is None:
+        pytest.skip("no S02 data")
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from gait_speeds import shuffling
+
+    lines = shuffling(rec)
+    assert "- right: 5 strides as recorded, 5 after the shuffling: 5 the same" in "\n".join(lines)
+    assert "- left: 6 strides as recorded, 6 after the shuffling: 6 the same" in "\n".join(lines)
+    assert all(" 0 invented" in line for line in lines if line.startswith("- "))

@@ -2,13 +2,13 @@
 
 import numpy as np
 
-from pipeline.simulate.foot_walk import FC_SHARE, foot_walk
+from pipeline.simulate.foot_walk import FC_SHARE, Pace, foot_walk
 
 
 def test_the_signals_are_those_of_the_path():
     """At rest the gyroscope reads noise and the accelerometer 1 g; the strides advance the
     foot by their length, turned by their turn; the events are where the lobes say."""
-    w = foot_walk(strides=4, stride_time_s=1.0, length_m=1.2, turns_deg=(0, 90), seed=0)
+    w = foot_walk(strides=4, pace=Pace(1.0, 1.2), turns_deg=(0, 90), seed=0)
     still = w.time < 1.5
     assert np.abs(w.gyr[still]).max() < 0.06
     np.testing.assert_allclose(np.linalg.norm(w.acc[still], axis=1), 9.81, atol=0.3)

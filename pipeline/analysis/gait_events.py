@@ -41,9 +41,11 @@ from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.filtering import lowpass
 from pipeline.io.gaps import true_runs
 
-__all__ = ["MIN_SHANK_PEAK", "SEGMENTS", "SHANK_PEAK_SHARE", "GaitEvents", "MIN_STEP_M",
-           "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events", "rest_periods",
-           "rest_vertical", "sagittal_rate"]  # fmt: skip
+__all__ = ["MAX_STANCE_S", "MIN_SHANK_PEAK", "SEGMENTS", "SHANK_PEAK_SHARE", "STRIDE_SHARE",
+           "STRIDE_RANGE_S", "GaitEvents",
+           "MIN_STEP_M", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events", "rest_periods",
+           "rest_vertical", "sagittal_rate", "stance_rests", "stride_period",
+           "swing_peaks"]  # fmt: skip
 
 #: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
 #: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
@@ -101,9 +103,19 @@ def _runs(w: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _swing_lobe(w: np.ndarray, a: int, b: int) -> tuple[int, int, float]:
-    """The run of one sign within ``[a, b)`` with the largest turn: ``(start, stop, turn)``."""
+    """The run of one sign within ``[a, b)`` with the largest turn: ``(start, stop, turn)``;
+    the largest forward (positive) run where it turns at least half as much as the largest
+    backward one (a fast walk's first stride from standing turns the foot back through its
+    whole stance as much as forward in its swing: no rest between them splits the stance)."""
     runs = [(a + i, a + j, float(np.sum(w[a + i:a + j]))) for i, j in _runs(w[a:b])]
-    return max(runs, key=lambda r: abs(r[2]))
+    largest = max(runs, key=lambda r: abs(r[2]))
+    forward = max(runs, key=lambda r: r[2])
+    return forward if forward[2] >= 0.5 * abs(largest[2]) else largest
+
+
+def _largest_turn(w: np.ndarray, a: int, b: int) -> float:
+    """The largest turn (rad, signed) of a run of one sign within ``[a, b)``."""
+    return max((float(np.sum(w[a + i:a + j])) for i, j in _runs(w[a:b])), key=abs)
 
 
 def rest_vertical(acc: np.ndarray, rests: np.ndarray) -> np.ndarray:
@@ -140,10 +152,10 @@ def sagittal_rate(gyr: np.ndarray, rests: np.ndarray,
     _, _, vt = np.linalg.svd(sample - sample.mean(axis=0), full_matrices=False)
     axis = vt[0]
     w = g @ axis
-    turns = [_swing_lobe(w, a, b)[2] for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True)
+    turns = [_largest_turn(w, a, b) for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True)
              if b - a >= 3]  # fmt: skip
-    if turns:
-        flip = np.sum(np.sign(turns)) < 0
+    if turns:  # the walk's swings outweigh a standing start's or a shuffle's small turns
+        flip = np.sum(turns) < 0
     else:
         flip = w[moving].max(initial=0.0) < -w[moving].min(initial=0.0)
     return (-w, -axis) if flip else (w, axis)
@@ -167,17 +179,14 @@ CONTACT_SEARCH_S = 0.35
 #: 1.6 rad/s, its straight strides 4.5-5.4), standing and shuffling at a tenth.
 SHANK_PEAK_SHARE = 0.25
 MIN_SHANK_PEAK = 1.0
+#: Swing peaks lie at least this share of the walk's stride apart (:func:`stride_period`): S02's
+#: feet turn at 4-6.4 rad/s in a lobe 0.65 s after a swing (a stride of 1.4 s), nearly as fast as
+#: the swing itself.
+STRIDE_SHARE = 0.7
 
 
 def _shank_events(w: np.ndarray, rate_hz: float):
-    from scipy.signal import find_peaks
-
-    distance = max(1, int(0.6 * rate_hz))
-    peaks, props = find_peaks(w, height=MIN_SHANK_PEAK, distance=distance)
-    strong = props["peak_heights"][props["peak_heights"] >= MIN_SWING_RATE]
-    least = max(MIN_SHANK_PEAK, SHANK_PEAK_SHARE * float(np.median(strong))) if len(strong) \
-        else np.inf
-    peaks = peaks[(peaks > 0) & (w[peaks] >= least)]
+    peaks = swing_peaks(w, rate_hz)
     reach = int(CONTACT_SEARCH_S * rate_hz)
     fc = [max(0, p - reach) + int(np.argmin(w[max(0, p - reach):p])) for p in peaks]
     ic = [_swing_end(w, p, 2 * reach) for p in peaks]
@@ -199,6 +208,100 @@ def _swing_end(w: np.ndarray, peak: int, reach: int) -> float:
     return min(ends) if ends else float(peak + np.argmin(after[:reach // 2 + 1]))
 
 
+def _smooth(w: np.ndarray, rate_hz: float) -> np.ndarray:
+    """The sagittal rate low-passed at 15 Hz (the events' timing, not the impacts')."""
+    return lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
+
+
+#: The longest stance (s) between two swings that is given a rest of its own: longer, it is a
+#: pause whose rests the fixed thresholds find, or no walk.
+MAX_STANCE_S = 2.0
+
+
+def swing_peaks(w: np.ndarray, rate_hz: float) -> np.ndarray:
+    """The swings' peaks of a sagittal rate ``w`` (positive in the swing): its peaks beyond a
+    share of the walk's typical one (:data:`SHANK_PEAK_SHARE` of the median of those beyond
+    :data:`MIN_SWING_RATE`, at least :data:`MIN_SHANK_PEAK`), one a stride at most
+    (:data:`STRIDE_SHARE`)."""
+    from scipy.signal import find_peaks
+
+    peaks, props = find_peaks(w, height=MIN_SHANK_PEAK, distance=max(1, int(0.4 * rate_hz)))
+    strong = props["peak_heights"][props["peak_heights"] >= MIN_SWING_RATE]
+    if not len(strong):
+        return np.zeros(0, dtype=int)
+    least = max(MIN_SHANK_PEAK, SHANK_PEAK_SHARE * float(np.median(strong)))
+    stride = stride_period(w, rate_hz)
+    if stride is not None:  # one peak a stride: a foot's other lobes are not swings
+        peaks, _ = find_peaks(w, height=least, distance=max(1, int(STRIDE_SHARE * stride)))
+    return peaks[(peaks > 0) & (w[peaks] >= least)]
+
+
+#: Where a stride's period is looked for (s): a run's to a slow walk's.
+STRIDE_RANGE_S = (0.5, 2.5)
+
+
+def stride_period(w: np.ndarray, rate_hz: float) -> float | None:
+    """The stride's period (samples): the lag within :data:`STRIDE_RANGE_S` at which the sagittal
+    rate ``w`` correlates best with itself (the whole stride's pattern repeats, where a foot's
+    lobes within a stride do not); None where no lag there correlates at all."""
+    x = np.nan_to_num(w - np.nanmean(w))
+    n = len(x)
+    lo, hi = (int(round(v * rate_hz)) for v in STRIDE_RANGE_S)
+    if n < 2 * lo or hi <= lo:
+        return None
+    spectrum = np.fft.rfft(x, 2 * n)
+    r = np.fft.irfft(spectrum * np.conj(spectrum))[:n] / np.maximum(n - np.arange(n), 1)
+    hi = min(hi, n // 2)
+    if hi <= lo or r[0] <= 0:
+        return None
+    k = lo + int(np.argmax(r[lo:hi]))
+    return float(k) if r[k] > 0.0 else None
+
+
+def stance_rests(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.ndarray,
+                 w: np.ndarray) -> np.ndarray:  # fmt: skip
+    """``rests`` with, for each stance between two swings (:func:`swing_peaks` of ``w``, at most
+    :data:`MAX_STANCE_S` apart) within a stretch of more than one and a half strides without
+    a rest, its stillest :data:`REST_WINDOW_S` window in its middle three fifths: the
+    smallest ``|w|^2 / REST_GYRO^2 + (|a| - g)^2 / REST_ACC^2`` over the window (the energy
+    of Skog et al. 2010's SHOE detector, the thresholds its scales). A fast walk's foot
+    never rests by the fixed thresholds (at 1.9 m/s its stillest 50 ms turn at 0.43-0.92
+    rad/s), but each of its stances has a stillest moment, the zero-velocity update's place
+    (Rampp et al. 2015's mid-stance: the minimum of the gyroscope's energy between two
+    swings). The heel strike's impact keeps the window off the contact (the specific force's
+    term), and so the search needs no sign of ``w``: on a run the fastest rotation is the
+    push-off, not the swing (qmt's run: 11-12 against 8-9 rad/s), and the peaks then bound a
+    swing and a stance, not a stance alone."""
+    n = max(1, int(round(REST_WINDOW_S * rate_hz)))
+    energy = (np.linalg.norm(np.nan_to_num(gyr), axis=1) / REST_GYRO) ** 2 + (
+        (np.linalg.norm(np.nan_to_num(acc), axis=1) - G) / REST_ACC) ** 2  # fmt: skip
+    window = np.convolve(energy, np.ones(n) / n, mode="valid")  # window k: samples k..k+n-1
+    added = []
+    stride = stride_period(w, rate_hz)
+    for a, b in _stances(swing_peaks(w, rate_hz), rests, MAX_STANCE_S * rate_hz, stride):
+        lo, hi = a + (b - a) // 5, b - (b - a) // 5 - n + 1  # the peaks' lobes left out
+        if hi > lo:
+            k = lo + int(np.argmin(window[lo:hi]))
+            added.append((k, k + n))
+    if not added:
+        return rests
+    return np.array(sorted([*map(tuple, rests), *added]), dtype=int).reshape(-1, 2)
+
+
+def _stances(peaks: np.ndarray, rests: np.ndarray, longest: float,
+             stride: float | None) -> list[tuple[int, int]]:  # fmt: skip
+    """The sample ranges between consecutive swing ``peaks`` that hold no rest, at most
+    ``longest`` samples long, within a stretch between two rests that lasts more than one and a
+    half ``stride`` (a walk whose stances the fixed thresholds do not find; a stretch of one
+    stride between two rests is a walk's, whatever its peaks)."""
+    if stride is None:
+        return []
+    ends = [0, *(int(v) for r in rests for v in r), 1 << 62]
+    gaps = [(a, b) for a, b in zip(ends[0::2], ends[1::2], strict=False) if b - a > 1.5 * stride]
+    return [(int(a), int(b)) for a, b in zip(peaks[:-1], peaks[1:], strict=True)
+            if b - a <= longest and any(g0 <= a and b <= g1 for g0, g1 in gaps)]  # fmt: skip
+
+
 #: The segments whose sensor gives events: a foot's rests in stance, a shank's swing peaks.
 SEGMENTS = ("foot", "shank")
 
@@ -212,10 +315,13 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
     rests = rest_periods(gyr, acc, rate_hz)
     if segment == "shank":
         w, axis = sagittal_rate(gyr, np.zeros((0, 2), int), rest_vertical(acc, rests))
-        swing, ic, fc = _shank_events(lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz)), rate_hz)
+        swing, ic, fc = _shank_events(_smooth(w, rate_hz), rate_hz)
         return GaitEvents(rests, np.asarray(swing, int), ic, fc, axis)
-    w, axis = sagittal_rate(gyr, rests, rest_vertical(acc, rests))
-    w = lowpass(w, rate_hz, min(15.0, 0.4 * rate_hz))
+    up = rest_vertical(acc, rests)
+    first, _ = sagittal_rate(gyr, np.zeros((0, 2), int), up)  # signed by the fastest rotation
+    rests = stance_rests(gyr, acc, rate_hz, rests, _smooth(first, rate_hz))
+    w, axis = sagittal_rate(gyr, rests, up)
+    w = _smooth(w, rate_hz)
     swing, ic, fc = [], [], []
     path = None  # the foot's trajectory, once a weak swing asks for it
     for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True):

@@ -11,24 +11,34 @@ between the two rests (deg, positive to the left: counter-clockwise seen from ab
 ``straight`` when ``|turn|`` is below :data:`STRAIGHT_TURN_DEG`. A pair of ICs more than
 :data:`MAX_STRIDE_S` apart (the subject stopped) is no stride. Without a path (events from a
 shank sensor) length, speed, clearance and turn are NaN.
+
+A stride is ``steady`` when it is neither the first nor the last of its walk (a run of strides,
+each starting where the one before ended: the first starts the walk from standing, the last
+stops it; S02's last step is 0.34 m where its walk's strides are 1.31-1.45 m) and lasts no longer
+than :data:`MERGED_SHARE` times its side's median stride (longer, a contact was missed and two
+strides merged). The summary's means (:func:`stride_summary`) are over the straight, steady
+strides, and it counts the others.
 """
 
 from __future__ import annotations
 
-from dataclasses import astuple, dataclass, fields
+from dataclasses import astuple, dataclass, fields, replace
 
 import numpy as np
 
 from pipeline.analysis.foot_trajectory import FootTrajectory
 from pipeline.analysis.gait_events import GaitEvents
 
-__all__ = ["MAX_STRIDE_S", "STRAIGHT_TURN_DEG", "STRIDE_COLUMNS", "Stride", "foot_strides",
-           "stride_rows", "stride_summary", "stride_table", "strides_csv"]  # fmt: skip
+__all__ = ["MAX_STRIDE_S", "MERGED_SHARE", "STRAIGHT_TURN_DEG", "STRIDE_COLUMNS", "Stride",
+           "foot_strides", "in_the_means", "left_out", "mark_steady", "stride_rows",
+           "stride_summary", "stride_table", "strides_csv"]  # fmt: skip
 
 #: A stride turning less than this (deg) is straight.
 STRAIGHT_TURN_DEG = 20.0
 #: Two initial contacts further apart than this (s) are no stride.
 MAX_STRIDE_S = 2.5
+#: A stride longer than this many times its side's median merges two: a contact was missed.
+MERGED_SHARE = 1.5
 
 
 @dataclass(frozen=True)
@@ -46,6 +56,7 @@ class Stride:
     clearance_m: float
     turn_deg: float
     straight: bool
+    steady: bool = True
 
 
 STRIDE_COLUMNS = tuple(f.name for f in fields(Stride))
@@ -98,7 +109,38 @@ def foot_strides(side: str, time: np.ndarray, events: GaitEvents,
             length, clearance, turn = _path_measures(events, path, k0, k1)
         out.append(Stride(side, at(k0), at(k1), t, stance, length, length / t,
                           120.0 / t, clearance, turn, bool(abs(turn) < STRAIGHT_TURN_DEG)))
+    return mark_steady(out)
+
+
+def mark_steady(strides: list[Stride]) -> list[Stride]:
+    """One side's strides (in order) with ``steady`` set (module docstring)."""
+    if not strides:
+        return strides
+    typical = float(np.median([s.stride_time_s for s in strides]))
+    out = []
+    for k, s in enumerate(strides):
+        joined_before = k > 0 and strides[k - 1].end_s == s.start_s
+        joined_after = k + 1 < len(strides) and strides[k + 1].start_s == s.end_s
+        merged = s.stride_time_s > MERGED_SHARE * typical
+        out.append(replace(s, steady=joined_before and joined_after and not merged))
     return out
+
+
+def left_out(strides: list[Stride]) -> dict[str, int]:
+    """Why strides are left out of the means: their counts (``turning``, ``starting or
+    stopping``, ``merged``: longer than :data:`MERGED_SHARE` times the side's median)."""
+    typical = {side: float(np.median([s.stride_time_s for s in strides if s.side == side]))
+               for side in {s.side for s in strides}}  # fmt: skip
+    merged = [s for s in strides if s.stride_time_s > MERGED_SHARE * typical[s.side]]
+    ends = [s for s in strides if not s.steady and s not in merged]
+    turning = [s for s in strides if s.steady and not s.straight and np.isfinite(s.turn_deg)]
+    return {"turning": len(turning), "starting or stopping": len(ends), "merged": len(merged)}
+
+
+def in_the_means(s: Stride) -> bool:
+    """Whether a stride counts in the summary's means: steady, and straight where its turn is
+    known (a shank's strides have none)."""
+    return s.steady and (s.straight or not np.isfinite(s.turn_deg))
 
 
 def stride_rows(strides: list[Stride]) -> list[tuple]:
@@ -107,11 +149,11 @@ def stride_rows(strides: list[Stride]) -> list[tuple]:
 
 
 def stride_summary(strides: list[Stride]) -> dict[str, dict[str, tuple[float, float, int]]]:
-    """``{'right'|'left'|'both': {parameter: (mean, SD, n)}}`` over the strides with a value
-    (NaN where none)."""
+    """``{'right'|'left'|'both': {parameter: (mean, SD, n)}}`` over the straight, steady strides
+    with a value (:func:`in_the_means`; NaN where none)."""
     out = {}
     for group in ("right", "left", "both"):
-        chosen = [s for s in strides if group in ("both", s.side)]
+        chosen = [s for s in strides if group in ("both", s.side) and in_the_means(s)]
         out[group] = {}
         for name in STRIDE_COLUMNS[3:10]:
             v = np.array([getattr(s, name) for s in chosen], dtype=float)
@@ -123,8 +165,8 @@ def stride_summary(strides: list[Stride]) -> dict[str, dict[str, tuple[float, fl
 
 def strides_csv(strides: list[Stride]) -> str:
     """``<name>_strides.csv``: :data:`STRIDE_COLUMNS`, one row per stride (SI units, 6
-    significant digits; ``straight`` as ``true``/``false``; an empty cell where a value is not
-    measured)."""
+    significant digits; ``straight`` and ``steady`` as ``true``/``false``; an empty cell where a
+    value is not measured)."""
     from pipeline.io.tables import csv_text
 
     def cell(v):
@@ -146,7 +188,8 @@ _SHOWN = {"stride_time_s": ("stride time (s)", 1.0, 2), "stance_share": ("stance
 def stride_table(strides: list[Stride]) -> list[str]:
     """The strides' mean ± SD per side and over both, as Markdown lines."""
     summary = stride_summary(strides)
-    n = {g: sum(1 for s in strides if g in ("both", s.side)) for g in summary}
+    n = {g: sum(1 for s in strides if g in ("both", s.side) and in_the_means(s))
+         for g in summary}  # fmt: skip
     lines = [f"| parameter | right (n={n['right']}) | left (n={n['left']}) | "
              f"both (n={n['both']}) |", "|---|---|---|---|"]  # fmt: skip
     for col, (label, scale, digits) in _SHOWN.items():
@@ -156,6 +199,9 @@ def stride_table(strides: list[Stride]) -> list[str]:
             cells.append("" if k == 0 else f"{scale * mean:.{digits}f} ± {scale * sd:.{digits}f}"
                          if k > 1 else f"{scale * mean:.{digits}f}")  # fmt: skip
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    turns = sum(1 for s in strides if not s.straight and np.isfinite(s.turn_deg))
-    lines.append(f"| strides turning {STRAIGHT_TURN_DEG:.0f} deg or more | | | {turns} |")
+    out = left_out(strides)
+    lines.append(f"| strides turning {STRAIGHT_TURN_DEG:.0f} deg or more | | | {out['turning']} |")
+    lines.append(f"| strides starting or stopping a walk | | | {out['starting or stopping']} |")
+    lines.append(f"| strides longer than {MERGED_SHARE:g} times the side's median (a missed "
+                 f"contact?) | | | {out['merged']} |")
     return lines

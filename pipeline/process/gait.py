@@ -30,7 +30,7 @@ import numpy as np
 
 from pipeline.analysis.foot_trajectory import FootTrajectory, foot_trajectory
 from pipeline.analysis.gait_events import GaitEvents, gait_events
-from pipeline.analysis.strides import Stride, foot_strides
+from pipeline.analysis.strides import MAX_STRIDE_S, Stride, foot_strides
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
@@ -87,7 +87,12 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
     if not sources:
         notes.append("no strides: no foot or shank sensor with raw signals")
     elif not strides:
-        notes.append("no strides: no walking found (no swing of a foot or shank)")
+        swings = {side: len(ev.swing) for side, ev in events.items() if len(ev.swing)}
+        notes.append("no strides: " + ("no walking found (no swing of a foot or shank)" if not
+                                       swings else "swings found (" + ", ".join(
+                                           f"{side} {n}" for side, n in swings.items())
+                                       + f") but no two contacts of one foot within "
+                                       f"{MAX_STRIDE_S:g} s of each other"))  # fmt: skip
     return Gait(sorted(strides, key=lambda s: s.start_s), events, paths, sources)
 
 

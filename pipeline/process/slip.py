@@ -74,7 +74,6 @@ deg, as much as the 22 deg of a belt turned by 30 deg on S02).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -82,31 +81,22 @@ from pipeline.filtering import lowpass
 from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR, SENSOR_TO_SEGMENT
 from pipeline.model.conventions import other_side
+from pipeline.process.slip_step import (
+    ALONE_DEG,
+    CERTAIN_SLIP_DEG,
+    MAX_STRIDE_S,
+    ROCKING_AXIS,
+    SLIP_DEG,
+    Slip,
+    larger,
+)
 
 __all__ = ["ALONE_DEG", "CERTAIN_SLIP_DEG", "MAX_STRIDE_S", "MIN_SIDE", "ROCKING_AXIS", "SLIP_DEG",
            "STRIDE_TOL", "Slip", "leg_slips", "legs_slips", "slip_step", "unchecked",
            "walking_strides"]
 
-#: A step beyond this (deg) is a slip: half as much again as the largest step measured without
-#: one (9.8, module docstring), under the 19-35 deg a 30 deg slip gives.
-SLIP_DEG = 15.0
-#: Beyond this step of its flexion axis (eq 1, deg) a leg sensor's slip is certain and the sensor
-#: excluded (below, and for a step of gravity alone, a flag that keeps it): half as much again as
-#: the largest axis step a leg sensor alone on its leg made on a faultless recording (S02 7.1,
-#: cut to start mid-walk; qmt 10.0; the simulated walks, cut short, 11.5), under the 24-30 deg of
-#: a 30 deg slip (S02, the simulated walk). Gravity at mid-stance steps with the movement itself
-#: (qmt's 10-30 s windows: 17-40 deg as its walk turns to a run, the axis 1-3 deg), and a slip
-#: about the flexion axis turns gravity alone: a flag. The pelvis's slip is never certain (module
-#: docstring).
-CERTAIN_SLIP_DEG = 18.0
-#: A step counts as a slip only while the leg's other sensors step less than this (deg) at the
-#: same split: a change of the walk itself (stairs, a slope, a turn) turns them all.
-ALONE_DEG = 0.5 * SLIP_DEG
 #: Strides needed on each side of a split.
 MIN_SIDE = 2
-#: A longer interval between initial contacts is a pause, not a stride (up to this, a missed
-#: contact joins two strides into one bin).
-MAX_STRIDE_S = 4.0
 #: The flexion axis's low-pass cut-off (Hz) and the vertical's, and the horizontal angular speed
 #: (rad/s) from which a sample counts (as :mod:`pipeline.calibration.flexion_axis`).
 AXIS_CUTOFF_HZ = 3.0
@@ -115,79 +105,6 @@ MIN_SPEED = 0.5
 #: A stride lasting longer or shorter than the leg's median by more than this share is not used
 #: for the pelvis's axis (eq 3).
 STRIDE_TOL = 0.25
-#: What the pelvis's axis (eq 3) is called in a finding.
-ROCKING_AXIS = "the axis it rocks about once a stride"
-
-
-@dataclass(frozen=True)
-class Slip:
-    """The largest step of one sensor's view of its segment: ``axis_deg`` (eq 1) and
-    ``gravity_deg`` (eq 2, NaN without foot rests) at the split ``time_s`` (the first stride
-    after it starts there), with ``before`` and ``after`` strides; ``others_deg``: the largest
-    step of the leg's other sensors at that split (0 without any); ``mirror_deg``: the step of
-    the other leg's sensor on the same segment at its split nearest in time (NaN without)."""
-
-    axis_deg: float
-    gravity_deg: float
-    time_s: float
-    before: int
-    after: int
-    others_deg: float = 0.0
-    mirror_deg: float = float("nan")
-    axis_name: str = "its segment's flexion axis"
-
-    @property
-    def deg(self) -> float:
-        return _larger(self.axis_deg, self.gravity_deg)
-
-    @property
-    def slipped(self) -> bool:
-        """Beyond :data:`SLIP_DEG`, and alone on its leg or on its side of the body
-        (:data:`ALONE_DEG`; module docstring)."""
-        return self.deg > SLIP_DEG and (self.others_deg < ALONE_DEG
-                                        or self.mirror_deg < ALONE_DEG)  # fmt: skip
-
-    @property
-    def certain(self) -> bool:
-        """A slip whose flexion axis (eq 1) turned beyond :data:`CERTAIN_SLIP_DEG`, of a leg
-        sensor: gravity at mid-stance turns with the movement, and the pelvis's rocking axis as
-        much where a walk starts, stops or turns (module docstring)."""
-        return (self.slipped and self.axis_name != ROCKING_AXIS
-                and self.axis_deg > CERTAIN_SLIP_DEG)  # fmt: skip
-
-    @property
-    def inconclusive(self) -> bool:
-        """Beyond :data:`SLIP_DEG` with the leg's other sensors and the other leg's stepping as
-        well: the movement changed (turns, shuffles), and a slip there would not be told apart."""
-        return self.deg > SLIP_DEG and not self.slipped
-
-    def evidence(self) -> str:
-        """What turned, where, for a finding: a slip, or a step that cannot be told from a change
-        of the movement (:attr:`inconclusive`)."""
-        turned = " and ".join(
-            f"{what} by {deg:.0f} deg" for what, deg in
-            ((f"{self.axis_name} turned", self.axis_deg),
-             ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))  # fmt: skip
-        mirror = (f", the other leg's by {self.mirror_deg:.0f}" if np.isfinite(self.mirror_deg)
-                  else "")  # fmt: skip
-        seen = (f"in its own frame {turned} between the {self.before} strides before t = "
-                f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
-                f"other sensors by {self.others_deg:.0f} at most{mirror}")
-        if self.inconclusive:
-            return ("not checked for a slip: " + seen + ": the movement itself changed (turns, "
-                    "shuffles?), and a slip would not be told from it")
-        if self.certain:
-            return seen + ": it slipped on its segment (a loose strap?)"
-        return seen + (f": it may have slipped on its segment (a loose strap?; certain beyond "
-                       f"{CERTAIN_SLIP_DEG:g} deg of a leg sensor's axis, never for the "
-                       "pelvis's, which a walk's start, stop or turn turns as much)")
-
-
-def _larger(*steps: float) -> float:
-    """The larger of a sensor's steps (eq 1, 2) that were seen; NaN when neither was."""
-    return max((d for d in steps if np.isfinite(d)), default=float("nan"))
-
-
 def _angle(a: np.ndarray, b: np.ndarray, signed: bool = True) -> float:
     """The angle (deg) between ``a`` and ``b`` (of their lines when not ``signed``); NaN when
     either is zero (a sensor's samples missing there)."""
@@ -282,7 +199,9 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
     """The split with the largest ``max(d_axis, d_g)`` (eq 1, 2)."""
     best = None
     for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
-        step = Slip(*_step_at(C, g, m), float(time[strides[m][0]]), m, len(strides) - m)
+        pause = float(time[strides[m][0]] - time[strides[m - 1][1]])
+        step = Slip(*_step_at(C, g, m), float(time[strides[m][0]]), m, len(strides) - m,
+                    pause_s=pause)  # fmt: skip
         if best is None or step.deg > best.deg:
             best = step
     return best
@@ -321,7 +240,7 @@ def _mirror_step(other, name: str, time_s: float, time: np.ndarray) -> float:
         return float("nan")
     starts = time[[a for a, _ in strides]]
     m = int(np.clip(np.argmin(np.abs(starts - time_s)), MIN_SIDE, len(strides) - MIN_SIDE))
-    return _larger(*_step_at(*views[mirror], m))
+    return larger(*_step_at(*views[mirror], m))
 
 
 def leg_slips(ctx, side: str, pelvis: bool = False) -> dict[str, Slip]:
@@ -341,7 +260,7 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
     out = {}
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
-        others = [_larger(*_step_at(*views[n], best.before)) for n in views
+        others = [larger(*_step_at(*views[n], best.before)) for n in views
                   if n not in (name, pelvis_name) and leg[n].complete]  # fmt: skip
         seen = [d for d in others if np.isfinite(d)]
         out[name] = dataclasses.replace(
