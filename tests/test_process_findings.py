@@ -19,4 +19,9 @@ def test_actions_are_applied_in_one_place_and_only_some_are_flags():
     assert found[0].line() == "sensor a: dead: x (excluded)"
     assert apply_findings(rec, found[2:]) is rec  # nothing to change: the same recording
     assert {a.value for a in Action} == {"excluded", "magnetometer not used",
-                                         "read as swapped back", "noted", "listed"}
+                                         "read as swapped back", "noted", "listed",
+                                         "orientation from its raw signals"}
+    q = SensorSignals(quat=np.tile([1.0, 0, 0, 0], (3, 1)), gyr=np.zeros((3, 3)))
+    rec = Recording(np.arange(3.0), 100.0, {"a": q})
+    out = apply_findings(rec, [Finding("a", "orientations", Action.ORIENTATION_FROM_SIGNALS, "")])
+    assert out.sensors["a"].quat is None and out.sensors["a"].gyr is q.gyr

@@ -226,7 +226,7 @@ def test_the_registry_names_every_check_with_its_scope():
 
     assert {n: c.scope for n, c in CHECKS.items()} == {
         "units": "recording", "quaternion order": "recording", "read": "sensor",
-        "dead": "sensor", "dropout": "sensor", "saturation": "sensor",
+        "dead": "sensor", "dropout": "sensor", "saturation": "sensor", "orientations": "sensor",
         "moves with its segment": "sensor", "slipped": "sensor", "crossed": "legs",
         "swapped": "legs"}
     assert {c.scope for c in CHECKS.values()} == set(SCOPES)
@@ -271,3 +271,31 @@ def test_the_real_recordings():
     assert {f.sensor for f in listed} >= set(read_recording(ximu3).sensors) - {"tibia_r_imu"}
     assert all("the movement itself changed" in f.evidence or "across a pause" in f.evidence
                for f in listed)  # fmt: skip
+
+
+@pytest.mark.dataset
+def test_one_sensors_quaternion_order_is_named_and_its_orientation_filtered():
+    """S02 with the right thigh's quaternions written x, y, z, w (the others right): named for
+    that sensor (its orientations turn unlike its gyroscope), its orientation from its raw signals
+    (6-D, aligned by the joints): every joint within 2 deg RMS of the faultless run (measured:
+    0.1-1.8, the right hip's rotation most)."""
+    from _helpers import s02_cut
+
+    from pipeline.process import mot_columns, process_recording
+
+    rec = s02_cut(0)
+    if rec is None:
+        pytest.skip("no S02 data")
+    s = rec.sensors["femur_r_imu"]
+    bad = rec.with_sensors({**rec.sensors, "femur_r_imu": s.replace(quat=s.quat[:, [1, 2, 3, 0]])})
+    z_up = {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)}
+    base, run = (process_recording(r, Measures("m", 1.72), **z_up) for r in (rec, bad))
+    (f,) = run.sensor_findings
+    assert (f.sensor, f.check, f.action) == ("femur_r_imu", "orientations",
+                                             "orientation from its raw signals")
+    assert any("orientations of ['femur_r_imu'] estimated from their raw signals" in n
+               for n in run.notes)  # fmt: skip
+    a, b = mot_columns(base), mot_columns(run)
+    moved = {k: np.degrees(np.sqrt(np.nanmean((a[k] - b[k]) ** 2))) for k in a
+             if not k.startswith("pelvis_t")}  # fmt: skip
+    assert max(moved.values()) < 2.0, moved

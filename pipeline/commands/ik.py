@@ -26,6 +26,7 @@ from pipeline.commands.ik_summary import summary_text
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
 from pipeline.io.formats import read_recording, recording_name
+from pipeline.io.lock import output_lock
 from pipeline.io.mot import write_mot
 from pipeline.io.recording import Recording
 from pipeline.io.tables import write_array_csv
@@ -92,18 +93,41 @@ def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
 
     ``recorder``: a :class:`~pipeline.viz.background.BackgroundRecording` the caller started
     early (the command-line program, before its imports; this closes it), else one is started
-    here for a short recording where forking is safe. Implausible results
+    here for a short recording where forking is safe. One run writes into a folder at a time
+    (:mod:`pipeline.io.lock`); the recording's own folder is refused. Implausible results
     (:mod:`pipeline.analysis.quality`) open the summary and go to stderr; with ``strict`` they
     raise :class:`~pipeline.errors.QualityError` and nothing is written.
     """
     inputs, outputs = settings.inputs, settings.outputs
     orientations, out_dir = Path(inputs.orientations), Path(outputs.out)
+    _not_into(orientations, out_dir)
     trial = load_orientations(orientations, inputs.sensor_map, inputs.ignore)
     static = None
     if inputs.static_trial is not None:
         static = load_orientations(inputs.static_trial, inputs.sensor_map, inputs.ignore)
     name = recording_name(orientations)
     output_dir(out_dir, create=False)
+    taken: list[str] = []
+    with output_lock(out_dir, f"pipeline ik of {orientations}", taken):
+        for note in taken:
+            print(f"note: {note}", file=sys.stderr)
+        return _write_run(trial, static, name, settings, recorder)
+
+
+def _not_into(recording: Path, out_dir: Path) -> None:
+    """Refuse outputs into a recording folder or below it (they would mix with its files, and
+    be read as part of it next time); beside a one-file recording they are welcome."""
+    if not recording.is_dir():
+        return
+    folder, out = recording.resolve(), out_dir.resolve()
+    if out == folder or folder in out.parents:
+        raise InputError("--out is in the recording's own folder: its outputs would mix with the "
+                         "recording's files; give another --out", file=out_dir, field="out")
+
+
+def _write_run(trial, static, name: str, settings: IKSettings, recorder) -> IKRun:
+    """:func:`run_settings`'s writing, its output folder locked (:mod:`pipeline.io.lock`)."""
+    outputs, out_dir = settings.outputs, Path(settings.outputs.out)
     previous = previous_outputs(out_dir, name)
     if previous and not outputs.overwrite:
         names = ", ".join(p.name for p in previous)

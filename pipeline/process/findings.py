@@ -27,6 +27,8 @@ class Action(str, Enum):
     MAGNETOMETER_NOT_USED = "magnetometer not used"
     #: Sensors named for each other's places are read under their right names.
     SWAPPED_BACK = "read as swapped back"
+    #: The sensor's own orientations are left out: its orientation comes from its raw signals.
+    ORIENTATION_FROM_SIGNALS = "orientation from its raw signals"
     #: A fault the run works around or cannot be sure of; the sensor is kept (a flag).
     NOTED = "noted"
     #: Said in the sensor table only (the reader's repairs, a check that could not run): not a
@@ -57,8 +59,9 @@ class Finding:
 
 
 def apply_findings(rec: Recording, findings: list[Finding]) -> Recording:
-    """The recording without its excluded sensors and with the magnetometers not used removed
-    (the other actions change no signal: a swap is read back by its own check)."""
+    """The recording without its excluded sensors, the magnetometers not used and the
+    orientations rejected removed (the other actions change no signal: a swap is read back by
+    its own check)."""
     sensors, changed = dict(rec.sensors), False
     for f in findings:
         if f.action == Action.EXCLUDED and f.sensor in sensors:
@@ -66,5 +69,8 @@ def apply_findings(rec: Recording, findings: list[Finding]) -> Recording:
             changed = True
         elif f.action == Action.MAGNETOMETER_NOT_USED and f.sensor in sensors:
             sensors[f.sensor] = sensors[f.sensor].replace(mag=None)
+            changed = True
+        elif f.action == Action.ORIENTATION_FROM_SIGNALS and f.sensor in sensors:
+            sensors[f.sensor] = sensors[f.sensor].replace(quat=None)
             changed = True
     return rec.with_sensors(sensors) if changed else rec

@@ -248,7 +248,8 @@ def _prepared(trial: Recording, static, opts: IKOptions) -> _Prepared:
     ctx, findings = run_checks(CheckContext(trial))
     trial, gait, windows = ctx.rec, ctx.gait, ctx.windows
     notes += ctx.gait_notes + ([short] if (short := too_short(gait.strides)) else [])
-    trial, static, oriented, world = _in_model_world(trial, static, opts, notes)
+    rejected = frozenset(f.sensor for f in findings if f.action == Action.ORIENTATION_FROM_SIGNALS)
+    trial, static, oriented, world = _in_model_world(trial, static, opts, notes, rejected)
     rotations, sensors = _segment_rotations(trial, notes)
     if sensors.pelvis and not oriented.filtered:  # the filter's world is vertical by construction
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
@@ -312,11 +313,11 @@ def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, no
     return standing_posture(trial, rotations, cal.at_pose, cal.pose, forward, lengths, legs, notes)
 
 
-def _in_model_world(trial, static, opts: IKOptions, notes: list[str]):
+def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=frozenset()):
     """Step 2: ``(trial, static, oriented, world)``: orientations estimated from raw signals
-    where asked or needed (:class:`~pipeline.process.signals.Orientations`), and every
-    orientation in the model's y-up world."""
-    oriented = orientations_from_signals(trial, opts.filter, notes)
+    where asked or needed (:class:`~pipeline.process.signals.Orientations`; ``rejected``: the
+    sensors whose own a check left out), and every orientation in the model's y-up world."""
+    oriented = orientations_from_signals(trial, opts.filter, notes, rejected=rejected)
     trial, filtered = oriented.recording, oriented.filtered
     if static is not None:
         notes += [f"static trial: {n}" for n in static.notes]

@@ -29,6 +29,10 @@ findings and the recording read back). Every finding's action is one of
   on. Gyroscope: **excluded** when more than :data:`MAX_SATURATED` of the samples are, else
   **noted**; accelerometer (heel strikes clip a +-8 g range for a sample or two): **noted**
   unless more than :data:`MAX_SATURATED`, then excluded.
+* ``orientations`` (:func:`~pipeline.process.recording_checks.turn_agreement`): a sensor whose
+  own orientations do not turn as its gyroscope does (a wrong component order, direction or
+  handedness of that sensor alone; the whole recording's order is refused first): its
+  orientation comes **from its raw signals** (its world then its own, aligned by the joints).
 * ``moves with its segment``: a sensor whose median angular speed (a foot's: its upper quartile,
   :data:`FOOT_QUANTILE`, as a walking foot rests through mid-stance) stays below
   :data:`MIN_SPEED_RATIO` of the slowest of its neighbours' while all of them move (a sensor that
@@ -72,7 +76,12 @@ from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.process.check_context import CheckContext
 from pipeline.process.findings import Action, Finding, apply_findings
-from pipeline.process.recording_checks import check_quaternion_order, check_units
+from pipeline.process.recording_checks import (
+    MIN_TURN_COSINE,
+    check_quaternion_order,
+    check_units,
+    turn_agreement,
+)
 from pipeline.process.slip import slip_step, unchecked
 from pipeline.process.swap import crossing_evidence, swap_evidence
 
@@ -248,6 +257,17 @@ def _repaired_on_reading(name: str, s: SensorSignals, ctx: CheckContext) -> Find
         for n in said))  # fmt: skip
 
 
+def _orientations(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    agreement = turn_agreement(s, ctx.rec.rate_hz)
+    if agreement is None or agreement >= MIN_TURN_COSINE:
+        return None
+    return Finding(name, "orientations", Action.ORIENTATION_FROM_SIGNALS,
+                   f"its orientations do not turn as its gyroscope does (median cosine "
+                   f"{agreement:.2f} between their rates; real sensors' 0.995-0.999): their "
+                   "component order (w, x, y, z), direction (sensor -> world) or handedness is "
+                   "wrong")  # fmt: skip
+
+
 def _slipped(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
     step = slip_step(name, ctx)
     if step is None:
@@ -306,6 +326,7 @@ CHECKS: dict[str, Check] = {
     "dead": Check("sensor", _dead),
     "dropout": Check("sensor", _dropout),
     "saturation": Check("sensor", _saturation),
+    "orientations": Check("sensor", _orientations),
     "moves with its segment": Check("sensor", _moves_with_segment),
     "slipped": Check("sensor", _slipped),
     "crossed": Check("legs", _crossed),  # first: ``swapped`` needs each leg's own sensors

@@ -78,15 +78,20 @@ def check_fields(trial: Recording, names: list[str]) -> dict[str, FieldTrust]:
 
 
 def orientations_from_signals(
-    trial: Recording, method: str | None, notes: list[str], *, every_sensor: bool = False
+    trial: Recording, method: str | None, notes: list[str], *, every_sensor: bool = False,
+    rejected: frozenset[str] = frozenset(),
 ) -> Orientations:
     """Every model sensor's orientation (module docstring): by ``method`` (None: only if no
     sensor has one, then :data:`DEFAULT_FILTER`). ``every_sensor``: all sensors, not only those
-    with a segment in the model."""
+    with a segment in the model. ``rejected``: the sensors whose own orientations a check left
+    out (:mod:`pipeline.process.sensor_checks`, ``orientations``): in a vendor's z-up world they
+    alone are filtered (6-D, their headings their own, aligned by the joints)."""
     names = list(trial.sensor_names) if every_sensor else list(known_segments(trial))
     have = [n for n in names if trial.sensors[n].quat is not None]
     if method is None and have and len(have) < len(names):
         missing = sorted(set(names) - set(have))
+        if set(missing) <= rejected and trial.header.get(WORLD) in Z_UP_WORLDS:
+            return _filtered_alone(trial, names, missing, notes)
         raise InputError(f"sensors {have} have orientations and {missing} do not: give --filter "
                          "vqf|pi to estimate all of them from their raw signals",
                          file=trial.source, field="filter")  # fmt: skip
@@ -118,6 +123,28 @@ def orientations_from_signals(
                  + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
     shared = frozenset(n for n, d in dims.items() if d == "9-D")
     return Orientations(trial.with_sensors(sensors), filtered, shared, fields)
+
+
+def _filtered_alone(trial: Recording, names: list[str], missing: list[str],
+                    notes: list[str]) -> Orientations:  # fmt: skip
+    """The recording's own orientations, and the ``missing`` sensors' from their raw signals
+    (:data:`DEFAULT_FILTER`, 6-D: a z-up world whose heading is each one's own, beside the
+    vendor's z-up world)."""
+    fields = check_fields(trial, names)
+    sensors = dict(trial.sensors)
+    for n in missing:
+        s = trial.sensors[n]
+        if s.gyr is None or s.acc is None:
+            raise InputError(f"sensor {n} has no gyroscope and accelerometer signals to estimate "
+                             "its orientation from", file=trial.source, field=n)  # fmt: skip
+        sensors[n] = s.replace(quat=filter_orientations(trial.time, s.gyr, s.acc, None,
+                                                        method=DEFAULT_FILTER))  # fmt: skip
+    notes.append(f"orientations of {missing} estimated from their raw signals by "
+                 f"{DEFAULT_FILTER.upper()}, 6-D (their own were rejected); the others' are the "
+                 "recording's")  # fmt: skip
+    shared = frozenset(n for n in names if n not in missing
+                       and (n not in fields or fields[n].trusted))  # fmt: skip
+    return Orientations(trial.with_sensors(sensors), None, shared, fields)
 
 
 #: A measured up axis is accepted within this angle (deg) of a world axis.
