@@ -18,6 +18,7 @@ from pipeline.calibration.conventions import (
     METHODS,
 )
 from pipeline.cli_options import PORT, add_ik_options, int_from
+from pipeline.cli_startup import recording_writer, single_threaded_blas
 from pipeline.errors import InputError, QualityError, RecordingError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS, STANDING_S
@@ -38,6 +39,9 @@ EXAMPLES = {
 }
 
 
+DEBUG_HELP = "show tracebacks on errors (default: one line; before or after the command)"
+
+
 def _version() -> str:
     from pipeline import __version__
 
@@ -51,13 +55,16 @@ EXAMPLE_NEEDS = {"orientations": "the simulate example's output",
 
 def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
     needs = f" (reads {EXAMPLE_NEEDS[name]})" if name in EXAMPLE_NEEDS else ""
-    return sub.add_parser(
+    p = sub.add_parser(
         name,
         help=help_,
         description=help_,
         epilog=f"example{needs}:\n  {EXAMPLES[name]}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    # after the command too (``pipeline ik ... --debug``); unset there, the program's stands
+    p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
+    return p
 
 
 def _add_anthropometrics(p: argparse.ArgumentParser) -> None:
@@ -79,7 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples:\n  " + "\n  ".join(EXAMPLES.values()),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="command")
 
@@ -209,12 +216,28 @@ def _pairs(items: list[str] | None, option: str) -> dict[str, str] | None:
     return parse_pairs(items, option) if items else None
 
 
+def _say(text: str) -> None:
+    """A command's report on standard output, after its outputs are written: a closed pipe
+    (``| head -1``) is said nothing of, as a Unix tool does, a full device (``> /dev/full``) on
+    stderr; neither is an error (the outputs are complete). Standard output then goes nowhere,
+    so that its flush at exit fails no more."""
+    import os
+
+    try:
+        print(text, flush=True)
+    except OSError as exc:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        if not isinstance(exc, BrokenPipeError):
+            print(f"warning: could not print to standard output ({exc.strerror or exc}); the "
+                  "outputs are written", file=sys.stderr)  # fmt: skip
+
+
 def _cmd_scale(args) -> int:
     from pipeline.commands.scale import run_scale
 
     line = run_scale(_measures(args), args.out, knee=args.knee,
                      knee_axis_femur=args.knee_axis_femur, knee_axis_tibia=args.knee_axis_tibia)
-    print(line)
+    _say(line)
     return 0
 
 
@@ -225,15 +248,16 @@ def _cmd_ik(args) -> int:
 
     values = {s.name: from_flag(s, getattr(args, s.name)) for s in all_specs()}
     settings = resolve_settings(args.config, values)
-    print(summary_text(run_settings(settings, recorder=args.recorder)))
+    _say(summary_text(run_settings(settings, recorder=args.recorder)))
     return 0
 
 
 def _cmd_calibrate(args) -> int:
     from pipeline.commands.calibrate import run_calibration
 
+    # its report is its output (no file): printing it failing is an error
     print(run_calibration(args.joint, args.imu1, args.imu2, args.method, args.seed, args.json,
-                          iterations=args.iterations, population=args.population))
+                          iterations=args.iterations, population=args.population), flush=True)
     return 0
 
 
@@ -245,14 +269,14 @@ def _cmd_simulate(args) -> int:
     if standing is None:  # a calibration pose where the motion's rest pose is standing
         standing = (STANDING_S if args.motion in STANDING_MOTIONS and args.duration_s > STANDING_S
                     else 0.0)  # fmt: skip
-    print(run_simulation(args.out, args.motion, args.duration_s, args.seed, standing))
+    _say(run_simulation(args.out, args.motion, args.duration_s, args.seed, standing))
     return 0
 
 
 def _cmd_orientations(args) -> int:
     from pipeline.commands.orientations import run_orientations
 
-    print(run_orientations(args.imu, args.out, filter=args.filter,
+    _say(run_orientations(args.imu, args.out, filter=args.filter,
                            sensor_map=_pairs(args.sensor_map, "--sensor-map"),
                            ignore=tuple(args.ignore)))  # fmt: skip
     return 0
@@ -264,21 +288,21 @@ def _cmd_batch(args) -> int:
 
     text, failed = run_batch(args.manifest, args.out, workers=args.workers,
                              scheduler=args.scheduler, force=args.force)  # fmt: skip
-    print(text)
+    _say(text)
     return 1 if failed else 0
 
 
 def _cmd_reproduce(args) -> int:
     from pipeline.commands.reproduce import run_reproduce
 
-    print(run_reproduce(args.paper, args.data, args.out, rerun_dir=args.rerun))
+    _say(run_reproduce(args.paper, args.data, args.out, rerun_dir=args.rerun))
     return 0
 
 
 def _cmd_demo(args) -> int:
     from pipeline.commands.demo import run_demo
 
-    print(run_demo(args.out, seed=args.seed, standing_s=args.standing_s))
+    _say(run_demo(args.out, seed=args.seed, standing_s=args.standing_s))
     return 0
 
 
@@ -300,8 +324,8 @@ _RECORDING_COMMANDS = {_cmd_ik, _cmd_demo}
 def main(argv: list[str] | None = None) -> int:
     """The ``pipeline`` program (``argv=None``: ``sys.argv``, run as a program)."""
     if argv is None:
-        _single_threaded_blas()
-    recorder = _recording_writer(argv)
+        single_threaded_blas()
+    recorder = recording_writer(argv)
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -321,41 +345,6 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if recorder is not None:
             recorder.close()
-
-
-#: BLAS thread pools the program sizes to one thread unless the user set them.
-BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-def _single_threaded_blas() -> None:
-    """One BLAS thread per process, unless the environment says otherwise: the commands' arrays
-    are small (3 x 3 rotations, joint-sized normal matrices, stacks of them), where BLAS threads
-    gain nothing, and the program runs a second process (the recording's writer, Dask workers)
-    on the other cores: two processes' spinning BLAS pools on two cores slowed each ~2x here.
-    Before NumPy is imported (its pool is sized then)."""
-    import os
-
-    for var in BLAS_THREADS:
-        os.environ.setdefault(var, "1")
-
-
-def _recording_writer(argv: list[str] | None):
-    """``pipeline ik`` run as the program, its recording wanted: the recording's writer forked
-    first, before the parser and the heavy imports, so that it imports NumPy, pyarrow and rerun's
-    native writer on the second core meanwhile (:mod:`pipeline.viz.background`; ``run_ik`` hands
-    it the job or closes it)."""
-    words = sys.argv[1:] if argv is None else []
-    if words[:1] != ["ik"] or any(w in ("--no-rerun", "-h", "--help") for w in words):
-        return None
-    from pipeline.viz.background import BackgroundRecording
-
-    return BackgroundRecording.start(warm=_warm_recording)
-
-
-def _warm_recording() -> None:
-    from pipeline.viz.scene import warm_recording  # no Pinocchio: the child only logs
-
-    warm_recording()
 
 
 def _run(args) -> int:

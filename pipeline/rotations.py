@@ -187,12 +187,13 @@ def axis_angle(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def matrix_from_quat(q: np.ndarray) -> np.ndarray:
     """Rotation matrices from scalar-first quaternions ``[w, x, y, z]``.
 
-    Quaternions are normalised first; a zero quaternion raises ``ValueError``.
+    Quaternions are normalised first; a zero or infinite quaternion raises ``ValueError``; NaN in,
+    NaN out (a sensor's missing sample).
     """
     q, single = _stack(q, 1)
     n = np.linalg.norm(q, axis=-1)
-    if np.any(~np.isfinite(n)) or np.any(n < 1e-12):
-        raise ValueError("zero or non-finite quaternion")
+    if np.any(np.isinf(q)) or np.any(n < 1e-12):
+        raise ValueError("zero or infinite quaternion")
     w, x, y, z = (q / n[:, None]).T
     out = np.empty((q.shape[0], 3, 3))
     out[:, 0, 0] = 1.0 - 2.0 * (y * y + z * z)

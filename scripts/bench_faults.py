@@ -11,12 +11,16 @@ orientations left out, so that a fault in the signals reaches the result). For e
 whether the run named it (a sensor-check finding, a quality flag, a note about that sensor, or a
 refusal), and the change of the joint angles against the undisturbed run, RMS over the trial
 (deg): the largest over the joints the faulty sensor does not observe ("untouched": target 0.5)
-and over those it observes. Target (issue 24): every fault detected and named.
+and over those it observes. Target (issue 24): every fault detected and named. Then the faults
+of time and of the file system on S02's files (issue 41; ``scripts/time_faults.py``): rows
+missing or cells empty for 0.1, 1 and 5 s, a sensor starting late or ending early, one sensor's
+quaternions x, y, z, w, two runs into one folder.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +31,9 @@ from pipeline.model.measures import Measures
 from pipeline.process import process_recording
 from pipeline.process.sides import mirrored
 from pipeline.rotations import exp3
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import time_faults  # noqa: E402
 
 #: The sensor each fault is injected into (a shank: it observes the knee and the ankle).
 TARGET = "tibia_r_imu"
@@ -277,9 +284,6 @@ def simulated_walk() -> tuple[Recording, Measures]:
 
 
 def s02(data: Path) -> tuple[Recording, Measures]:
-    import sys
-
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_gait import S02_MAP
 
     from pipeline.io.formats import read_recording
@@ -300,6 +304,7 @@ def main() -> None:
                    "wandering biases, the floor's field; 9-D)")  # fmt: skip
     if (args.data / "gaittoolbox_s02").exists():
         lines += bench(*s02(args.data), "S02 (the real walk, raw signals through VQF)")
+        lines += time_faults.section(args.data)
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)

@@ -118,3 +118,25 @@ def test_windows_whose_samples_disagree_are_left_out():
     bad[::2] = np.einsum("nij,nj->ni", rot_y(np.full(n // 2, 2.0)), u[::2])
     with pytest.raises(InputError, match="do not agree within any window"):
         heading_between(u, bad, 100.0, up=UP)
+
+
+def test_no_window_crosses_a_break_and_each_run_has_its_own_heading():
+    """A distal filter that started again after a gap (``breaks``): its heading jumps there.
+    Each run's windows alone give its heading (exact on both sides, where a window across the
+    break would average the two); a run without an informative window is NaN, not held."""
+    n = 1200
+    u = np.tile([1.0, 0.0, 0.0], (n, 1))
+    true = np.where(np.arange(n) < 600, 0.6, -2.0)  # the heading jumps at the gap
+    v = np.einsum("nij,nj->ni", rot_y(-true), u)
+    breaks = np.zeros(n, dtype=bool)
+    breaks[560:600] = True
+    v[560:600] = np.nan  # the distal sensor's gap
+    d = heading_between(u, v, 100.0, up=UP, breaks=breaks)
+    np.testing.assert_allclose(d.psi[:560], 0.6, atol=1e-12)
+    np.testing.assert_allclose(d.psi[600:], -2.0, atol=1e-12)
+    ignored = heading_between(u, v, 100.0, up=UP)  # without the break: windows mix the two
+    assert np.max(np.abs(ignored.psi[600:] + 2.0)) > 0.1
+    u_still = u.copy()
+    u_still[600:] = [0.0, 1.0, 0.0]  # vertical after the gap: nothing shows the heading there
+    d = heading_between(u_still, v, 100.0, up=UP, breaks=breaks)
+    assert np.isnan(d.psi[600:]).all() and np.isfinite(d.psi[:560]).all()

@@ -49,8 +49,6 @@ def _bad_files():
     repeated[20] = (rows[19][0], rows[20][1])
     zero_q = [(t, [[0, 0, 0, 0]] + q[1:]) if k == 5 else (t, q) for k, (t, q) in enumerate(rows)]
     big_q = [(t, [[3, 0, 0, 0]] + q[1:]) if k == 5 else (t, q) for k, (t, q) in enumerate(rows)]
-    nan_gap = [(t, [[np.nan] * 4] + q[1:]) if 10 <= k < 40 else (t, q)
-               for k, (t, q) in enumerate(rows)]  # fmt: skip
     full = _sto(rows)
     return {
         "empty": ("", "empty"),
@@ -60,7 +58,6 @@ def _bad_files():
         "repeated time": (_sto(repeated), "time"),
         "zero quaternion": (_sto(zero_q), "quaternion"),
         "non-unit quaternion": (_sto(big_q), "unit"),
-        "long NaN gap": (_sto(nan_gap), "gap"),
         "rate mismatch": (_sto(_rows(dt=0.02)), "rate"),
     }
 
@@ -283,21 +280,6 @@ def test_every_ik_flag_reaches_the_options(monkeypatch, tmp_path):
     assert seen["settings"].outputs.rerun is False
 
 
-def test_program_runs_blas_single_threaded_unless_told(monkeypatch):
-    """Run as a program, BLAS pools default to one thread (the program's two processes would
-    spin against each other on two cores); a user's setting is kept."""
-    from pipeline.cli import BLAS_THREADS, _single_threaded_blas
-
-    for var in BLAS_THREADS:
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("OMP_NUM_THREADS", "4")
-    _single_threaded_blas()
-    import os
-
-    assert os.environ["OPENBLAS_NUM_THREADS"] == "1" and os.environ["MKL_NUM_THREADS"] == "1"
-    assert os.environ["OMP_NUM_THREADS"] == "4"
-
-
 def test_view_refuses_what_is_not_a_whole_recording(tmp_path, capsys):
     (tmp_path / "notes.rrd").write_text("hello")
     assert main(["view", str(tmp_path / "notes.rrd")]) == 2
@@ -372,3 +354,34 @@ def test_a_full_disk_is_one_line_and_exit_2_never_a_hang(full_disk):
         assert done.stderr.strip().splitlines()[-1] == (
             "error: cannot write the outputs: No space left on device")
         assert time.monotonic() - t0 < 30 and list(full_disk.iterdir()) == []
+
+
+def test_debug_after_the_command_shows_the_traceback(tmp_path):
+    """``--debug`` works after the command as before it (refused there before)."""
+    args = ["scale", "--sex", "m", "--height-m", "1.75", "--knee-axis-femur", "0", "0", "0",
+            "--out", str(tmp_path / "m.urdf")]  # fmt: skip
+    assert main(args) == 2
+    for where in (["--debug", *args], [*args, "--debug"]):
+        with pytest.raises(Exception, match="knee"):
+            main(where)
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_a_report_that_cannot_be_printed_after_the_outputs_is_not_an_error(tmp_path):
+    """``> /dev/full`` and ``| head -0`` after the model is written: exit 0 (an error before,
+    'cannot write the outputs', with every output written); the full device said on stderr,
+    the closed pipe not."""
+    import subprocess
+    import sys
+
+    args = [sys.executable, "-m", "pipeline", "scale", "--sex", "m", "--height-m", "1.7"]
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([*args, "--out", str(tmp_path / "a.urdf")], stdout=full,
+                           stderr=subprocess.PIPE, text=True)  # fmt: skip
+    assert r.returncode == 0 and (tmp_path / "a.urdf").exists()
+    assert r.stderr.strip() == ("warning: could not print to standard output (No space left on "
+                                "device); the outputs are written")
+    p = subprocess.Popen([*args, "--out", str(tmp_path / "b.urdf")], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)  # fmt: skip
+    p.stdout.close()  # the reader gone before the report
+    assert p.wait() == 0 and p.stderr.read() == "" and (tmp_path / "b.urdf").exists()

@@ -218,3 +218,21 @@ def test_a_service_that_is_not_a_dask_scheduler_is_refused_within_the_timeout(tr
     finally:
         server.close()
     assert time.time() - t0 < 20
+
+
+def test_a_row_whose_recording_comes_from_its_config(trials, tmp_path):
+    """An empty orientations cell with a config that gives it (before: written to s1/None/ and
+    never skipped): the folder is named after the config's recording, a rerun skips it; a row
+    with neither is refused naming its line."""
+    cfg = tmp_path / "s1.toml"
+    cfg.write_text(f'[ik]\norientations = "{trials / "walk0.sto"}"\nknee = "free"\n')
+    m = _manifest(tmp_path, [f"s1,m,1.75,,{cfg}"], header="subject,sex,height_m,orientations,"
+                                                          "config")  # fmt: skip
+    out = tmp_path / "out"
+    text, failed = run_batch(m, out, workers=1, progress=False)
+    assert failed == 0 and (out / "s1" / "walk0" / "walk0_ik.mot").is_file()
+    assert not (out / "s1" / "None").exists()
+    assert "1 skipped" in run_batch(m, out, workers=1, progress=False)[0]
+    bare = _manifest(tmp_path, ["s1,m,1.75,,"], header="subject,sex,height_m,orientations,config")
+    with pytest.raises(InputError, match=r"field orientations \(line 2\): expected a recording"):
+        read_manifest(bare)

@@ -213,3 +213,42 @@ def test_a_second_run_into_the_same_folder_is_refused_or_replaces_the_first(tmp_
     assert "imu.osim" not in {p.name for p in out.iterdir()}  # the first run's, not rewritten
     assert (out / "notes.txt").read_text() == "mine"  # not an output of this recording
     assert "overwrite" not in (out / "imu_config.toml").read_text()
+
+
+@pytest.mark.dataset
+def test_a_dropout_is_blank_named_and_the_rest_kept(tmp_path, capsys):
+    """OpenSense's walk with 1 s of the right shank's cells empty (a radio dropout): the run
+    completes, one warning names the sensor and the span, the right knee and ankle are blank
+    over it in the .mot, every other joint is as in the faultless run."""
+    import numpy as np
+
+    from pipeline.io.mot import read_mot
+
+    if not WALK.exists():
+        pytest.skip("../shared/data/opensim not present")
+    lines = WALK.read_text().splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("time"))
+    col = lines[head].split("\t").index("tibia_r_imu")
+    for i in range(head + 1 + 1000, head + 1 + 1100):
+        cells = lines[i].split("\t")
+        cells[col] = ""
+        lines[i] = "\t".join(cells)
+    holed = tmp_path / "holed.sto"
+    holed.write_text("\n".join(lines) + "\n")
+    args = ["--sex", "f", "--height-m", "1.68", "--sensor-to-model", "-1.5708", "0", "0",
+            "--no-rerun"]  # fmt: skip
+    assert main(["ik", "--orientations", str(WALK), *args, "--out", str(tmp_path / "a")]) == 0
+    capsys.readouterr()
+    assert main(["ik", "--orientations", str(holed), *args, "--out", str(tmp_path / "b")]) == 0
+    err = capsys.readouterr().err
+    said = [line for line in err.splitlines() if "dropout" in line]
+    assert len(said) == 1 and "tibia_r_imu" in said[0] and "10.00-10.99 s" in said[0], err
+    a = read_mot(tmp_path / "a" / "xsens_walking_orientations_ik.mot").columns
+    b = read_mot(tmp_path / "b" / "holed_ik.mot").columns
+    gap = slice(1000, 1100)
+    for name in ("knee_angle_r", "ankle_angle_r"):
+        assert np.isnan(b[name][gap]).all()
+        assert np.isfinite(np.delete(b[name], range(1000, 1100))).all()
+    for name in ("knee_angle_l", "ankle_angle_l", "hip_flexion_r", "hip_flexion_l"):
+        assert np.isfinite(b[name]).all()
+        assert np.max(np.abs(np.asarray(b[name]) - np.asarray(a[name]))) < 0.5, name

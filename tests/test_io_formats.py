@@ -149,3 +149,28 @@ def test_map_by_name_or_unique_part_and_aliases():
 def test_unmatched_ambiguous_or_duplicate_names_are_refused(names, mapping, message):
     with pytest.raises(InputError, match=message):
         apply_sensor_map(_rec(*names), mapping)
+
+
+def test_a_sensor_map_that_is_not_a_mapping_is_named(tmp_path):
+    """``sensor_map`` given as the CLI's text (an AttributeError before)."""
+    with pytest.raises(InputError, match=r"field sensor_map: expected a mapping .* got str "
+                                         r"'pelvis_imu=00B40B91'"):
+        read_recording(tmp_path, "pelvis_imu=00B40B91")
+
+
+def test_an_ximu3_folder_mapped_by_device_id():
+    """x-IMU3 device folders ``<label> <device id> (<interface>)``: a map by the device id, as
+    documented, names them (refused before: only the labels were matched)."""
+    folder = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ximu3_lower_body"
+    if not folder.exists():
+        pytest.skip("../shared/data/ximu3_lower_body not present")
+    ids = {"pelvis_imu": "64F0EDBF", "tibia_r_imu": "64F61B2A", "femur_r_imu": "64F61C2E",
+           "calcn_r_imu": "64F619FB", "femur_l_imu": "64F61CC4", "tibia_l_imu": "64F61CB3",
+           "calcn_l_imu": "64F0EBCE"}  # fmt: skip
+    by_id, by_label = read_recording(folder, ids), read_recording(folder)
+    assert set(by_id.sensor_names) == set(ids)
+    for name in ids:
+        np.testing.assert_array_equal(by_id.sensors[name].gyr, by_label.sensors[name].gyr)
+    swapped = dict(ids, tibia_r_imu="64F61CB3", tibia_l_imu="64F61B2A")  # a map decides
+    np.testing.assert_array_equal(read_recording(folder, swapped).sensors["tibia_r_imu"].gyr,
+                                  by_label.sensors["tibia_l_imu"].gyr)  # fmt: skip

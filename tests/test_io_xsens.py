@@ -135,11 +135,14 @@ def test_dropped_packets_filled_and_reported(tmp_path):
     np.testing.assert_allclose(rec.gyr, gyr, atol=1e-6)
 
 
-def test_long_packet_loss_refused(tmp_path):
+def test_long_packet_loss_left_missing_and_noted(tmp_path):
     t, R, acc, gyr = _motion(100)
-    p = _write(tmp_path / "d.txt", R, acc, gyr, drop=tuple(range(30, 60)))
-    with pytest.raises(InputError, match=r"gap of 30 missing samples \(0\.3 s\) from t=0\.3 s"):
-        xsens.read_xsens_txt(p)
+    rec = xsens.read_xsens_txt(_write(tmp_path / "d.txt", R, acc, gyr, drop=tuple(range(30, 60))))
+    assert rec.time.size == 100
+    assert np.isnan(rec.quat[30:60]).all() and np.isnan(rec.gyr[30:60]).all()
+    assert np.isfinite(rec.quat[:30]).all() and np.isfinite(rec.quat[60:]).all()
+    assert any("missing 30 sample(s) (0.3 s) from t=0.3 s to t=0.59 s" in n and "not bridged" in n
+               for n in rec.notes)  # fmt: skip
 
 
 def test_repeated_packet_counter_refused(tmp_path):
@@ -295,20 +298,48 @@ def test_trial_from_several_sensors(tmp_path):
         read_recording(tmp_path, {"pelvis_imu": "00B421AF"})
 
 
-def test_sensors_of_different_lengths_keep_the_span_all_cover(tmp_path):
-    """Files of one station share the packet counter: a file that stops early crops the trial
-    to the samples every sensor has (not a refusal)."""
+def test_a_sensor_that_stops_early_or_starts_late_is_missing_there(tmp_path):
+    """Files of one station share the packet counter: the trial spans every sensor's samples;
+    a file that stops early or starts late leaves its sensor missing there (NaN, never bridged),
+    and a note says so (not a refusal, not a crop)."""
     from pipeline.io.formats import read_recording
 
     t, R, acc, gyr = _motion(60)
     _write(tmp_path / "a_1.txt", R, acc, gyr)
-    _write(tmp_path / "a_2.txt", R[:50], acc[:50], gyr[:50])
+    _write(tmp_path / "a_2.txt", R[:40], acc[:40], gyr[:40])
     trial = read_recording(tmp_path, {"pelvis_imu": "a_1", "femur_r_imu": "a_2"})
-    assert trial.n_samples == 50
-    np.testing.assert_allclose(trial.time, t[:50], atol=1e-9)
-    later = np.arange(3593, 3593 + 50)  # the second sensor's first packet 10 samples later
-    _write(tmp_path / "a_2.txt", R[10:], acc[10:], gyr[10:], counter=later)
+    assert trial.n_samples == 60
+    np.testing.assert_allclose(trial.time, t, atol=1e-9)
+    femur = trial.sensors["femur_r_imu"].quat
+    assert np.isnan(femur[40:]).all() and _err(femur[:40], R[:40]).max() < 2e-5
+    assert "femur_r_imu ends 0.20 s early: missing there, not bridged" in trial.notes
+    later = np.arange(3583 + 20, 3583 + 60)  # the second sensor's first packet 20 samples later
+    _write(tmp_path / "a_2.txt", R[20:], acc[20:], gyr[20:], counter=later)
     trial = read_recording(tmp_path, {"pelvis_imu": "a_1", "femur_r_imu": "a_2"})
-    assert trial.n_samples == 50
-    assert _err(trial.sensors["pelvis_imu"].quat, R[10:]).max() < 2e-5
-    assert _err(trial.sensors["femur_r_imu"].quat, R[10:]).max() < 2e-5
+    assert trial.n_samples == 60
+    assert _err(trial.sensors["pelvis_imu"].quat, R).max() < 2e-5
+    femur = trial.sensors["femur_r_imu"].quat
+    assert np.isnan(femur[:20]).all() and _err(femur[20:], R[20:]).max() < 2e-5
+    assert "femur_r_imu starts 0.20 s late: missing there, not bridged" in trial.notes
+
+
+def test_empty_orientation_columns_are_read_as_raw_signals(tmp_path):
+    """An export whose Quat_ columns are there but empty (the raw signals complete): read as
+    raw signals, said in the notes (refused before: 'no finite values at all')."""
+    t, R, acc, gyr = _motion(50)
+    p = _write(tmp_path / "q.txt", R, acc, gyr, orientation="quaternion")
+    lines = p.read_text().splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("PacketCounter"))
+    cols = lines[head].split("\t")
+    quat = [k for k, c in enumerate(cols) if c.startswith("Quat_")]
+    assert len(quat) == 4
+    for i in range(head + 1, len(lines)):
+        cells = lines[i].split("\t")
+        for k in quat:
+            cells[k] = ""
+        lines[i] = "\t".join(cells)
+    p.write_text("\n".join(lines) + "\n")
+    rec = xsens.read_xsens_txt(p)
+    assert rec.sensor.quat is None
+    np.testing.assert_allclose(rec.gyr, gyr, atol=1e-6)
+    assert any("the orientation columns are empty: read as raw signals" in n for n in rec.notes)

@@ -115,3 +115,25 @@ def test_a_measured_pelvis_width_places_the_hip_centres():
     assert default.right_hip[2] - default.left_hip[2] == pytest.approx(0.157, abs=5e-4)
     with pytest.raises(InputError, match="looks like centimetres"):
         Measures("m", 1.72, pelvis_width_m=24.2)
+
+
+@pytest.mark.parametrize("sex", ["m", "f"])
+def test_every_accepted_height_scales_with_the_bodys_proportions(sex):
+    """Heights 1.0-2.5 m (all accepted) give a model: beyond the regression's heights (Wang's
+    subjects' and 0.1 m) the landmarks at the nearest bound scaled by the heights' ratio, so the
+    segments keep that bound's proportions; within them the equations themselves (before, a
+    1.2 m woman was refused for a thigh of 12 % of her height)."""
+    from pipeline.model.scaling import REGRESSION_HEIGHTS_M
+
+    low, high = REGRESSION_HEIGHTS_M[sex]
+    share = {}
+    for h in (1.0, 1.2, low, 1.7, high, 2.2, 2.5):
+        g, _ = geometry_from_measures(Measures(sex, h))
+        share[h] = (g.thigh_length / h, g.shank_length / h)
+    for h, bound in ((1.0, low), (1.2, low), (2.2, high), (2.5, high)):
+        np.testing.assert_allclose(share[h], share[bound], rtol=1e-12)
+    from pipeline.model.anthropometry import predict_landmarks
+
+    within = geometry_from_measures(Measures(sex, 1.7))[1].femur["EFM"]
+    np.testing.assert_array_equal(within, predict_landmarks(Measures(sex, 1.7)).femur["EFM"])
+    assert share[1.2][0] != pytest.approx(share[1.7][0])  # the proportions do vary within

@@ -245,14 +245,14 @@ def test_a_hip_that_does_not_align_takes_the_other_thighs_heading(walk, monkeypa
     from pipeline.errors import InputError
 
     trial, raw, normal = walk
-    ball = ha._ball
+    ball = ha.ball_heading
 
     def refused_right_hip(trial_, R_1, R_2, prox, dist, method):
         if dist == "right_femur":
             raise InputError("the two sensors' views of it do not agree within any window")
         return ball(trial_, R_1, R_2, prox, dist, method)
 
-    monkeypatch.setattr(ha, "_ball", refused_right_hip)
+    monkeypatch.setattr(ha, "ball_heading", refused_right_hip)
     run = process_recording(raw, SUBJECT, filter="vqf")
     notes = " ".join(run.notes)
     assert "right hip: femur sensor's heading not aligned" in notes
@@ -284,14 +284,14 @@ def test_both_hips_refused_the_pelvis_line_puts_the_thighs_in_its_heading(monkey
     from pipeline.errors import InputError
     from pipeline.simulate.artefacts import Artefacts
 
-    ball = ha._ball
+    ball = ha.ball_heading
 
     def refused_hips(trial_, R_1, R_2, prox, dist, method):
         if dist.endswith("_femur"):
             raise InputError("the two sensors' views of it do not agree within any window")
         return ball(trial_, R_1, R_2, prox, dist, method)
 
-    monkeypatch.setattr(ha, "_ball", refused_hips)
+    monkeypatch.setattr(ha, "ball_heading", refused_hips)
 
     geometry, _ = geometry_from_measures(SUBJECT)
     sk = Skeleton.build(geometry, knee="free", root="freeflyer")

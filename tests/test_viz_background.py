@@ -122,3 +122,21 @@ def test_a_child_that_hangs_or_dies_ends_the_wait_in_one_line():
         with pytest.raises(RecordingError, match=r"its writer was killed \(signal 9"):
             worker.wait()
         assert time.monotonic() - t0 < 5
+
+
+def test_a_writer_stopped_by_ctrl_c_or_sigterm_is_the_commands_interruption():
+    """Ctrl-C and SIGTERM reach the whole process group, the writer sometimes first: its death
+    by them is the command's interruption (exit 130 or 143), not a failed recording (exit 2 in
+    5 of 30 tries before)."""
+    import signal
+
+    from pipeline.errors import Terminated
+
+    for sig, raised in ((signal.SIGINT, KeyboardInterrupt), (signal.SIGTERM, Terminated)):
+        worker = BackgroundRecording.start()
+        worker.submit(_sleep, 60)
+        time.sleep(0.2)
+        os.kill(worker.pid, sig)
+        with pytest.raises(raised):
+            worker.wait()
+        assert not _alive(worker.pid)

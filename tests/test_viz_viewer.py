@@ -62,6 +62,26 @@ def test_busy_port_refused_before_anything_is_printed(rrd, capsys):
     assert capsys.readouterr().out == ""
 
 
+def test_a_port_a_closed_server_left_in_time_wait_is_free():
+    """A viewer just closed leaves its port in TIME_WAIT (the server closed first): free to the
+    next viewer, which binds with SO_REUSEADDR (refused for a minute before)."""
+    import socket
+
+    from pipeline.viz.viewer import port_in_use
+
+    server = socket.socket()
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    port = server.getsockname()[1]
+    client = socket.create_connection(("127.0.0.1", port))
+    conn, _ = server.accept()
+    conn.close()  # the server's side closes first: its port goes to TIME_WAIT
+    server.close()
+    client.close()
+    assert not port_in_use(port)
+
+
 def test_native_viewer_without_display_hints_web(rrd, monkeypatch):
     from pipeline.viz import viewer
 

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import InputError
+from pipeline.io.gaps import true_runs
 from pipeline.rotations import exp3, normalize
 
 __all__ = [
@@ -91,7 +92,7 @@ class HeadingDrift:
     @property
     def drift_deg(self) -> float:
         """Range of ``psi`` over the trial (deg): how far the two headings drifted apart."""
-        return float(np.degrees(np.ptp(self.psi)))
+        return float(np.degrees(np.nanmax(self.psi) - np.nanmin(self.psi)))
 
 
 def turn_about_vertical(R: np.ndarray, psi: np.ndarray, up: np.ndarray) -> np.ndarray:
@@ -110,20 +111,23 @@ def hinge_heading(
     *,
     up: np.ndarray = (0.0, 1.0, 0.0),
     window_s: float = WINDOW_S,
+    breaks: np.ndarray | None = None,
 ) -> HeadingDrift:
     """Eq (1) of the module docstring for a hinge: ``u = R_1 j_1``, ``v = R_2 j_2``.
 
     ``R_1``, ``R_2``: (N, 3, 3) sensor -> world orientations of the proximal and distal sensor
     (filter output, world vertical ``up``); ``axis_1``, ``axis_2``: the hinge axis in each
     sensor's frame, signed alike (both pointing to the subject's right, say). Windows whose axis
-    is too close to vertical (:data:`MIN_HORIZONTAL`) are skipped (:func:`heading_between`)."""
+    is too close to vertical (:data:`MIN_HORIZONTAL`) are skipped; ``breaks`` as
+    :func:`heading_between` takes them."""
     R_1, R_2 = np.asarray(R_1, float), np.asarray(R_2, float)
     if R_1.shape != R_2.shape or R_1.ndim != 3 or R_1.shape[1:] != (3, 3):
         raise InputError(f"expected two (N, 3, 3) orientation series of one length, got "
                          f"{R_1.shape} and {R_2.shape}", field="orientations")  # fmt: skip
     u = R_1 @ normalize(np.asarray(axis_1, float))
     v = R_2 @ normalize(np.asarray(axis_2, float))
-    return heading_between(u, v, rate_hz, up=up, window_s=window_s, min_weight=MIN_HORIZONTAL)
+    return heading_between(u, v, rate_hz, up=up, window_s=window_s, min_weight=MIN_HORIZONTAL,
+                           breaks=breaks)
 
 
 def heading_between(
@@ -135,6 +139,7 @@ def heading_between(
     window_s: float = WINDOW_S,
     min_weight: float = MIN_HORIZONTAL,
     min_agreement: float = MIN_AGREEMENT,
+    breaks: np.ndarray | None = None,
 ) -> HeadingDrift:
     """Eq (1) on windows of ``window_s`` (half overlapping) for world vectors ``u`` (N, 3), seen
     by the proximal sensor, and ``v``, the same vector seen by the distal one.
@@ -142,8 +147,12 @@ def heading_between(
     A window is informative when its mean ``|u^h| |v^h|`` is at least ``min_weight`` (units of
     ``u`` times ``v``) and its samples agree (``min_agreement``, :data:`MIN_AGREEMENT`); ``psi``
     is interpolated linearly between the informative windows' centres (held at the ends). Rows
-    with NaN are ignored. Refused (:class:`InputError`) when no window is informative, saying
-    why. The residuals of :class:`HeadingDrift` are over the informative windows' samples."""
+    with NaN are ignored. ``breaks`` (N,) bool: rows across which the heading may jump (a filter
+    that started again after a sensor's gap, with a heading of its own): no window crosses them,
+    each run between them has its own headings, NaN over a run without an informative window
+    (:func:`_psi_by_runs`). Refused
+    (:class:`InputError`) when no window is informative, saying why. The residuals of
+    :class:`HeadingDrift` are over the informative windows' samples."""
     u, v = np.asarray(u, float), np.asarray(v, float)
     if u.shape != v.shape or u.ndim != 2 or u.shape[1] != 3:
         raise InputError(f"expected two (N, 3) vector series of one length, got {u.shape} and "
@@ -162,13 +171,12 @@ def heading_between(
     weight = np.linalg.norm(u_h, axis=1) * np.linalg.norm(v_h, axis=1)
 
     width = max(2, int(round(window_s * rate_hz)))
-    hop = max(1, width // 2)
-    starts = np.arange(0, max(n - width, 0) + 1, hop)
+    runs = [(0, n)] if breaks is None or not np.any(breaks) else true_runs(~np.asarray(breaks))
+    windows = _windows(runs, width)
     centres, angles = [], []
     used_rows = np.zeros(n, dtype=bool)
     horizontal = 0
-    for s in starts:
-        rows = slice(s, min(s + width, n))
+    for rows in windows:
         count = int(ok[rows].sum())
         if count == 0 or weight[rows].sum() / count < min_weight:
             continue
@@ -187,7 +195,7 @@ def heading_between(
         raise InputError(f"the two sensors' views of it do not agree within any window "
                          f"(agreement < {min_agreement:g}): the joint does not hold the constraint",
                          field="orientations")  # fmt: skip
-    psi = np.interp(np.arange(n), centres, np.unwrap(angles))
+    psi = _psi_by_runs(runs, n, centres, angles)
     sel = ok & used_rows
 
     def rms_deg(turn: np.ndarray) -> float:
@@ -199,8 +207,35 @@ def heading_between(
     el_u = np.arcsin(np.clip(_unit(u[sel]) @ g, -1, 1))
     el_v = np.arcsin(np.clip(_unit(v[sel]) @ g, -1, 1))
     return HeadingDrift(psi, rms_deg(psi), rms_deg(mean_psi),
-                        float(np.degrees(np.sqrt(np.mean((el_u - el_v) ** 2)))), len(starts),
+                        float(np.degrees(np.sqrt(np.mean((el_u - el_v) ** 2)))), len(windows),
                         len(angles))  # fmt: skip
+
+
+def _psi_by_runs(runs: list[tuple[int, int]], n: int, centres: list[float],
+                 angles: list[float]) -> np.ndarray:  # fmt: skip
+    """``psi`` per row: within each run from that run's informative windows alone (interpolated
+    between their centres, held at the run's ends), NaN over a run without one (the heading is
+    not observed there); the break rows between runs interpolated across (a sensor missing
+    there)."""
+    psi = np.interp(np.arange(n), centres, np.unwrap(angles))
+    if len(runs) < 2:
+        return psi
+    c, ang = np.asarray(centres), np.asarray(angles)
+    for a, b in runs:
+        mine = (c >= a) & (c < b)
+        rows = np.arange(a, b)
+        psi[a:b] = np.interp(rows, c[mine], np.unwrap(ang[mine])) if mine.any() else np.nan
+    return psi
+
+
+def _windows(runs: list[tuple[int, int]], width: int) -> list[slice]:
+    """Half-overlapping windows of ``width`` rows within each run (one window of a run shorter
+    than ``width``)."""
+    hop = max(1, width // 2)
+    out = []
+    for a, b in runs:
+        out += [slice(s, min(s + width, b)) for s in range(a, max(b - width, a) + 1, hop)]
+    return out
 
 
 def _unit(x: np.ndarray) -> np.ndarray:

@@ -122,13 +122,29 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
             else:
                 row[key] = from_cell(columns[key], value, path.parent, path, line) if value \
                     else None
-        if row.get("orientations") is not None:
-            from pipeline.commands.ik import recording_name
+        row["orientations"] = _orientations_of(row, path, line)
+        from pipeline.commands.ik import recording_name
 
-            path_component(recording_name(str(row["orientations"])), path,
-                           f"orientations (line {line})")  # fmt: skip
+        path_component(recording_name(str(row["orientations"])), path,
+                       f"orientations (line {line})")  # fmt: skip
         rows.append(row)
     return rows
+
+
+def _orientations_of(row: Mapping[str, object], path: Path, line: int) -> object:
+    """The row's recording: its cell, else its configuration file's ``[ik] orientations`` (the
+    row's folder is named after it), else refused naming the line."""
+    if row.get("orientations") is not None:
+        return row["orientations"]
+    if row.get("config") is not None:
+        from pipeline.io.config import read_config
+        from pipeline.process.options import all_specs
+
+        given = read_config(row["config"], all_specs()).get("orientations")
+        if given is not None:
+            return given
+    raise InputError("expected a recording, in the cell or in the row's config ([ik] "
+                     "orientations)", file=path, field=f"orientations (line {line})")
 
 
 def path_component(name: str, file: Path, field: str) -> str:

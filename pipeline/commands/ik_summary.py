@@ -55,8 +55,8 @@ def summary_text(run: IKRun) -> str:
                   "| joint | from | to | drift | constraint residual | with a constant heading |",
                   "|---|---|---|---|---|---|"]  # fmt: skip
         for key, d in run.heading_drifts.items():
-            lines.append(f"| {key.replace('_', ' ')} | {np.degrees(d.psi.min()):.1f} | "
-                         f"{np.degrees(d.psi.max()):.1f} | {d.drift_deg:.1f} | "
+            lines.append(f"| {key.replace('_', ' ')} | {np.degrees(np.nanmin(d.psi)):.1f} | "
+                         f"{np.degrees(np.nanmax(d.psi)):.1f} | {d.drift_deg:.1f} | "
                          f"{d.residual_deg:.2f} | {d.before_deg:.2f} |")  # fmt: skip
         lines.append("")
     if run.knee_calibrations:

@@ -240,12 +240,14 @@ def check_quaternions(
     field: str | None = None,
     first_line: int | None = None,
     note_above: float = 1e-3,
+    allow_missing: bool = False,
 ) -> np.ndarray:
     """Check and clean scalar-first quaternions ``(N, 4)``; returns unit, sign-continuous ones.
 
-    Refuses non-finite and zero quaternions, and norms outside ``norm_range`` ("not unit
-    quaternions (norm x at row r)"). Norms inside the range are normalised; a deviation larger
-    than ``note_above`` is noted. Hemisphere flips (q -> -q) are removed and noted.
+    Refuses non-finite (unless ``allow_missing``: such rows are missing samples, kept NaN) and
+    zero quaternions, and norms outside ``norm_range`` ("not unit quaternions (norm x at row
+    r)"). Norms inside the range are normalised; a deviation larger than ``note_above`` is noted.
+    Hemisphere flips (q -> -q) are removed and noted.
     """
     q = np.asarray(q, dtype=float)
     if q.ndim != 2 or q.shape[1] != 4:
@@ -253,6 +255,12 @@ def check_quaternions(
             f"expected quaternions as an (N, 4) array, got shape {q.shape}", file=file, field=field
         )
     bad = np.flatnonzero(~np.all(np.isfinite(q), axis=1))
+    if bad.size and allow_missing and bad.size < len(q):
+        ok = np.all(np.isfinite(q), axis=1)
+        out = np.full_like(q, np.nan)
+        out[ok] = check_quaternions(q[ok], norm_range=norm_range, notes=notes, file=file,
+                                    field=field, note_above=note_above)  # fmt: skip
+        return out
     if bad.size:
         raise InputError(
             f"non-finite quaternion at {where(int(bad[0]), first_line)}", file=file, field=field

@@ -138,6 +138,10 @@ def read_recording(
     installed with the package (:mod:`pipeline.examples`)."""
     from pipeline.examples import resolve
 
+    if sensor_map is not None and not isinstance(sensor_map, Mapping):
+        raise InputError(f"expected a mapping of our sensor names to the recording's, e.g. "
+                         f"{{'pelvis_imu': '00B40B91'}}, got {type(sensor_map).__name__} "
+                         f"{sensor_map!r:.60}", field="sensor_map")  # fmt: skip
     path = resolve(path)
     if not path.exists():
         raise InputError("no such file or folder", file=path)
@@ -222,16 +226,20 @@ def _merge_names(recs: dict[str, Recording], folder: Path) -> _Named:
 def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False):
     """The recording (or, for a folder, the :class:`_Named` one-sensor recordings) with our sensor
     names (module docstring). ``sensor_map``: our name -> the recording's sensor name or a unique
-    part of it. In a folder every sensor must get a name; elsewhere a sensor with another name
-    keeps it (it is reported as not in the model)."""
+    part of it (in a folder, of its entry's name too: an x-IMU3 device id). In a folder every
+    sensor must get a name; elsewhere a sensor with another name keeps it (it is reported as not
+    in the model)."""
     names = list(rec.sensor_names) if isinstance(rec, _Named) else list(rec.sensors)
+    # a folder's sensor is also known by its entry's name (an x-IMU3 device folder's id)
+    known = {n: (n, rec.entries[n]) if isinstance(rec, _Named) else (n,) for n in names}
     source = rec.source
     renamed: dict[str, str] = {}  # the recording's name -> ours
     for ours, theirs in sensor_map.items():
         if ours not in SENSOR_NAMES:
             raise InputError(f"expected a sensor name among {list(SENSOR_NAMES)}, got {ours!r}",
                              file=source, field=f"sensors.{ours}")  # fmt: skip
-        hits = [n for n in names if n == theirs] or [n for n in names if theirs in n]
+        hits = [n for n in names if n == theirs] or [n for n in names
+                                                     if any(theirs in k for k in known[n])]
         if len(hits) != 1:
             what = "no sensor" if not hits else f"several sensors ({hits})"
             raise InputError(f"{what} of the recording matches {theirs!r}; its sensors: {names}",

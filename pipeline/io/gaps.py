@@ -1,13 +1,16 @@
-"""Missing samples: interpolate short runs of NaN, refuse long ones.
+"""Missing samples: interpolate short runs of NaN; long ones stay missing or are refused.
 
 Readers turn empty or ``NaN`` cells into NaN (:mod:`pipeline.io.text`); :func:`fill_gaps` decides
 what to do with them. A short gap is filled (linear interpolation of vectors, slerp of
 quaternions, holding the nearest sample at either end) and written to the reader's
-:class:`~pipeline.io.notes.Notes`; a gap longer than ``max_gap_s`` is refused with an
-:class:`~pipeline.errors.InputError` giving its time range.
+:class:`~pipeline.io.notes.Notes`; a gap longer than ``max_gap_s`` stays missing in a
+recording's signals (``keep_long``: never bridged, noted with its time range) and is refused
+elsewhere (a table the run compares with) with an :class:`~pipeline.errors.InputError`.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -20,6 +23,40 @@ __all__ = ["DEFAULT_MAX_GAP_S", "fill_gaps", "true_runs"]
 
 DEFAULT_MAX_GAP_S = 0.1
 """Longest run of missing samples (seconds) that is interpolated; longer gaps are refused."""
+
+
+@dataclass(frozen=True)
+class Missing:
+    """Sensor -> the ``[start, stop)`` sample ranges it misses (a channel of it not finite);
+    ``restarted``: the sensors whose orientations were filtered here from their raw signals, the
+    filter started again after each gap (a 6-D heading of its own from there on)."""
+
+    spans: dict[str, tuple[tuple[int, int], ...]] = field(default_factory=dict)
+    restarted: frozenset[str] = frozenset()
+
+    def mask(self, sensor: str, n: int) -> np.ndarray:
+        """(n,) bool: the samples ``sensor`` misses."""
+        out = np.zeros(n, dtype=bool)
+        for a, b in self.spans.get(sensor, ()):
+            out[a:b] = True
+        return out
+
+    def of(self, sensors) -> Missing:
+        """The spans of ``sensors`` alone."""
+        return Missing({k: v for k, v in self.spans.items() if k in sensors},
+                       self.restarted & frozenset(sensors))  # fmt: skip
+
+    def breaks(self, sensors, n: int) -> np.ndarray:
+        """(n,) bool: the samples missing of those ``sensors`` whose filter started again
+        after them (a heading may jump across them)."""
+        out = np.zeros(n, dtype=bool)
+        for name in self.restarted & frozenset(sensors):
+            out |= self.mask(name, n)
+        return out
+
+    def describe(self, sensor: str, time: np.ndarray) -> str:
+        """The spans of ``sensor`` in seconds, for a finding."""
+        return ", ".join(f"{time[a]:.2f}-{time[b - 1]:.2f} s" for a, b in self.spans[sensor])
 
 
 def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -50,8 +87,11 @@ def fill_gaps(
     notes: Notes | None = None,
     file: FileLike = None,
     field: str | None = None,
+    keep_long: bool = False,
 ) -> np.ndarray:
-    """Interpolate short runs of missing (non-finite) samples; refuse long ones.
+    """Interpolate short runs of missing (non-finite) samples; refuse long ones, or with
+    ``keep_long`` leave them missing (NaN: a recording's dropout is never bridged; the run
+    blanks what needs the sensor there, :mod:`pipeline.process.missing`) and note them.
 
     A sample (row) is missing when any of its components is not finite. A run of ``n`` missing
     samples lasts ``n * dt`` (dt = median interval). Runs up to ``max_gap_s`` are filled, inside
@@ -76,6 +116,14 @@ def fill_gaps(
         raise InputError("no finite values at all (every sample missing)", file=file, field=field)
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     runs = true_runs(missing)
+    long = [(a, b) for a, b in runs if (b - a) * dt > max_gap_s + 1e-9]
+    if keep_long:
+        for a, b in long:
+            if notes is not None:
+                notes.add(f"missing {b - a} sample(s) ({(b - a) * dt:.3g} s) from t={t[a]:.4g} s "
+                          f"to t={t[b - 1]:.4g} s: longer than the {max_gap_s:g} s that may be "
+                          "interpolated, not bridged", file=file, field=field)  # fmt: skip
+        runs = [r for r in runs if r not in long]
     for a, b in runs:
         dur = (b - a) * dt
         if dur > max_gap_s + 1e-9:

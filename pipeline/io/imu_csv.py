@@ -105,8 +105,8 @@ def read_imu_csv(
     def cols(names: tuple[str, ...], field: str, kind: str = "vector") -> np.ndarray:
         v = data[:, [idx[c] for c in names]]
         return fill_gaps(
-            time, v, kind=kind, max_gap_s=max_gap_s, notes=notes, file=path, field=field
-        )
+            time, v, kind=kind, max_gap_s=max_gap_s, notes=notes, file=path, field=field,
+            keep_long=True)
 
     gyr = cols(GYR_COLUMNS, "gyr")
     acc = cols(ACC_COLUMNS, "acc")
@@ -117,6 +117,7 @@ def read_imu_csv(
     if all(has_q):
         quat = check_quaternions(
             cols(QUAT_COLUMNS, "quat", "quaternion"),
+            allow_missing=True,
             notes=notes,
             file=path,
             field="quat",

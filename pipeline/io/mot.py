@@ -108,7 +108,8 @@ def read_mot(
     """Read an OpenSim numeric ``.mot``/``.sto`` table; angles are returned in radians.
 
     Checks the header (``endheader``, ``nRows``/``nColumns`` against the data: a shorter table
-    is reported as truncated), time strictly increasing, and fills short NaN gaps (noted).
+    is reported as truncated), time strictly increasing, and fills short NaN gaps (noted); a
+    longer one (a joint a run left blank) stays NaN, noted.
     """
     path = Path(path)
     lines = read_text_lines(path)
@@ -137,7 +138,8 @@ def read_mot(
     for k, n in enumerate(names):
         c = data[:, k + 1]
         if time.size > 1:
-            c = fill_gaps(time, c, max_gap_s=max_gap_s, notes=notes, file=path, field=n)
+            c = fill_gaps(time, c, max_gap_s=max_gap_s, notes=notes, file=path, field=n,
+                          keep_long=True)
         cols[n] = np.radians(c) if n in ang else c
     return MotTable(
         time=time,

@@ -25,6 +25,7 @@ translational coordinates ``*_tx``, ``*_ty``, ``*_tz`` unless told otherwise).
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -57,6 +58,19 @@ __all__ = [
 
 
 
+_MISSING_CELL = re.compile(r"(?<=\t)(?:nan)?(?=\t|$)", re.IGNORECASE)
+
+
+def _missing_cells(row: str, cells: int) -> str:
+    """A row's empty (or single ``nan``) quaternion cells as four NaN: a sensor without that
+    sample (its gap is filled or kept missing by :func:`~pipeline.io.gaps.fill_gaps`); a
+    trailing tab after the row's ``cells`` cells is a separator, not a cell."""
+    row = row.rstrip("\r")
+    if row.endswith("\t") and row.count("\t") >= cells:
+        row = row[:-1]
+    return _MISSING_CELL.sub("nan,nan,nan,nan", row)
+
+
 def read_orientations_sto(
     path: str | Path,
     *,
@@ -67,9 +81,9 @@ def read_orientations_sto(
 
     Checks: header with ``endheader``; ``DataType=Quaternion`` when given; every row complete;
     every cell ``w,x,y,z``; time strictly increasing; rate from the time stamps equal to
-    ``DataRate`` within ``rate_rtol``; missing quaternions (``nan`` cells) filled by slerp up to
-    ``max_gap_s`` and refused beyond; quaternions unit (normalised within 10 %) and
-    sign-continuous. Repairs are listed in ``notes``.
+    ``DataRate`` within ``rate_rtol``; missing quaternions (empty or ``nan`` cells) filled by
+    slerp up to ``max_gap_s`` and left missing beyond (noted, never bridged); quaternions unit
+    (normalised within 10 %) and sign-continuous. Repairs are listed in ``notes``.
     """
     path = Path(path)
     lines = read_text_lines(path)
@@ -87,6 +101,9 @@ def read_orientations_sto(
     if not sensors_names:
         raise InputError("no sensor columns after 'time'", file=path, field="labels")
     flat = ["time"] + [f"{s}[{c}]" for s in sensors_names for c in "wxyz"]
+    cells = 1 + len(sensors_names)
+    rows = [_missing_cells(r, cells) if "\t\t" in r or r.endswith("\t") or "nan" in r.lower()
+            else r for r in rows]  # fmt: skip
     try:
         data = parse_table(rows, flat, file=path, first_line=first_line, also_sep=",")
     except InputError as e:
@@ -102,10 +119,10 @@ def read_orientations_sto(
     for k, name in enumerate(sensors_names):
         q = data[:, 1 + 4 * k : 5 + 4 * k]
         q = fill_gaps(
-            time, q, kind="quaternion", max_gap_s=max_gap_s, notes=notes, file=path, field=name
-        )
+            time, q, kind="quaternion", max_gap_s=max_gap_s, notes=notes, file=path, field=name,
+            keep_long=True)
         sensors[name] = check_quaternions(
-            q, notes=notes, file=path, field=name, first_line=first_line
+            q, notes=notes, file=path, field=name, first_line=first_line, allow_missing=True
         )
     rate = float(declared_rate(header, path) or info.rate_hz)
     return Recording.from_orientations(time, rate, sensors, header=header, notes=notes.as_tuple(),

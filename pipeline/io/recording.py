@@ -9,6 +9,9 @@ in the sensor frame and in SI units (readers convert). ``header`` keeps the file
 ``notes`` what the reader repaired or noticed, ``source`` the file or folder it came from, and
 ``sensor_notes`` (sensor -> its own file's notes, for a folder of one-sensor files) which sensor
 a repair concerns (dropped samples filled, an irregular clock: the sensor check names them).
+``missing`` (:class:`~pipeline.io.gaps.Missing`) says which samples of a sensor were bridged
+after reading (:mod:`pipeline.process.missing`): a statistic or a fit takes
+:meth:`Recording.present` rows only.
 
 ``header[WORLD]`` names the world frame of the orientations when the reader knows it from the
 vendor (:data:`Z_UP_WORLDS`: a vendor's earth frame with z up, which ``pipeline ik`` turns to its
@@ -30,6 +33,7 @@ import numpy as np
 
 from pipeline.errors import InputError
 from pipeline.filtering import lowpass
+from pipeline.io.gaps import Missing
 from pipeline.rotations import matrix_from_quat, quat_from_matrix
 
 __all__ = ["WORLD", "Z_UP_WORLDS", "Recording", "SensorSignals", "world_of"]
@@ -99,6 +103,7 @@ class Recording:
     notes: tuple[str, ...] = ()
     source: Path | None = None
     sensor_notes: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    missing: Missing = field(default_factory=Missing)
 
     # ---- construction -------------------------------------------------------------------------
     @classmethod
@@ -155,6 +160,14 @@ class Recording:
     @property
     def sensor_names(self) -> tuple[str, ...]:
         return tuple(self.sensors)
+
+    def present(self, *names: str) -> np.ndarray:
+        """(N,) bool: the samples each of the sensors ``names`` (default: all) has of its own,
+        not bridged over a gap (:attr:`missing`)."""
+        out = np.ones(self.n_samples, dtype=bool)
+        for name in names or self.sensor_names:
+            out &= ~self.missing.mask(name, self.n_samples)
+        return out
 
     def orientations(self) -> dict[str, np.ndarray]:
         """Sensor name -> (N, 4) quaternions, for the sensors that have them."""

@@ -84,9 +84,13 @@ def _check_dot_columns(labels: list[str], path: Path, notes: Notes) -> None:
         notes.add(f"DOT columns not used: {unused}", file=path)
 
 
-def _dot_line(line: str) -> str:
+def _dot_line(line: str, semicolons: bool = False) -> str:
     """One line of a DOT export without the comma the DOT app ends every line with (the header
-    ``...,Status,``; rows ``0, 3629233986, ..., 0, ``: comma and space)."""
+    ``...,Status,``; rows ``0, 3629233986, ..., 0, ``: comma and space). ``semicolons``: a
+    file saved in a decimal-comma locale (``0;4294000000;0,999;...``): its commas made points,
+    its semicolons commas."""
+    if semicolons:
+        line = line.rstrip().rstrip(";").replace(",", ".").replace(";", ",")
     return line.rstrip().rstrip(",")
 
 
@@ -98,13 +102,17 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     if start is None:
         raise InputError("no header line starting with 'PacketCounter' (a Movella DOT export)",
                          file=path)  # fmt: skip
-    labels = [s.strip() for s in _dot_line(lines[start]).split(",")]
-    rows = [_dot_line(ln) for ln in lines[start + 1 :] if ln.strip()]
+    semicolons = ";" in lines[start] and "," not in lines[start]  # a decimal-comma locale
+    labels = [s.strip() for s in _dot_line(lines[start], semicolons).split(",")]
+    rows = [_dot_line(ln, semicolons) for ln in lines[start + 1 :] if ln.strip()]
     if not rows:
         raise InputError("no data rows after the header", file=path)
     required = ("SampleTimeFine", "Acc_X", "Acc_Y", "Acc_Z", "Gyr_X", "Gyr_Y", "Gyr_Z")
     data, idx = _columns(rows, labels, path, start + 2, required, "header")
     notes = Notes()
+    if semicolons:
+        notes.add("separated by semicolons with decimal commas (a decimal-comma locale): read so",
+                  file=path)  # fmt: skip
     _check_dot_columns(labels, path, notes)
     time = _unwrap_ticks(data[:, idx["SampleTimeFine"]], 2.0**32) * 1e-6
     clock = {"clock_start_s": repr(float(time[0])), "clock_wrap_s": repr(2.0**32 * 1e-6),
@@ -114,7 +122,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
 
     def cols(names, field, kind="vector"):
         return fill_gaps(time, data[:, [idx[c] for c in names]], kind=kind, max_gap_s=max_gap_s,
-                         notes=notes, file=path, field=field)  # fmt: skip
+                         notes=notes, file=path, field=field, keep_long=True)  # fmt: skip
 
     gyr = np.radians(cols(("Gyr_X", "Gyr_Y", "Gyr_Z"), "Gyr"))  # deg/s in the file
     acc = cols(("Acc_X", "Acc_Y", "Acc_Z"), "Acc")
@@ -125,7 +133,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     if "Quat_W" in idx:
         quat = check_quaternions(cols(("Quat_W", "Quat_X", "Quat_Y", "Quat_Z"), "Quat",
                                       "quaternion"), notes=notes, file=path,
-                                 field="Quat")  # fmt: skip
+                                 field="Quat", allow_missing=True)  # fmt: skip
     elif "Euler_X" in idx:  # roll, pitch, yaw in degrees; R = Rz(yaw) Ry(pitch) Rx(roll)
         eul = np.radians(cols(("Euler_Z", "Euler_Y", "Euler_X"), "Euler"))
         quat = quat_from_matrix(matrix_from_euler_zyx(eul))
@@ -158,7 +166,7 @@ def read_ximu3_folder(folder: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_
     t = check_time(t, file=inertial, field="Timestamp (us)", first_line=2)
     check_rate(t, notes=notes, file=inertial, field="Timestamp (us)")
     v = fill_gaps(t, v, kind="vector", max_gap_s=max_gap_s, notes=notes, file=inertial,
-                  field="Inertial")  # fmt: skip
+                  field="Inertial", keep_long=True)  # fmt: skip
     gyr, acc = np.radians(v[:, :3]), v[:, 3:] * G
     check_gyro_units(gyr, file=inertial, field="Gyroscope")
     check_acc_units(acc, file=inertial, field="Accelerometer")
@@ -169,7 +177,8 @@ def read_ximu3_folder(folder: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_
         if tq.shape != t.shape or np.abs(tq - t).max() > 1e-6:
             raise InputError("expected the Inertial.csv time stamps", file=qpath,
                              field="Timestamp (us)")  # fmt: skip
-        quat = check_quaternions(q, notes=notes, file=qpath, field="W,X,Y,Z", first_line=2)
+        quat = check_quaternions(q, notes=notes, file=qpath, field="W,X,Y,Z", first_line=2,
+                                 allow_missing=True)  # fmt: skip
     if mpath.is_file():
         tm, m = _ximu3_csv(mpath, tuple(f"{a} (a.u.)" for a in "XYZ"))
         tm = check_time(tm, file=mpath, field="Timestamp (us)", first_line=2)

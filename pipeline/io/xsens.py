@@ -230,13 +230,18 @@ def read_xsens_txt(
         v = block(names)
         if np.all(np.isnan(v)):
             return None
-        return fill_gaps(time, v, max_gap_s=max_gap_s, notes=notes, file=path, field=prefix)
+        return fill_gaps(time, v, max_gap_s=max_gap_s, notes=notes, file=path, field=prefix,
+                         keep_long=True)  # fmt: skip
 
     acc, gyr, mag = vectors("Acc"), vectors("Gyr"), vectors("Mag")
     if acc is not None:
         check_acc_units(acc, file=path, field="Acc")
     if gyr is not None:
         check_gyro_units(gyr, file=path, field="Gyr")
+    if orient is not None and not np.isfinite(block(orient[1])).any():
+        orient = None  # the orientation columns are there but empty: a raw-signal export
+        notes.add("the orientation columns are empty: read as raw signals", file=path,
+                  field="orientation")  # fmt: skip
     if orient is None:  # raw signals only: the orientations come from an attitude filter
         if acc is None or gyr is None:
             raise InputError("the Acc and Gyr columns are empty and there are no orientation "
@@ -274,8 +279,10 @@ def read_xsens_txt(
         notes=notes,
         file=path,
         field="orientation",
+        keep_long=True,
     )
-    quat = check_quaternions(quat, notes=notes, file=path, field="orientation")
+    quat = check_quaternions(quat, notes=notes, file=path, field="orientation",
+                             allow_missing=True)  # fmt: skip
     header = {**comments, **clock, "orientation_from": kind, WORLD: "xsens"}
     return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
                             rate_hz=float(rate), header=header, notes=notes.as_tuple(),

@@ -12,7 +12,7 @@ that turns on its planted foot).
 from __future__ import annotations
 
 __all__ = ["ANKLE_MODES", "DEFAULT_KNEE", "JOINT_SEGMENTS", "KNEE_MODES", "LANDMARKS",
-           "LANDMARK_SEGMENT", "SEGMENTS", "other_side"]
+           "LANDMARK_SEGMENT", "SEGMENTS", "landmark_segment", "other_side"]
 
 KNEE_MODES = ("hinge", "free")
 #: The knee model used when none is asked for, by the library and the CLI alike.
@@ -28,6 +28,12 @@ LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femu
 #: Joint -> (proximal, distal) segment of one leg (the pelvis has no side), from the pelvis down.
 JOINT_SEGMENTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"),
                   "ankle": ("tibia", "foot")}  # fmt: skip
+
+
+def landmark_segment(frame: str) -> str:
+    """The segment a sided landmark is fixed in: ``'right_KJC'`` -> ``'right_femur'``."""
+    side, landmark = frame.split("_", 1)
+    return f"{side}_{LANDMARK_SEGMENT[landmark]}"
 
 
 def other_side(side: str) -> str:

@@ -10,6 +10,7 @@ which is then the single source of truth for every dimension downstream.
 from __future__ import annotations
 
 import csv
+import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -31,8 +32,8 @@ from pipeline.rotations import normalize
 
 KNEE_AOR_FILE = "wang2023_knee_aor.csv"
 
-__all__ = ["HIP_SHARE_OF_PELVIS_WIDTH", "PopulationKneeAxis", "geometry_from_measures",
-           "hip_centre", "population_knee_axis", "scale_model"]
+__all__ = ["HIP_SHARE_OF_PELVIS_WIDTH", "REGRESSION_HEIGHTS_M", "PopulationKneeAxis",
+           "geometry_from_measures", "hip_centre", "population_knee_axis", "scale_model"]
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,7 @@ def geometry_from_measures(
     Knee axes default to the population mean of the subject's sex. Returns the geometry and the
     predicted landmarks (which carry the Table I row used for every coordinate, for reports).
     """
-    landmarks = predict_landmarks(measures, table=table)
+    landmarks = _landmarks_at(measures, table)
     aor = population_knee_axis(measures.sex)
     right_hip = hip_centre(measures)
     geometry = SubjectGeometry(
@@ -107,6 +108,28 @@ def geometry_from_measures(
         left_hip=None if right_hip is None else mirror_point(right_hip),
     )
     return geometry, landmarks
+
+
+#: The heights (m) the regression equations are used at, by sex: Wang 2023's subjects' (men
+#: 1.69-1.88 m, women 1.55-1.75) and 0.1 m beyond. Linear in height with an intercept, they
+#: extrapolate to proportions no body has (a 1.2 m woman's thigh 12 % of her height, a 2.4 m
+#: man's 32 %); a subject outside is given the landmarks at the nearest bound, scaled by the
+#: heights' ratio (geometric similarity, OpenSim's scaling by height).
+REGRESSION_HEIGHTS_M = {"m": (1.59, 1.98), "f": (1.45, 1.85)}
+
+
+def _landmarks_at(measures: Measures, table: RegressionTable | None) -> LandmarkPositions:
+    """Eq 14 at the subject's height, or, outside :data:`REGRESSION_HEIGHTS_M` with height the
+    only measure, at the nearest bound scaled by the heights' ratio."""
+    low, high = REGRESSION_HEIGHTS_M[measures.sex]
+    h = measures.height_m
+    if low <= h <= high or set(measures.inputs_mm()) != {"h"}:
+        return predict_landmarks(measures, table=table)
+    bound = min(max(h, low), high)
+    at = predict_landmarks(dataclasses.replace(measures, height_m=bound), table=table)
+    k = h / bound
+    return LandmarkPositions({n: k * p for n, p in at.femur.items()},
+                             {n: k * p for n, p in at.tibia.items()}, at.equations)  # fmt: skip
 
 
 #: The hip centre's distance from the midline as a share of the inter-ASIS distance: Bell et al.

@@ -4,14 +4,21 @@
 
 A check that changes the recording (a sensor excluded, two read back) hands on the context of the
 changed recording (:meth:`CheckContext.of`); an unchanged recording keeps its context, so that the
-strides a check found are the ones the run uses.
+strides a check found are the ones the run uses. A context starts from a recording as read
+(:meth:`CheckContext.of_recording`): its sensors' missing samples found and bridged
+(:mod:`pipeline.process.missing`), so that every check sees finite signals and the dropout
+check sees the spans.
 """
 
 from __future__ import annotations
 
 from functools import cached_property
 
-from pipeline.io.recording import Recording
+import numpy as np
+
+from pipeline.io.gaps import Missing
+from pipeline.io.recording import Recording, SensorSignals
+from pipeline.process.missing import bridged, missing_of
 
 __all__ = ["CheckContext"]
 
@@ -23,8 +30,28 @@ class CheckContext:
         self.rec = rec
         self.gait_notes: list[str] = []
 
+    @classmethod
+    def of_recording(cls, rec: Recording) -> CheckContext:
+        """The context of a recording as read: its missing samples found and bridged."""
+        return cls(bridged(rec, missing_of(rec)))
+
+    def own(self, name: str) -> SensorSignals:
+        """Sensor ``name``'s signals with its missing samples NaN again (bridged in :attr:`rec`
+        for the estimators): a check judges the samples the sensor has."""
+        s = self.rec.sensors[name]
+        gone = self.missing.mask(name, self.rec.n_samples)
+        if not gone.any():
+            return s
+        return s.replace(**{k: np.where(gone[:, None], np.nan, v) for k in ("quat", "gyr", "acc",
+                            "mag") if (v := getattr(s, k)) is not None})  # fmt: skip
+
+    @property
+    def missing(self) -> Missing:
+        """The recording's missing samples (bridged in :attr:`rec`)."""
+        return self.rec.missing
+
     def of(self, rec: Recording) -> CheckContext:
-        """This context for ``rec`` itself, else a new one."""
+        """This context for ``rec`` itself, else a new one (the same missing samples)."""
         return self if rec is self.rec else CheckContext(rec)
 
     @cached_property

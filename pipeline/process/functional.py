@@ -98,25 +98,25 @@ def calibrate_knees(
             continue
         if any(v is None for v in (s1.gyr, s1.acc, s2.gyr, s2.acc)):
             continue
-        n = trial.n_samples
-        moving = np.flatnonzero(np.linalg.norm(s1.gyr, axis=1) + np.linalg.norm(s2.gyr, axis=1)
-                                > MOVING_RAD_S)  # fmt: skip
+        n, own = trial.n_samples, trial.present(thigh, shank)  # not over a bridged gap
+        moving = np.flatnonzero((np.linalg.norm(s1.gyr, axis=1) + np.linalg.norm(s2.gyr, axis=1)
+                                 > MOVING_RAD_S) & own)  # fmt: skip
         if n < 2 * min_samples or moving.size < 2 * min_samples:
             continue
         middle = int(moving[moving.size // 2])
-        halves = (slice(None), slice(0, middle), slice(middle, None))
+        halves = _halves(own, middle)
         # the independent start checks the whole trial's fit; the halves only give axes
         full, first, second = (fit_joint(trial.time, s1, s2, rows, method,
                                          shared_world=shared_world,
-                                         verify_start=rows == slice(None))
+                                         verify_start=rows is halves[0])
                                for rows in halves)  # fmt: skip
         sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
         split = float(np.degrees(max(angle_between(first.axis_1, sign * second.axis_1),
                                      angle_between(first.axis_2,
                                                    sign * second.axis_2))))  # fmt: skip
         # eq 6 alone: |w_1 x j_1| - |w_2 x j_2| (rad/s), over the whole trial
-        r = (np.linalg.norm(np.cross(s1.gyr, full.axis_1), axis=1)
-             - np.linalg.norm(np.cross(s2.gyr, full.axis_2), axis=1))  # fmt: skip
+        r = (np.linalg.norm(np.cross(s1.gyr[own], full.axis_1), axis=1)
+             - np.linalg.norm(np.cross(s2.gyr[own], full.axis_2), axis=1))  # fmt: skip
         residual = float(np.sqrt(np.mean(r**2)))
         vs_model = (float("nan") if placements is None else
                     _vs_model(full.axis_1, full.axis_2, placements, side, model_axes[side]))
@@ -133,6 +133,15 @@ def calibrate_knees(
                                    full.observability.determined, vs_model, not reasons,
                                    "; ".join(reasons), axes_ok))  # fmt: skip
     return out
+
+
+def _halves(own: np.ndarray, middle: int) -> tuple:
+    """The whole trial's rows and its two halves at ``middle``: slices, or the rows each has
+    of its own where a sensor misses samples."""
+    if own.all():
+        return slice(None), slice(0, middle), slice(middle, None)
+    rows = np.flatnonzero(own)
+    return rows, rows[rows < middle], rows[rows >= middle]
 
 
 def with_placements(
@@ -159,8 +168,8 @@ def _vs_model(axis_thigh, axis_shank, placements, side, model_axes):
     return float(np.degrees(max(angle_between(s * seg_F, a_F), angle_between(s * seg_T, a_T))))
 
 
-def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joint: str = "hinge",
-              verify_start: bool = True, **options):  # fmt: skip
+def fit_joint(time, s1, s2, rows: slice | np.ndarray, method: str, *, shared_world: bool,
+              joint: str = "hinge", verify_start: bool = True, **options):  # fmt: skip
     """Hu 2021's calibration of one joint between sensors ``s1`` and ``s2``
     (:class:`~pipeline.io.recording.SensorSignals`) on the samples ``rows``, at most
     :data:`MAX_SAMPLES` of them (``verify_start``: solved again from an independent start);
@@ -169,7 +178,11 @@ def fit_joint(time, s1, s2, rows: slice, method: str, *, shared_world: bool, joi
     from pipeline.calibration.calibrate import calibrate
     from pipeline.calibration.joint_constraints import JointData, joint_data
 
-    d = joint_data(time[rows], s1.gyr[rows], s1.acc[rows], s2.gyr[rows], s2.acc[rows])
+    if isinstance(rows, slice):
+        d = joint_data(time[rows], s1.gyr[rows], s1.acc[rows], s2.gyr[rows], s2.acc[rows])
+    else:  # chosen samples (a sensor's gap left out): the accelerations taken on every sample
+        d = joint_data(time, s1.gyr, s1.acc, s2.gyr, s2.acc)
+        d = JointData(*(getattr(d, f.name)[rows] for f in fields(JointData)))
     q1 = None if s1.quat is None or not shared_world else s1.quat[rows]
     q2 = None if s2.quat is None or not shared_world else s2.quat[rows]
     n = d.gyr_1.shape[0]

@@ -4,8 +4,9 @@ from its foot sensor, else its shank sensor.
 Per side, the foot sensor's raw signals (after the sensor check: a faulty foot sensor is already
 excluded) give the events (:mod:`pipeline.analysis.gait_events`), its path
 (:mod:`pipeline.analysis.foot_trajectory`) and the strides (:mod:`pipeline.analysis.strides`).
-Without a usable foot sensor the shank's give the events only (stride time, stance share,
-cadence; no length, speed, clearance or turn), with a note. A recording without raw signals, or
+Without a usable foot sensor (or with one missing most of the recording's samples, where the
+shank's has more) the shank's give the events only (stride time, stance share, cadence; no
+length, speed, clearance or turn), with a note. A recording without raw signals, or
 with no walking (no swing: supine, seated, standing), has no strides, and the notes say so.
 
 **The pelvis's path** (:func:`with_pelvis_path`, after the IK): each foot sensor's path is
@@ -63,12 +64,24 @@ def _sensor_of(rec: Recording, segment: str) -> str | None:
     return name if s is not None and s.gyr is not None and s.acc is not None else None
 
 
+def _covers_less(rec: Recording, foot: str, shank: str) -> bool:
+    """Whether the foot sensor misses most of the recording and the shank's has more of it (a
+    battery that died: the strides come from where the samples are)."""
+    have = rec.present(foot).mean()
+    return have < 0.5 and rec.present(shank).mean() > have
+
+
 def gait_of(rec: Recording, notes: list[str]) -> Gait:
     """Events and strides of each side (module docstring); what was used and why not goes to
     ``notes``."""
     strides, events, paths, sources = [], {}, {}, {}
     for side in ("right", "left"):
         foot, shank = _sensor_of(rec, f"{side}_foot"), _sensor_of(rec, f"{side}_tibia")
+        why = "no usable foot sensor"
+        if foot and shank and _covers_less(rec, foot, shank):
+            why = (f"the foot sensor {foot} has {100 * rec.present(foot).mean():.0f}% of the "
+                   f"recording's samples, the shank's {100 * rec.present(shank).mean():.0f}%")
+            foot = None
         name = foot or shank
         if name is None:
             continue
@@ -81,8 +94,8 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
         if path is not None:
             paths[side] = path
         elif found:
-            notes.append(f"{side} strides from the shank sensor {name} (no usable foot sensor): "
-                         "times only, no length, speed, clearance or turn")  # fmt: skip
+            notes.append(f"{side} strides from the shank sensor {name} ({why}): times only, no "
+                         "length, speed, clearance or turn")  # fmt: skip
         strides += found
     if not sources:
         notes.append("no strides: no foot or shank sensor with raw signals")

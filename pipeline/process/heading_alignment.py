@@ -68,21 +68,17 @@ not the shared world's (6-D output, a disturbed magnetometer), ``'joints'`` all,
 
 from __future__ import annotations
 
-from functools import partial
+import dataclasses
 
 import numpy as np
 
 from pipeline.calibration.flexion_axis import (
     FlexionAxis,
-    knee_signs,
-    leg_flexion_axes,
     pelvis_lateral_line,
     stride_frequency,
 )
 from pipeline.calibration.heading_offset import (
-    MIN_ACCELERATION,
     HeadingDrift,
-    heading_between,
     hinge_heading,
     turn_about_vertical,
 )
@@ -91,30 +87,21 @@ from pipeline.io.recording import Recording
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 from pipeline.model.conventions import JOINT_SEGMENTS, other_side
 from pipeline.process.functional import KneeCalibration
+from pipeline.process.joint_headings import (
+    MAX_RESIDUAL_DEG,
+    UP,
+    WINDOW_S,
+    ball_heading,
+    centre_fit,
+    flexion_heading,
+    has_signals,
+    knee_heading,
+    leg_axes,
+    signals_of,
+)
 
-__all__ = ["CENTRE_BOUND_M", "CUTOFF_HZ", "MAX_HINGE_RESIDUAL_DEG", "MAX_RESIDUAL_DEG",
-           "MIN_SIDE_MARGIN", "WINDOW_S", "align_headings", "centre_fit", "sensors_to_align"]
+__all__ = ["MAX_RESIDUAL_DEG", "MIN_SIDE_MARGIN", "align_headings", "sensors_to_align"]
 
-_UP = np.array([0.0, 1.0, 0.0])
-#: Window of eq (1) (s): several whole strides (a stride takes ~1-1.3 s).
-WINDOW_S = 4.0
-#: Low-pass cut-off (Hz) of the signals the hip's and ankle's centre force is computed from: on
-#: the simulator 4 Hz already bent the force's harmonics (the hips' headings 2.1-2.8 deg off,
-#: 0.8-1.9 at 6 Hz); on the real walk 6 Hz keeps every hip and ankle window that agrees.
-CUTOFF_HZ = 6.0
-#: A joint's heading is not used when the constraint's RMS residual after the turn (the angle
-#: between the two sensors' views of its axis or centre force, over the windows used) exceeds
-#: this (deg). The simulated joints leave 0.1-1 deg; the real walk gaittoolbox_s02 4.6-6.8 deg
-#: (knees and ankles) and 3-4 deg (hips); the x-IMU3 recording's knees and ankles 11-15 deg.
-MAX_RESIDUAL_DEG = 20.0
-#: The trusted hinge axes hold a hinge exactly (0.1-0.4 deg on the simulator's hinge): beyond this
-#: the knee is not one (the simulator's free knee with soft tissue: 18.7 deg, and 150 deg off) and
-#: the knee centre or the flexion axes take over.
-MAX_HINGE_RESIDUAL_DEG = 10.0
-#: Bound (m) of a joint centre's components in its sensor's frame in the centre's fit here: past
-#: any lower-limb sensor's distance from its joint (S02's knees: 0.34 m along their axis), so that
-#: it binds nowhere and the fit ends alike however the sensors sit (0.3 m bound S02's knees).
-CENTRE_BOUND_M = 0.5
 #: The hip centres sign the pelvis's medio-lateral line when the cosine between it and the
 #: vector from the left hip centre to the right (or one centre's lateral side) is at least this:
 #: 0.53-0.99 on the simulated walk (6-D, seeds 1-3), S02 (hips refused) and the x-IMU3 walk.
@@ -148,7 +135,7 @@ def align_headings(
     functional calibrations; ``method``: the hip's spherical calibration method."""
     out = dict(rotations)
     drifts: dict[str, HeadingDrift] = {}
-    axes = {side: _leg_axes(trial, out, side) for side in legs}  # inclinations only: no heading
+    axes = {side: leg_axes(trial, out, side) for side in legs}  # inclinations only: no heading
     adrift = []  # legs whose thigh sensor kept a heading of its own
     for side in legs:
         for joint, (prox, dist) in JOINT_SEGMENTS.items():  # from the pelvis down
@@ -159,23 +146,39 @@ def align_headings(
             name = f"{side} {joint}"
             try:
                 if joint != "knee":
-                    drift = _ball(trial, out[p], out[d], p, d, method)
+                    drift = ball_heading(trial, out[p], out[d], p, d, method)
                     how = f"the {joint} centre's acceleration"
                 else:
-                    drift, how = _knee(trial, out[p], out[d], p, d, side, knees, axes[side],
+                    drift, how = knee_heading(trial, out[p], out[d], p, d, side, knees, axes[side],
                                        method)  # fmt: skip
                 _check_residual(drift)
             except InputError as e:
                 notes.append(f"{name}: {dist} sensor's heading not aligned: {e.message}")
                 adrift += [side] if joint == "hip" else []
                 continue
-            out[d] = turn_about_vertical(out[d], drift.psi, _UP)
+            drift = _through(drift, out[p], rotations[p])
+            out[d] = turn_about_vertical(out[d], drift.psi, UP)
             drifts[f"{side}_{joint}"] = drift
             notes.append(_turned(name, dist, prox, how, drift))
     for side in adrift:
         _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes)
     _legs_in_one_heading(trial, out, align, axes, drifts, notes)
     return out, drifts
+
+
+def _through(drift: HeadingDrift, proximal: np.ndarray, own: np.ndarray) -> HeadingDrift:
+    """``drift`` NaN where the proximal segment's heading is not known though its sensor has
+    samples (``proximal``, turned, NaN there; ``own``, its sensor's, not): a distal segment
+    turned into it is not known there either
+    (:func:`~pipeline.calibration.heading_offset.heading_between`)."""
+    unknown = _rows_nan(proximal) & ~_rows_nan(own)
+    if not unknown.any():
+        return drift
+    return dataclasses.replace(drift, psi=np.where(unknown, np.nan, drift.psi))
+
+
+def _rows_nan(R: np.ndarray) -> np.ndarray:
+    return ~np.all(np.isfinite(R), axis=(1, 2))
 
 
 def _check_residual(drift: HeadingDrift) -> None:
@@ -185,10 +188,14 @@ def _check_residual(drift: HeadingDrift) -> None:
 
 
 def _turned(name: str, dist: str, prox: str, how: str, drift: HeadingDrift) -> str:
+    low, high = np.degrees(np.nanmin(drift.psi)), np.degrees(np.nanmax(drift.psi))
+    unknown = float(np.mean(np.isnan(drift.psi)))
     return (f"{name}: {dist} sensor turned into the {prox} sensor's heading by {how} "
-            f"({np.degrees(drift.psi.min()):.1f} to {np.degrees(drift.psi.max()):.1f} deg; "
+            f"({low:.1f} to {high:.1f} deg; "
             f"constraint residual {drift.residual_deg:.1f} deg, {drift.before_deg:.1f} deg with a "
-            "constant heading)")
+            "constant heading)" + (f"; not observed on {100 * unknown:.0f}% of the samples (a "
+            "filter started again after a sensor's gap, and no window after it shows the "
+            "heading): the joints it turns are blank there" if unknown else ""))  # fmt: skip
 
 
 def _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes) -> None:
@@ -222,7 +229,7 @@ def _turn_leg(out, side: str, drift: HeadingDrift, drifts) -> None:
         seg = f"{side}_{dist}"
         if seg in out and (seg in turned or (f"{side}_{joint}" in drifts
                                              and f"{side}_{prox}" in turned)):
-            out[seg] = turn_about_vertical(out[seg], drift.psi, _UP)
+            out[seg] = turn_about_vertical(out[seg], drift.psi, UP)
             turned.add(seg)
 
 
@@ -260,7 +267,7 @@ def _thigh_on_thigh(trial, out, axes, side: str) -> HeadingDrift:
     walking both flex about the body's medio-lateral line: one line in the world)."""
     o, femur = f"{other_side(side)}_femur", f"{side}_femur"
     both = {**_leg_axes_of(axes, other_side(side)), **_leg_axes_of(axes, side)}
-    return _flexion(trial, out[o], out[femur], both, o, femur)
+    return flexion_heading(trial, out[o], out[femur], both, o, femur)
 
 
 def _by_other_thigh(trial, out, side, align, axes, drifts, method) -> tuple[HeadingDrift, str]:
@@ -279,13 +286,13 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
     centres: the right one lies on the right."""
     femur = f"{side}_femur"
     thigh = _leg_axes_of(axes, side)[femur]
-    pelvis, s_f = _signals(trial, "pelvis"), _signals(trial, femur)
+    pelvis, s_f = signals_of(trial, "pelvis"), signals_of(trial, femur)
     stride_hz = stride_frequency(s_f.gyr @ thigh.axis, trial.rate_hz)
-    up = np.einsum("nji,j->ni", out["pelvis"], _UP)
+    up = np.einsum("nji,j->ni", out["pelvis"], UP)
     line = pelvis_lateral_line(pelvis.gyr, up, trial.rate_hz, stride_hz).axis
     rightward = np.zeros(3)  # the hip centres in the pelvis sensor's frame, right minus left
     for s, sign in (("right", 1.0), ("left", -1.0)):
-        if f"{s}_femur" not in out or not _has_signals(trial, f"{s}_femur"):
+        if f"{s}_femur" not in out or not has_signals(trial, f"{s}_femur"):
             continue
         fit, _, _ = centre_fit(trial, out["pelvis"], out[f"{s}_femur"], "pelvis", f"{s}_femur",
                                 method)  # fmt: skip
@@ -295,104 +302,8 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
         raise InputError(f"the hip centres do not say which way the pelvis's medio-lateral line "
                          f"points (cosine {margin:.2f})")  # fmt: skip
     line = line if margin > 0 else -line
-    drift = hinge_heading(out["pelvis"], out[femur], line, thigh.axis, trial.rate_hz, up=_UP,
+    drift = hinge_heading(out["pelvis"], out[femur], line, thigh.axis, trial.rate_hz, up=UP,
                           window_s=WINDOW_S)  # fmt: skip
     return drift, "the pelvis's medio-lateral line (its list at the stride frequency)"
 
 
-def _has_signals(trial: Recording, segment: str) -> bool:
-    s = trial.sensors.get(SEGMENT_SENSOR[segment])
-    return s is not None and s.gyr is not None and s.acc is not None
-
-
-def _signals(trial: Recording, segment: str):
-    if not _has_signals(trial, segment):
-        raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
-    return trial.sensors[SEGMENT_SENSOR[segment]]
-
-
-def _knee(trial, R_1, R_2, prox, dist, side, knees, axes, method) -> tuple[HeadingDrift, str]:
-    """The knee's heading by the trusted hinge axes where they hold, else by whichever of the knee
-    centre's force and the segments' flexion axes the data hold better: the smaller residual,
-    within :data:`MAX_RESIDUAL_DEG` where either is (module docstring)."""
-    c = next((k for k in knees if k.side == side and k.axes_trusted), None)
-    if c is not None:  # the fit leaves each axis's sign free: the knee's flexion signs them
-        s_1, s_2 = knee_signs(*(np.einsum("nji,j->ni", R, _UP) for R in (R_1, R_2)),
-                              c.axis_thigh, c.axis_shank, trial.rate_hz)  # fmt: skip
-        drift = hinge_heading(R_1, R_2, s_1 * c.axis_thigh, s_2 * c.axis_shank, trial.rate_hz,
-                              up=_UP, window_s=WINDOW_S)  # fmt: skip
-        if drift.residual_deg <= MAX_HINGE_RESIDUAL_DEG:
-            return drift, "the knee's hinge axis"
-    solvers = {
-        "the knee centre's acceleration": partial(_ball, trial, R_1, R_2, prox, dist, method),
-        "the segments' flexion axes": partial(_flexion, trial, R_1, R_2, axes, prox, dist)}
-    found, why = {}, None  # how -> its drift
-    for how, solve in solvers.items():
-        try:
-            found[how] = solve()
-        except InputError as e:
-            why = e
-    if not found:
-        raise why
-    held = {k: d for k, d in found.items() if d.residual_deg <= MAX_RESIDUAL_DEG} or found
-    best = min(held, key=lambda k: held[k].residual_deg)
-    return held[best], best + "".join(f", not {k} (its residual {d.residual_deg:.1f} deg)"
-                                      for k, d in held.items() if k != best)  # fmt: skip
-
-
-def _leg_axes(trial: Recording, rotations, side: str) -> dict[str, FlexionAxis] | str:
-    """One leg's flexion axes in its sensors' frames, or why there are none."""
-    segments = {}
-    for seg in ("femur", "tibia"):
-        name = f"{side}_{seg}"
-        s = trial.sensors.get(SEGMENT_SENSOR[name])
-        if name in rotations and s is not None and s.gyr is not None:
-            up = np.einsum("nji,j->ni", rotations[name], _UP)  # the vertical in the sensor frame
-            segments[seg] = (s.gyr, up)
-    try:
-        return {f"{side}_{k}": a for k, a in leg_flexion_axes(trial.rate_hz, segments).items()}
-    except InputError as e:
-        return e.message
-
-
-def _flexion(trial: Recording, R_1, R_2, axes, prox: str, dist: str) -> HeadingDrift:
-    """Eq (1) on the two segments' flexion axes (module docstring)."""
-    if isinstance(axes, str):
-        raise InputError(f"no flexion axes: {axes}")
-    if prox not in axes or dist not in axes:
-        raise InputError("raw gyroscope signals of both sensors are needed")
-    return hinge_heading(R_1, R_2, axes[prox].axis, axes[dist].axis, trial.rate_hz, up=_UP,
-                         window_s=WINDOW_S)  # fmt: skip
-
-
-def centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
-    """Hu's spherical fit of the joint on both signals low-passed at :data:`CUTOFF_HZ`, and those
-    signals. IPOPT (the default) starts from the centre's vertical constraint (module docstring);
-    ``gn``, ``dwpso``, ``gwo`` from their own random starts in the sensors' frames."""
-    from pipeline.calibration.joint_centres import joint_centre
-    from pipeline.process.functional import fit_joint
-
-    rate = trial.rate_hz
-    s1, s2 = (_signals(trial, seg) for seg in (prox, dist))
-    options = {}
-    if method == "ipopt":  # started alike however the sensors sit (the vertical's part of eq 2)
-        c = joint_centre(trial.time, s1.gyr, s1.acc, R_1, s2.gyr, s2.acc, R_2,
-                         cutoff_hz=CUTOFF_HZ, shared_axis=1)  # fmt: skip
-        options = {"start": (c.o_1, c.o_2), "position_bound": CENTRE_BOUND_M}
-    s1, s2 = (s.low_passed(rate, CUTOFF_HZ) for s in (s1, s2))
-    return fit_joint(trial.time, s1, s2, slice(None), method, shared_world=False,
-                     joint="spherical", verify_start=False, **options), s1, s2
-
-
-def _ball(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) -> HeadingDrift:
-    """Eq (1) on the specific force at the joint's centre (module docstring)."""
-    from pipeline.calibration.joint_constraints import joint_data, joint_force
-
-    fit, s1, s2 = centre_fit(trial, R_1, R_2, prox, dist, method)
-    # no observability test: a direction the fit leaves free moves the centre without changing
-    # its force much; the constraint's residual after the turn is the check (MAX_RESIDUAL_DEG)
-    data = joint_data(trial.time, s1.gyr, s1.acc, s2.gyr, s2.acc)
-    f1, f2 = joint_force(data, fit.position_1_m, fit.position_2_m)
-    u, v = (np.einsum("nij,nj->ni", R, f) for R, f in ((R_1, f1), (R_2, f2)))
-    return heading_between(u, v, trial.rate_hz, up=_UP, window_s=WINDOW_S,
-                           min_weight=MIN_ACCELERATION**2)  # fmt: skip

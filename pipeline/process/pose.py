@@ -91,19 +91,29 @@ class PoseInputs:
 
 def still_gravity(trial: Recording, segments, at: int = 0) -> dict[str, np.ndarray]:
     """Segment -> the vertical in its sensor's frame over the still run that starts at sample
-    ``at``: the mean accelerometer direction (at rest it reads gravity alone), for the sensors
-    still from there for at least :data:`MIN_STILL_S`
+    ``at`` (or at its sensor's first own sample after it, up to its next missing one): the mean
+    accelerometer direction (at rest it reads gravity alone), for the sensors still from there
+    for at least :data:`MIN_STILL_S`
     (:func:`~pipeline.calibration.attitude.still_start`)."""
     out = {}
     for seg in segments:
         s = trial.sensors.get(SEGMENT_SENSOR[seg])
         if s is None or s.acc is None or s.gyr is None:
             continue
-        n0 = still_start(s.gyr[at:], s.acc[at:])
-        if n0 >= 2 and trial.time[at + n0 - 1] - trial.time[at] >= MIN_STILL_S:
-            a = s.acc[at : at + n0].mean(axis=0)
+        own = trial.present(SEGMENT_SENSOR[seg])
+        k = at + int(np.argmax(own[at:])) if own[at:].any() else at  # its first own sample
+        n0 = still_start(s.gyr[k:], s.acc[k:])
+        n0 = int(np.argmin(own[k : k + n0])) if not own[k : k + n0].all() else n0
+        if n0 >= 2 and trial.time[k + n0 - 1] - trial.time[k] >= MIN_STILL_S:
+            a = s.acc[k : k + n0].mean(axis=0)
             out[seg] = a / np.linalg.norm(a)
     return out
+
+
+def _first_known(R: np.ndarray, at: int) -> int:
+    """The first sample from ``at`` on where ``R`` (N, 3, 3) is known (``at`` itself if none)."""
+    known = np.isfinite(R[at:]).all(axis=(1, 2))
+    return at + int(np.argmax(known)) if known.any() else at
 
 
 def _tilted_onto(R: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -122,8 +132,8 @@ def read_calibration_pose(
     gravity: dict[str, np.ndarray] | None = None,
 ) -> CalibrationPose:
     """The calibration pose (module docstring) from the sensors' orientations ``rotations``
-    (segment -> (N, 3, 3), y-up world) at sample ``at`` or, if given, the static trial's mean
-    orientations.
+    (segment -> (N, 3, 3), y-up world) at sample ``at`` (each at its first known sample from
+    there: a sensor that started late) or, if given, the static trial's mean orientations.
 
     ``gravity``: segment -> the vertical in its sensor's frame over the still run at ``at``
     (:func:`still_gravity`): the sensor's orientation there is tilted, by the smallest turn,
@@ -134,7 +144,7 @@ def read_calibration_pose(
     if static_pose is not None:
         at_pose = dict(static_pose)
     else:
-        at_pose = {seg: R[at] for seg, R in rotations.items()}
+        at_pose = {seg: R[_first_known(R, at)] for seg, R in rotations.items()}
         for seg, g in (gravity or {}).items():
             if seg in at_pose:
                 at_pose[seg] = _tilted_onto(at_pose[seg], g)

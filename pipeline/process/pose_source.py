@@ -106,7 +106,8 @@ def calibrate(trial, rotations, source: PoseSource, inputs: PoseInputs, notes: l
             raise InputError(f"--calibration-pose walking: {source.why}",
                              field="calibration_pose")  # fmt: skip
         return _from_walk(rotations, source.frames, inputs, "asked for")
-    checked = {w: _fits(w, source.frames, rotations, pose) for w in source.windows}
+    checked = {w: _fits(w, source.frames, rotations, pose) for w in source.windows
+               if _all_oriented(w, rotations)}  # fmt: skip
     showing = [w for w, fit in checked.items() if fit is None or fit[0]]
     before = [w for w in showing if source.walk_starts is None or w.stop <= source.walk_starts]
     if before or (showing and source.frames is None):
@@ -125,6 +126,13 @@ def calibrate(trial, rotations, source: PoseSource, inputs: PoseInputs, notes: l
                  "unchecked")  # fmt: skip
     cal = read_calibration_pose(rotations, inputs, notes, gravity=still_gravity(trial, rotations))
     return _described(cal, f"{pose} pose assumed at the first sample (no still window, no walk)")
+
+
+def _all_oriented(window, rotations) -> bool:
+    """Whether every segment's orientation is known somewhere in ``window`` (not NaN all
+    through: a sensor's missing samples, a heading not observed after its filter started
+    again); each is read at its first known sample there (:func:`read_calibration_pose`)."""
+    return all(np.isfinite(R[window.rows]).all(axis=(1, 2)).any() for R in rotations.values())
 
 
 def _fits(window, frames, rotations, pose) -> tuple[bool, str] | None:

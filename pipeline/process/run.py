@@ -39,7 +39,7 @@ model, the workflow of OpenSim's OpenSense, with the knee-AoR correction of Wang
 from __future__ import annotations
 
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -48,34 +48,34 @@ from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import KneeCorrection
-from pipeline.calibration.heading import check_vertical
 from pipeline.calibration.heading_offset import HeadingDrift
 from pipeline.calibration.magnetometer import FieldTrust
 from pipeline.errors import InputError
-from pipeline.io.opensim import map_sensors, rotate_world, sensor_to_opensim_matrix
 from pipeline.io.recording import Recording
+from pipeline.model.conventions import landmark_segment
 from pipeline.model.measures import Measures
 from pipeline.model.scaling import geometry_from_measures
 from pipeline.model.skeleton import Skeleton
-from pipeline.process.check_context import CheckContext
 from pipeline.process.findings import Action, Finding
 from pipeline.process.functional import KneeCalibration, calibrate_knees, with_placements
-from pipeline.process.gait import Gait, too_short, with_pelvis_path
+from pipeline.process.gait import Gait, with_pelvis_path
 from pipeline.process.heading_alignment import align_headings, sensors_to_align
 from pipeline.process.knee_correction import correct_knees
+from pipeline.process.missing import (
+    blank_after_restart,
+    blank_angles,
+    blank_landmarks,
+    blank_path,
+    unknown_in,
+)
 from pipeline.process.options import IKOptions, InputOptions
-from pipeline.process.pose import CalibrationPose, PoseInputs, static_orientations
+from pipeline.process.pose import CalibrationPose, PoseInputs
 from pipeline.process.pose_source import PoseSource, calibrate, source_of
 from pipeline.process.posture import Posture, lean_pose, standing_posture
-from pipeline.process.sensor_checks import run_checks
-from pipeline.process.sensors import SensorSet, known_segments, sensor_set
+from pipeline.process.prepare import Prepared, prepared
+from pipeline.process.sensors import SensorSet
 from pipeline.process.sides import Sides, exchange_of, in_one_heading, mirrored, side_evidence
-from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, world_to_model
 from pipeline.process.solve import PELVIS_ANGLES, joint_angles_of, landmarks_of, observed, solve
-from pipeline.process.still import StillWindow
-from pipeline.rotations import (
-    matrix_from_quat,
-)
 
 __all__ = ["MOT_NAMES", "IKRun", "mot_columns", "process_recording"]
 
@@ -186,7 +186,7 @@ def process_recording(
 def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) -> IKRun | Sides:
     """One pass of steps 1-6; the :class:`Sides` evidence instead of a run where ``check_sides``
     and the legs' sensors read as named left for right."""
-    s = _prepared(trial, static, opts)
+    s = prepared(trial, static, opts)
     geometry = _geometry(measures, opts)
     legs, method = s.sensors.legs, _method(opts)
     inputs = PoseInputs(Skeleton.build(geometry, knee=opts.knee, legs=legs), geometry, legs,
@@ -225,49 +225,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
     return run
 
 
-@dataclass
-class _Prepared:
-    """Steps 1-2 of a pass: the checked recording in the model's world and what it holds."""
-
-    trial: Recording
-    oriented: object
-    rotations: dict[str, np.ndarray]
-    sensors: SensorSet
-    findings: list[Finding]
-    gait: Gait
-    windows: list[StillWindow]
-    static_pose: dict[str, np.ndarray] | None
-    notes: list[str]
-    flags: list[str] = field(default_factory=list)
-
-
-def _prepared(trial: Recording, static, opts: IKOptions) -> _Prepared:
-    """Step 1-2: the sensor check, the strides and the still windows (computed once), the
-    orientations in the model's y-up world, and the static trial's mean pose."""
-    notes = list(trial.notes)
-    ctx, findings = run_checks(CheckContext(trial))
-    trial, gait, windows = ctx.rec, ctx.gait, ctx.windows
-    notes += ctx.gait_notes + ([short] if (short := too_short(gait.strides)) else [])
-    rejected = frozenset(f.sensor for f in findings if f.action == Action.ORIENTATION_FROM_SIGNALS)
-    trial, static, oriented, world = _in_model_world(trial, static, opts, notes, rejected)
-    rotations, sensors = _segment_rotations(trial, notes)
-    if sensors.pelvis and not oriented.filtered:  # the filter's world is vertical by construction
-        check_vertical(rotations["pelvis"], notes=notes, applied=world)
-    elif not sensors.pelvis:
-        notes.append("no pelvis sensor: hip and pelvis angles are not observed; landmarks are "
-                     "relative to each leg's hip centre")  # fmt: skip
-    if opts.heading != "anatomical" and not sensors.pelvis:
-        raise InputError(f"heading {opts.heading!r} needs a pelvis sensor (pelvis_imu)",
-                         file=trial.source, field="heading")  # fmt: skip
-    static_pose = None
-    if static is not None:
-        static_pose = static_orientations(static, list(rotations), notes,
-                                          opts.calibration_pose)  # fmt: skip
-    return _Prepared(trial, oriented, rotations, sensors, findings, gait, windows, static_pose,
-                     notes)  # fmt: skip
-
-
-def _calibration(s: _Prepared, rotations, inputs: PoseInputs) -> CalibrationPose:
+def _calibration(s: Prepared, rotations, inputs: PoseInputs) -> CalibrationPose:
     """Steps 3-4: the calibration pose where the recording shows it, else from the walk
     (:mod:`pipeline.process.pose_source`); ``cal.how`` says which."""
     if s.static_pose is not None:
@@ -281,7 +239,7 @@ def _method(opts: IKOptions) -> str:
     return DEFAULT_METHOD if opts.calibration_method == "none" else opts.calibration_method
 
 
-def _solved(s: _Prepared, geometry, opts: IKOptions, placements, rotations, cal) -> IKRun:
+def _solved(s: Prepared, geometry, opts: IKOptions, placements, rotations, cal) -> IKRun:
     """Step 6 and what follows it: the IK, the angles, the pelvis's path, the landmarks and the
     flags, as an :class:`IKRun` (its calibration's fields filled by the caller)."""
     t0 = _time.perf_counter()
@@ -291,15 +249,22 @@ def _solved(s: _Prepared, geometry, opts: IKOptions, placements, rotations, cal)
     notes = s.notes
     if not np.all(result.converged):
         notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
-    angles = joint_angles_of(sk, Q, s.sensors, rotations, placements, cal.H)
+    missing = unknown_in(rotations)
+    angles = blank_angles(joint_angles_of(sk, Q, s.sensors, rotations, placements, cal.H),
+                          missing)  # fmt: skip
+    if "pelvis_imu" in s.trial.missing.restarted:
+        angles = blank_after_restart(angles, PELVIS_ANGLES, "pelvis_imu", s.trial.missing, notes)
     gait = with_pelvis_path(s.gait, s.trial, sk, Q, notes)
+    if gait.pelvis_path is not None:
+        gait = replace(gait, pelvis_path=blank_path(gait.pelvis_path, missing))
     still = np.zeros(len(Q), dtype=bool)
     for w in s.windows:
         still[w.rows] = True
     flags = [f.line() for f in s.findings if f.flagged] + s.flags + quality_flags(
         sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if observed(j, s.sensors)],
         still)  # fmt: skip
-    return IKRun(s.trial.time, Q, angles, landmarks_of(sk, Q, s.sensors), cal.right, opts.heading,
+    landmarks = blank_landmarks(landmarks_of(sk, Q, s.sensors), missing, landmark_segment)
+    return IKRun(s.trial.time, Q, angles, landmarks, cal.right, opts.heading,
                  result.residual_rms, sk, seconds, notes, flags, opts, s.sensors, placements,
                  filtered=s.oriented.filtered, magnetometers=s.oriented.magnetometers,
                  source=s.trial.source, sensor_findings=s.findings, gait=gait,
@@ -311,54 +276,6 @@ def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, no
     lengths = {f"{side}_tibia": geometry.for_side(side).shank_length for side in legs}
     forward = cal.H[:, 0]
     return standing_posture(trial, rotations, cal.at_pose, cal.pose, forward, lengths, legs, notes)
-
-
-def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=frozenset()):
-    """Step 2: ``(trial, static, oriented, world)``: orientations estimated from raw signals
-    where asked or needed (:class:`~pipeline.process.signals.Orientations`; ``rejected``: the
-    sensors whose own a check left out), and every orientation in the model's y-up world."""
-    oriented = orientations_from_signals(trial, opts.filter, notes, rejected=rejected)
-    trial, filtered = oriented.recording, oriented.filtered
-    if static is not None:
-        notes += [f"static trial: {n}" for n in static.notes]
-        static = orientations_from_signals(static, opts.filter if filtered else None,
-                                           []).recording  # fmt: skip
-    to_model = opts.sensor_to_model
-    if filtered:
-        if to_model is not None:
-            raise InputError("--sensor-to-model applies to a recording's own orientations; the "
-                             "filter's world is z up and is turned to y up already",
-                             file=trial.source, field="sensor_to_model")  # fmt: skip
-        to_model = Z_UP_TO_Y_UP
-    elif to_model is None:
-        to_model, note = world_to_model(trial)
-        notes += [note] if note else []
-    world = np.eye(3)
-    if to_model is not None:
-        world = sensor_to_opensim_matrix(to_model)
-        trial = rotate_world(trial, world)
-        static = rotate_world(static, world) if static is not None else None
-    return trial, static, oriented, world
-
-
-def _segment_rotations(trial: Recording, notes: list[str]):
-    """Step 1: segment -> (N, 3, 3) sensor orientations of the segments whose sensors observe a
-    joint, and the :class:`SensorSet`; the others noted."""
-    rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()
-                 if seg != "torso"}  # fmt: skip
-    sensors = sensor_set(set(rotations), source=trial.source)
-    ignored = sorted(set(trial.sensor_names) - set(known_segments(trial)))
-    if ignored:
-        notes.append(f"sensors without a segment in this lower-limb model, ignored: {ignored}")
-    unused = sorted(s for s in rotations if _side(s) not in sensors.legs and s != "pelvis")
-    if unused:
-        notes.append(f"segments whose sensor observes no joint, ignored: {unused}")
-    rotations = {s: R for s, R in rotations.items() if s == "pelvis" or _side(s) in sensors.legs}
-    return rotations, sensors
-
-
-def _side(segment: str) -> str:
-    return segment.split("_", 1)[0]
 
 
 def _geometry(measures: Measures, opts: IKOptions):

@@ -19,9 +19,11 @@ findings and the recording read back). Every finding's action is one of
   value) cannot give an orientation: the sensor is **excluded** (its joints are not written). A
   magnetometer that never changes is **not used** (the sensor is filtered 6-D, its heading from
   the joints).
-* ``dropout``: a gyroscope or accelerometer with missing samples (NaN) for longer than
-  :data:`~pipeline.io.gaps.DEFAULT_MAX_GAP_S` (a radio dropout; shorter gaps the readers fill):
-  **excluded**.
+* ``dropout``: a sensor missing samples for longer than
+  :data:`~pipeline.io.gaps.DEFAULT_MAX_GAP_S` (a radio dropout, a late start or an early end;
+  shorter gaps the readers fill): **noted** with its spans, the sensor kept and what needs it
+  blank there (:mod:`pipeline.process.missing`: never bridged); missing :data:`MAX_MISSING` of
+  the recording or more: **excluded**.
 * ``saturation``: samples held at the range's limit (plateaus: runs of at least
   :data:`PLATEAU_SAMPLES` samples and :data:`PLATEAU_S` within :data:`PLATEAU_TOL` of the
   largest magnitude) or an angular speed no human segment reaches
@@ -71,7 +73,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.io.gaps import DEFAULT_MAX_GAP_S, true_runs
+from pipeline.io.gaps import true_runs
 from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SENSOR_TO_SEGMENT
 from pipeline.process.check_context import CheckContext
@@ -85,9 +87,9 @@ from pipeline.process.recording_checks import (
 from pipeline.process.slip import slip_step, unchecked
 from pipeline.process.swap import crossing_evidence, swap_evidence
 
-__all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_SATURATED", "MIN_SPEED_RATIO",
-           "PLATEAU_SAMPLES", "SCOPES", "SWAPPED_BACK", "Action", "Check", "Finding",
-           "check_sensors", "run_checks"]
+__all__ = ["CHECKS", "FOOT_QUANTILE", "MAX_HUMAN_GYRO_DPS", "MAX_MISSING", "MAX_SATURATED",
+           "MIN_SPEED_RATIO", "PLATEAU_SAMPLES", "SCOPES", "SWAPPED_BACK", "Action", "Check",
+           "Finding", "check_sensors", "run_checks"]
 
 #: A plateau: at least this many consecutive samples, lasting at least PLATEAU_S, within
 #: PLATEAU_TOL (relative) of a channel's largest magnitude. A smooth peak of human motion stays
@@ -101,6 +103,9 @@ PLATEAU_TOL = 0.001
 MAX_HUMAN_GYRO_DPS = 1500.0
 #: Share of saturated samples beyond which a sensor is excluded.
 MAX_SATURATED = 0.01
+#: A sensor missing this share of the recording or more is excluded (too little of it to
+#: calibrate or check); less, it is kept and blank where it is missing.
+MAX_MISSING = 0.9
 #: A sensor turning slower than this share of its neighbours' median speed does not follow a
 #: segment.
 MIN_SPEED_RATIO = 0.15
@@ -210,7 +215,7 @@ def _moves_with_segment(name: str, s: SensorSignals, ctx: CheckContext) -> Findi
     if s.gyr is None:
         return None
     near = _neighbours(name, rec)
-    speeds = [_speed(rec.sensors[n]) for n in near]
+    speeds = [_speed(ctx.own(n)) for n in near]
     if not speeds or min(speeds) < MOVING_SPEED:  # a still neighbour: a still segment is normal
         return None
     foot = SENSOR_TO_SEGMENT.get(name, "").endswith("foot")
@@ -231,20 +236,17 @@ def _action_on_stillness(neighbours: list[str]) -> Action:
 
 
 def _dropout(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    spans = ctx.missing.spans.get(name)
+    if not spans:
+        return None
     rec = ctx.rec
-    for field, what in (("gyr", "gyroscope"), ("acc", "accelerometer")):
-        x = getattr(s, field)
-        if x is None:
-            continue
-        runs = true_runs(~np.all(np.isfinite(x), axis=1))
-        long = [(a, b) for a, b in runs if (b - a) / rec.rate_hz > DEFAULT_MAX_GAP_S]
-        if long:
-            a, b = max(long, key=lambda r: r[1] - r[0])
-            return Finding(name, "dropout", Action.EXCLUDED,
-                           f"{what} missing for {(b - a) / rec.rate_hz:.1f} s (t = "
-                           f"{rec.time[a]:.2f}-{rec.time[b - 1]:.2f} s; {len(long)} gap(s) "
-                           f"longer than {DEFAULT_MAX_GAP_S:g} s)")  # fmt: skip
-    return None
+    share = sum(b - a for a, b in spans) / rec.n_samples
+    if share >= MAX_MISSING:
+        return Finding(name, "dropout", Action.EXCLUDED,
+                       f"missing {100 * share:.0f}% of the recording")  # fmt: skip
+    return Finding(name, "dropout", Action.NOTED,
+                   f"missing at {ctx.missing.describe(name, rec.time)} ({100 * share:.1f}% of "
+                   "the recording): not bridged, what needs it is blank there")  # fmt: skip
 
 
 def _repaired_on_reading(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
@@ -337,9 +339,9 @@ SWAPPED_BACK = Action.SWAPPED_BACK
 
 
 def check_sensors(rec: Recording) -> tuple[Recording, list[Finding]]:
-    """Every check of :data:`CHECKS` on ``rec`` (:func:`run_checks`): the checked recording and
-    the findings."""
-    ctx, findings = run_checks(CheckContext(rec))
+    """Every check of :data:`CHECKS` on ``rec`` as read (:func:`run_checks`; its missing samples
+    bridged, :meth:`CheckContext.of_recording`): the checked recording and the findings."""
+    ctx, findings = run_checks(CheckContext.of_recording(rec))
     return ctx.rec, findings
 
 
@@ -351,7 +353,8 @@ def run_checks(ctx: CheckContext) -> tuple[CheckContext, list[Finding]]:
     for check in of["recording"]:
         check.run(ctx)
     findings: list[Finding] = []
-    for name, s in ctx.rec.sensors.items():
+    for name in ctx.rec.sensors:
+        s = ctx.own(name)  # its missing samples NaN: judged on what it has
         for check in of["sensor"]:
             f = check.run(name, s, ctx)
             if f is not None:

@@ -5,7 +5,7 @@ Left-right mirrored names leave every sagittal angle as it was and mirror the ot
 ab/adduction and rotation come out as the other leg's, sign flipped): nothing in the angles says
 so. The hips do. Each thigh's hip centre in the pelvis sensor's frame, ``o_right`` and
 ``o_left``, follows from the two sensors' signals (Hu 2021 eq 1-3, the spherical calibration, as
-the heading alignment fits it: :func:`~pipeline.process.heading_alignment.centre_fit`), whatever
+the heading alignment fits it: :func:`~pipeline.process.joint_headings.centre_fit`), whatever
 the names; the subject's right at the calibration pose (``right``, world) follows from the way
 hips and knees flex (:func:`~pipeline.calibration.heading.subject_right`), whatever the names too.
 With ``R_p`` the pelvis sensor's orientation at the pose and ``h`` the horizontal part,
@@ -113,7 +113,7 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], cal, metho
     read), ``geometry`` the model (its hip centres), ``strides`` the walk's; None without raw
     signals of the pelvis's and both thighs' sensors or fewer than
     :data:`~pipeline.process.gait.MIN_STRIDES` on a leg."""
-    from pipeline.process.heading_alignment import centre_fit
+    from pipeline.process.joint_headings import centre_fit
 
     segments = ("pelvis", "right_femur", "left_femur")
     if any(s not in rotations or not _complete(trial, SEGMENT_SENSOR[s]) for s in segments):

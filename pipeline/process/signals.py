@@ -21,6 +21,7 @@ disturbed may carry a wrong heading from the vendor's fusion.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,12 +30,13 @@ from pipeline.calibration.attitude import MAGNETOMETER_FILTERS, filter_orientati
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.calibration.magnetometer import FieldTrust, field_trust
 from pipeline.errors import InputError
+from pipeline.io.gaps import true_runs
 from pipeline.io.recording import WORLD, Z_UP_WORLDS, Recording
 from pipeline.process.sensors import known_segments
 from pipeline.rotations import matrix_from_quat
 
-__all__ = ["Z_UP_TO_Y_UP", "Orientations", "gravity_in_world", "measured_up",
-           "orientations_from_signals", "world_to_model"]
+__all__ = ["Z_UP_TO_Y_UP", "Orientations", "filter_own_samples", "gravity_in_world",
+           "measured_up", "orientations_from_signals", "world_to_model"]
 
 #: ``sensor_to_model`` of a z-up world (space-fixed XYZ angles, rad), as OpenSense's for Xsens.
 Z_UP_TO_Y_UP = (-float(np.pi) / 2, 0.0, 0.0)
@@ -60,20 +62,31 @@ class Orientations:
         return sorted(n for n, f in self.magnetometers.items() if not f.trusted)
 
 
-def _inclination_up(time: np.ndarray, s) -> np.ndarray:
-    """The world's vertical in the sensor frame per sample, from a 6-D filter (gravity)."""
-    q = filter_orientations(time, s.gyr, s.acc, None, method=DEFAULT_FILTER)
-    return matrix_from_quat(q)[:, 2, :]  # the world's z (up) in the sensor frame: R^T e_z
+def filter_own_samples(trial: Recording, name: str, method: str = DEFAULT_FILTER,
+                       mag: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """(N, 4) orientations of sensor ``name`` from its raw signals by ``method`` (``mag``: its
+    magnetometer, for a 9-D filter); each run of its own samples (:meth:`Recording.present`)
+    filtered on its own: a filter's state is not carried across a gap it did not see, it starts
+    again after it (NaN over the gap)."""
+    s = trial.sensors[name]
+    q = np.full((trial.n_samples, 4), np.nan)
+    for a, b in true_runs(trial.present(name)):
+        if b - a >= 2:
+            q[a:b] = filter_orientations(trial.time[a:b], s.gyr[a:b], s.acc[a:b],
+                                         None if mag is None else mag[a:b], method=method)
+    return q
 
 
 def check_fields(trial: Recording, names: list[str]) -> dict[str, FieldTrust]:
     """:func:`~pipeline.calibration.magnetometer.field_trust` of the sensors ``names`` that have
-    a magnetometer and raw gyroscope and accelerometer signals."""
+    a magnetometer and raw gyroscope and accelerometer signals, over each one's own samples."""
     fields = {}
     for n in names:
         s = trial.sensors[n]
         if s.mag is not None and s.gyr is not None and s.acc is not None:
-            fields[n] = (s.mag, _inclination_up(trial.time, s))
+            own = trial.present(n)  # the world's z (up) in the sensor frame: R^T e_z
+            up = matrix_from_quat(filter_own_samples(trial, n)[own])[:, 2, :]
+            fields[n] = (s.mag[own], up)
     return field_trust(fields) if fields else {}
 
 
@@ -112,8 +125,7 @@ def orientations_from_signals(
                              "its orientation from", file=trial.source, field=n)  # fmt: skip
         use_mag = method in MAGNETOMETER_FILTERS and n in fields and fields[n].trusted
         mag = s.mag if use_mag else None
-        sensors[n] = s.replace(quat=filter_orientations(trial.time, s.gyr, s.acc, mag,
-                                                        method=method))  # fmt: skip
+        sensors[n] = s.replace(quat=filter_own_samples(trial, n, method, mag))
         dims[n] = "9-D" if use_mag else "6-D"
     kinds = sorted(set(dims.values()), reverse=True)
     filtered = " and ".join(kinds)
@@ -122,7 +134,8 @@ def orientations_from_signals(
     notes.append(f"orientations estimated from the raw signals by {what}"
                  + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
     shared = frozenset(n for n, d in dims.items() if d == "9-D")
-    return Orientations(trial.with_sensors(sensors), filtered, shared, fields)
+    out = _restarted(trial.with_sensors(sensors), [n for n, d in dims.items() if d == "6-D"])
+    return Orientations(out, filtered, shared, fields)
 
 
 def _filtered_alone(trial: Recording, names: list[str], missing: list[str],
@@ -137,14 +150,24 @@ def _filtered_alone(trial: Recording, names: list[str], missing: list[str],
         if s.gyr is None or s.acc is None:
             raise InputError(f"sensor {n} has no gyroscope and accelerometer signals to estimate "
                              "its orientation from", file=trial.source, field=n)  # fmt: skip
-        sensors[n] = s.replace(quat=filter_orientations(trial.time, s.gyr, s.acc, None,
-                                                        method=DEFAULT_FILTER))  # fmt: skip
+        sensors[n] = s.replace(quat=filter_own_samples(trial, n))
     notes.append(f"orientations of {missing} estimated from their raw signals by "
                  f"{DEFAULT_FILTER.upper()}, 6-D (their own were rejected); the others' are the "
                  "recording's")  # fmt: skip
     shared = frozenset(n for n in names if n not in missing
                        and (n not in fields or fields[n].trusted))  # fmt: skip
-    return Orientations(trial.with_sensors(sensors), None, shared, fields)
+    return Orientations(_restarted(trial.with_sensors(sensors), missing), None, shared, fields)
+
+
+def _restarted(trial: Recording, six_d: list[str]) -> Recording:
+    """``trial`` whose :attr:`~pipeline.io.gaps.Missing.restarted` names the ``six_d`` sensors
+    with a gap: filtered here run by run (:func:`filter_own_samples`), each has after a gap a
+    heading of its own."""
+    restarted = frozenset(n for n in six_d if n in trial.missing.spans)
+    if not restarted:
+        return trial
+    return dataclasses.replace(trial, missing=dataclasses.replace(trial.missing,
+                                                                  restarted=restarted))
 
 
 #: A measured up axis is accepted within this angle (deg) of a world axis.

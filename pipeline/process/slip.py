@@ -121,15 +121,24 @@ def _principal(C: np.ndarray) -> np.ndarray:
 
 def _strides(ctx, side: str) -> tuple[list[tuple[int, int]], np.ndarray]:
     """The leg's strides as sample ranges and its foot's rests (none from a shank), from the
-    recording's gait events (the context's ``gait``: the foot's, else the shank's)."""
+    recording's gait events (the context's ``gait``: the foot's, else the shank's); a stride
+    over a gap of the leg's or the pelvis's sensors left out (bridged there, not measured)."""
     ev = ctx.gait.events.get(side)
     if ev is None:
         return [], np.zeros((0, 2), int)
     ics = np.round(ev.ic).astype(int)
     longest = MAX_STRIDE_S * ctx.rec.rate_hz
-    strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True) if b - a <= longest]
+    own = ctx.rec.present(*(n for n in ctx.rec.sensors if _on_leg(n, side)))
+    strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True)
+               if b - a <= longest and own[a:b].all()]  # fmt: skip
     foot = ctx.gait.sources[side].startswith("foot")
     return strides, (ev.rests if foot else np.zeros((0, 2), int))
+
+
+def _on_leg(name: str, side: str) -> bool:
+    """Whether sensor ``name`` is on the ``side`` leg or the pelvis."""
+    segment = SENSOR_TO_SEGMENT.get(name, "")
+    return segment == "pelvis" or segment.startswith(f"{side}_")
 
 
 def _horizontal(w: np.ndarray, acc: np.ndarray, rate_hz: float) -> np.ndarray:

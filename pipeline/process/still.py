@@ -85,15 +85,18 @@ def resting(s: SensorSignals, rate_hz: float) -> np.ndarray | None:
 
 def still_windows(rec: Recording, sensors=None) -> list[StillWindow]:
     """The still windows (module docstring) of ``rec``'s ``sensors`` (default: all), in time
-    order."""
+    order; a sensor's missing samples (bridged, :meth:`~pipeline.io.recording.Recording.present`)
+    neither make a rest nor break one: the others' stillness decides there."""
     names = list(rec.sensors) if sensors is None else list(sensors)
     still = np.ones(rec.n_samples, dtype=bool)
     judged = False
     for name in names:
         r = resting(rec.sensors[name], rec.rate_hz)
         if r is not None:
-            still &= r
+            still &= r | ~rec.present(name)
             judged = True
+    if names:  # some sensor's own samples: a stretch no sensor has is not a rest
+        still &= np.any([rec.present(n) for n in names], axis=0)
     if not judged:
         return []
     least = MIN_WINDOW_S * rec.rate_hz

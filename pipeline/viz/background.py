@@ -33,7 +33,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from pipeline.errors import RecordingError
+from pipeline.errors import RecordingError, Terminated
 
 __all__ = ["WAIT_TIMEOUT_S", "BackgroundRecording"]
 
@@ -127,7 +127,10 @@ class BackgroundRecording:
     def wait(self, timeout_s: float = WAIT_TIMEOUT_S) -> None:
         """Wait for the job; raise :class:`~pipeline.errors.RecordingError` with the child's
         error if it failed, or if it has not finished after ``timeout_s`` (the child is killed:
-        a writer stuck on a full or hung disk never holds the command)."""
+        a writer stuck on a full or hung disk never holds the command). A writer stopped by
+        Ctrl-C or SIGTERM (sent to the whole process group, it may die before this process sees
+        its own) is the command's interruption: ``KeyboardInterrupt`` or
+        :class:`~pipeline.errors.Terminated` (exit 130 or 143), never a failed recording."""
         if self._job_fd >= 0:  # no job was submitted: let the child end
             os.close(self._job_fd)
             self._job_fd = -1
@@ -145,6 +148,10 @@ class BackgroundRecording:
         self._done = True
         code = os.waitstatus_to_exitcode(raw)
         if status != b"ok" and (status or code != 0):
+            if code == -signal.SIGINT:  # Ctrl-C reached the whole group, the writer first
+                raise KeyboardInterrupt
+            if code == -signal.SIGTERM:
+                raise Terminated
             why = (f"its writer was killed (signal {-code})" if code < 0
                    else f"its writer exited with code {code}")  # fmt: skip
             raise RecordingError(f"the rerun recording failed: {status.decode() or why}")

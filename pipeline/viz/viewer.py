@@ -46,8 +46,11 @@ def web_viewer_url(web_port: int = 9090, grpc_port: int = 9876) -> str:
 
 
 def port_in_use(port: int, host: str = "127.0.0.1") -> bool:
-    """Whether a TCP ``port`` on ``host`` is taken (a bind attempt, closed at once)."""
+    """Whether a TCP ``port`` on ``host`` is taken (a bind attempt, closed at once). With
+    ``SO_REUSEADDR``, as the viewer's server binds: a port a closed viewer left in TIME_WAIT
+    is free to it (refused for a minute after each viewer before), one listened on is not."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             sock.bind((host, int(port)))
         except OSError:
