@@ -17,6 +17,7 @@ from pipeline.calibration.conventions import (
     JOINTS,
     METHODS,
 )
+from pipeline.cli_live import add_live_options, run_live_command
 from pipeline.cli_options import PORT, add_ik_options, int_from
 from pipeline.cli_startup import recording_writer, single_threaded_blas
 from pipeline.errors import InputError, QualityError, RecordingError, Terminated
@@ -36,6 +37,8 @@ EXAMPLES = {
     "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
     "demo": "pipeline demo --out out/demo",
     "view": "pipeline view out/demo/demo.rrd --web",
+    "live": "pipeline live --replay example:ximu3_lower_body --sex m --height-m 1.80 "
+    "--speed max --viewer none --out out/live",
 }
 
 
@@ -196,6 +199,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--grpc-port", type=PORT, default=9876,
                    help="port serving the recording's data with --web (default 9876)")  # fmt: skip
     p.set_defaults(func=_cmd_view)
+
+    p = _sub(sub, "live", "joint angles and the skeleton while the subject moves: Lab Streaming "
+             "Layer streams, or a recording replayed as if live")
+    add_live_options(p)
+    p.set_defaults(func=run_live_command)
     for sp in sub.choices.values():  # every option's help says whether it has a default
         for action in sp._actions:
             if action.required and action.option_strings and "required" not in action.help:

@@ -16,7 +16,7 @@ def test_every_command_has_help_with_an_example(capsys):
     sub = next(a for a in parser._actions if a.dest == "command")
     assert set(sub.choices) == set(EXAMPLES) == {
         "scale", "ik", "orientations", "calibrate", "simulate", "reproduce", "demo",
-        "view", "batch"}  # fmt: skip
+        "view", "batch", "live"}  # fmt: skip
     for name in EXAMPLES:
         with pytest.raises(SystemExit) as exc:
             main([name, "--help"])

@@ -14,7 +14,8 @@ from pipeline.cli import EXAMPLES, build_parser, main
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 # in the order a new user would run them: calibrate reads what simulate wrote
-ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "batch", "demo", "reproduce")
+ORDER = ("scale", "simulate", "orientations", "calibrate", "ik", "batch", "demo", "reproduce",
+         "live")
 NEEDS_DATA = {"batch": SHARED / "opensim",
               "reproduce": SHARED / "wang2023"}  # fmt: skip
 

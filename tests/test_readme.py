@@ -31,3 +31,11 @@ def test_no_example_reads_data_a_user_does_not_have():
     for line in (ROOT / "README.md").read_text().splitlines():
         if line.startswith("pipeline "):
             assert "shared/data" not in line, line
+
+
+def test_the_lab_outlet_example_is_python_that_streams():
+    """The README's LSL outlet (a ``py`` block: it needs the lab's sensor) is Python that reads
+    the sensor and pushes its samples (the outlets' path itself: test_live_sources)."""
+    (code,) = re.findall(r"```py\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    compile(code, "README.md", "exec")
+    assert "read_my_sensor" in code and "push_sample" in code

@@ -26,7 +26,7 @@ from pipeline.model.conventions import JOINT_SEGMENTS
 from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import euler_zxy_from_matrix
 
-__all__ = ["ANGLE_NAMES", "jcs_angles", "joint_angles"]
+__all__ = ["ANGLE_NAMES", "angles_of_segments", "jcs_angles", "joint_angles", "segment_names"]
 
 #: Joint -> the names of its three JCS angles (the ankle's third is not in the model).
 ANGLE_NAMES = {"hip": ("flexion", "adduction", "rotation"),
@@ -63,16 +63,30 @@ def joint_angles(skeleton: Skeleton, Q: np.ndarray) -> dict[str, np.ndarray]:
     rotation = internal rotation. Computed from the segment frames (not read from q), so a hinge
     knee reports its JCS angles including the reference rotation between the segments.
     """
-    segs = ["pelvis"] + [f"{s}_{seg}" for s in skeleton.legs for seg in ("femur", "tibia", "foot")]
     Q = check_configurations(skeleton, Q)
     out: dict[str, np.ndarray] = {}
     for start in range(0, len(Q), CHUNK):  # chunks of frames: bounded memory on long trials
         rows = slice(start, start + CHUNK)
-        traj = frame_trajectories(skeleton, Q[rows], segs)
-        for side in skeleton.legs:
-            for joint, (prox, dist) in JOINT_SEGMENTS.items():
-                p = prox if prox == "pelvis" else f"{side}_{prox}"
-                ang = jcs_angles(traj[p][0], traj[f"{side}_{dist}"][0], joint, side)
-                for i, name in enumerate(ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
-                    out.setdefault(f"{side}_{joint}_{name}", np.empty(len(Q)))[rows] = ang[:, i]
+        traj = frame_trajectories(skeleton, Q[rows], segment_names(skeleton.legs))
+        chunk = angles_of_segments({seg: R for seg, (R, _) in traj.items()}, skeleton.legs)
+        for name, v in chunk.items():
+            out.setdefault(name, np.empty(len(Q)))[rows] = v
+    return out
+
+
+def segment_names(legs) -> list[str]:
+    """The segments the joint angles of ``legs`` are taken between: the pelvis and each leg's."""
+    return ["pelvis"] + [f"{s}_{seg}" for s in legs for seg in ("femur", "tibia", "foot")]
+
+
+def angles_of_segments(rotations: dict[str, np.ndarray], legs) -> dict[str, np.ndarray]:
+    """:func:`joint_angles` from the segments' world rotations (segment -> (N, 3, 3), the
+    segments of :func:`segment_names`)."""
+    out: dict[str, np.ndarray] = {}
+    for side in legs:
+        for joint, (prox, dist) in JOINT_SEGMENTS.items():
+            p = prox if prox == "pelvis" else f"{side}_{prox}"
+            ang = jcs_angles(rotations[p], rotations[f"{side}_{dist}"], joint, side)
+            for i, name in enumerate(ANGLE_NAMES[joint][: 2 if joint == "ankle" else 3]):
+                out[f"{side}_{joint}_{name}"] = ang[:, i]
     return out

@@ -54,6 +54,7 @@ __all__ = [
     "heading_between",
     "hinge_heading",
     "turn_about_vertical",
+    "vertical_turn",
 ]
 
 #: Window length (s) of (1); the windows overlap by half.
@@ -100,6 +101,13 @@ def turn_about_vertical(R: np.ndarray, psi: np.ndarray, up: np.ndarray) -> np.nd
     world vertical ``up`` (:func:`pipeline.rotations.exp3` of ``psi_k up``)."""
     g = normalize(np.asarray(up, float))
     return exp3(np.outer(psi, g)) @ R
+
+
+def vertical_turn(after: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """(N,) rad: the turn about the y-up vertical that takes orientations ``before`` (N, 3, 3)
+    to ``after`` (:func:`turn_about_vertical`'s ``psi``, read back; NaN where either is)."""
+    M = np.asarray(after, float) @ np.swapaxes(np.asarray(before, float), 1, 2)
+    return np.arctan2(M[:, 0, 2], M[:, 0, 0])
 
 
 def hinge_heading(

@@ -42,7 +42,7 @@ from pipeline.process.options import (
 from pipeline.process.run import IKRun, mot_columns, process_recording
 
 __all__ = ["figures_json", "load_orientations", "recording_name", "run_ik", "run_settings",
-           "summary_text", "write_landmarks_csv"]
+           "summary_text", "write_landmarks_csv", "write_outputs"]
 
 
 def load_orientations(path: str | Path, sensor_map: dict[str, str] | None = None,
@@ -175,6 +175,12 @@ def previous_outputs(out_dir: Path, name: str) -> list[Path]:
 #: and the IK; longer ones log in the process, where that import is a small part of the time and
 #: one process bounds the memory (``results/bench_long.txt``).
 BACKGROUND_FRAMES = 20_000
+
+
+def write_outputs(out, out_dir: Path, name: str, trial: Recording, settings: IKSettings) -> IKRun:
+    """Every file of ``pipeline ik`` for ``trial`` (our sensor names) into the output set
+    ``out`` (:func:`~pipeline.io.atomic.output_set`), the recording's ``.rrd`` logged here."""
+    return _outputs(out, out_dir, name, trial, None, settings, None)
 
 
 def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) -> IKRun:

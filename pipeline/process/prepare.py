@@ -30,7 +30,7 @@ from pipeline.process.signals import Z_UP_TO_Y_UP, orientations_from_signals, wo
 from pipeline.process.still import StillWindow
 from pipeline.rotations import matrix_from_quat
 
-__all__ = ["Prepared", "prepared"]
+__all__ = ["Prepared", "model_world", "prepared"]
 
 
 @dataclass
@@ -90,7 +90,20 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=f
         notes += [f"static trial: {n}" for n in static.notes]
         static = orientations_from_signals(static, opts.filter if filtered else None,
                                            []).recording  # fmt: skip
-    to_model = opts.sensor_to_model
+    world, note = model_world(trial, opts, bool(filtered))
+    notes += [note] if note else []
+    if not np.allclose(world, np.eye(3)):
+        trial = rotate_world(trial, world)
+        static = rotate_world(static, world) if static is not None else None
+    return trial, static, oriented, world
+
+
+def model_world(trial: Recording, opts: IKOptions, filtered: bool) -> tuple[np.ndarray, str | None]:
+    """The fixed rotation that puts the orientations of ``trial`` (``filtered``: from the
+    attitude filter, z up) in the model's y-up world, and what decided it (a note, or None):
+    ``--sensor-to-model``, else the filter's z up, else the vendor's world or the measured up
+    axis (:func:`~pipeline.process.signals.world_to_model`)."""
+    to_model, note = opts.sensor_to_model, None
     if filtered:
         if to_model is not None:
             raise InputError("--sensor-to-model applies to a recording's own orientations; the "
@@ -99,13 +112,7 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=f
         to_model = Z_UP_TO_Y_UP
     elif to_model is None:
         to_model, note = world_to_model(trial)
-        notes += [note] if note else []
-    world = np.eye(3)
-    if to_model is not None:
-        world = sensor_to_opensim_matrix(to_model)
-        trial = rotate_world(trial, world)
-        static = rotate_world(static, world) if static is not None else None
-    return trial, static, oriented, world
+    return (np.eye(3) if to_model is None else sensor_to_opensim_matrix(to_model)), note
 
 
 def _segment_rotations(trial: Recording, notes: list[str]):

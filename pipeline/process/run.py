@@ -48,7 +48,7 @@ from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import KneeCorrection
-from pipeline.calibration.heading_offset import HeadingDrift
+from pipeline.calibration.heading_offset import HeadingDrift, vertical_turn
 from pipeline.calibration.magnetometer import FieldTrust
 from pipeline.errors import InputError
 from pipeline.io.recording import Recording
@@ -106,7 +106,9 @@ class IKRun:
     frame -> 4x4 placement in its segment (the calibration applied); ``corrections``: side ->
     :class:`~pipeline.calibration.correction.KneeCorrection`; ``heading_drifts``:
     ``'<side>_<joint>'`` -> the :class:`~pipeline.calibration.heading_offset.HeadingDrift`
-    applied (:mod:`pipeline.process.heading_alignment`); ``sensors``: what the sensors observe;
+    applied (:mod:`pipeline.process.heading_alignment`); ``heading_turns``: segment -> (N,) rad,
+    the whole turn about the vertical that alignment gave its sensor's orientations (its own
+    drift and those above it; the segments it aligned); ``sensors``: what the sensors observe;
     ``heading_right``: the subject's right at the calibration pose (world); ``residual_rms``
     (N,) rad; ``flags``: implausible results (:mod:`pipeline.analysis.quality`); ``options``: the
     options used; ``filtered``: ``'6-D'``/``'9-D'`` when the orientations were estimated from raw
@@ -134,6 +136,7 @@ class IKRun:
     corrections: dict[str, KneeCorrection] = field(default_factory=dict)
     knee_calibrations: list[KneeCalibration] = field(default_factory=list)
     heading_drifts: dict[str, HeadingDrift] = field(default_factory=dict)
+    heading_turns: dict[str, np.ndarray] = field(default_factory=dict)
     filtered: str | None = None
     magnetometers: dict[str, FieldTrust] = field(default_factory=dict)
     posture: Posture | None = None
@@ -204,6 +207,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
     if align:
         rotations, drifts = align_headings(s.trial, rotations, legs, align, knee_cal, method,
                                            s.notes)  # fmt: skip
+    turns = {seg: vertical_turn(rotations[seg], s.rotations[seg]) for seg in align}
     cal = _calibration(s, rotations, inputs)
     knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     if check_sides and in_one_heading(s.oriented.shared, drifts):
@@ -221,7 +225,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
                                             unaligned, s.trial.rate_hz, s.notes)  # fmt: skip
     run = _solved(s, geometry, opts, placements, rotations, cal)
     run.measures, run.posture, run.corrections = measures, posture, corrections
-    run.knee_calibrations, run.heading_drifts = knee_cal, drifts
+    run.knee_calibrations, run.heading_drifts, run.heading_turns = knee_cal, drifts, turns
     return run
 
 

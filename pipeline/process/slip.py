@@ -274,6 +274,7 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
         seen = [d for d in others if np.isfinite(d)]
         out[name] = dataclasses.replace(
             best, others_deg=float(max(seen, default=0.0)),
+            others_min_deg=float(min(seen, default=0.0)),
             mirror_deg=_mirror_step(other, name, best.time_s, rec.time),
             axis_name=ROCKING_AXIS if name == pelvis_name else best.axis_name)
     return out

@@ -39,8 +39,9 @@ class Slip:
     """The largest step of one sensor's view of its segment: ``axis_deg`` (eq 1) and
     ``gravity_deg`` (eq 2, NaN without foot rests) at the split ``time_s`` (the first stride
     after it starts there), with ``before`` and ``after`` strides; ``others_deg``: the largest
-    step of the leg's other sensors at that split (0 without any); ``mirror_deg``: the step of
-    the other leg's sensor on the same segment at its split nearest in time (NaN without)."""
+    step of the leg's other sensors at that split (0 without any), ``others_min_deg`` their
+    smallest; ``mirror_deg``: the step of the other leg's sensor on the same segment at its split
+    nearest in time (NaN without)."""
 
     axis_deg: float
     gravity_deg: float
@@ -49,6 +50,7 @@ class Slip:
     after: int
     others_deg: float = 0.0
     mirror_deg: float = float("nan")
+    others_min_deg: float = 0.0
     axis_name: str = "its segment's flexion axis"
     pause_s: float = 0.0
 
@@ -59,11 +61,14 @@ class Slip:
     @property
     def slipped(self) -> bool:
         """Beyond :data:`SLIP_DEG`, alone on its leg or on its side of the body
-        (:data:`ALONE_DEG`; :mod:`pipeline.process.slip`), and within a walk (the split not across
+        (:data:`ALONE_DEG`; :mod:`pipeline.process.slip`; on its side: with a strap's other
+        sensor, while one of the leg's sensors stays: a whole leg stepping, and the other leg
+        not, is a turn pivoting on it), and within a walk (the split not across
         a pause longer than :data:`MAX_STRIDE_S`: two walks apart, the subject may stand, walk or
         run differently, or have strapped the sensor again)."""
+        together = self.mirror_deg < ALONE_DEG and self.others_min_deg < ALONE_DEG
         return (self.deg > SLIP_DEG and self.pause_s <= MAX_STRIDE_S
-                and (self.others_deg < ALONE_DEG or self.mirror_deg < ALONE_DEG))  # fmt: skip
+                and (self.others_deg < ALONE_DEG or together))  # fmt: skip
 
     @property
     def certain(self) -> bool:

@@ -19,8 +19,8 @@ from pipeline.process.pose import CalibrationPose
 from pipeline.process.sensors import SensorSet
 from pipeline.rotations import euler_zxy_from_matrix, quat_xyzw_from_matrix, unwrap_angles
 
-__all__ = ["PELVIS_ANGLES", "joint_angles_of", "landmarks_of", "observed", "same_sensor_runs",
-           "solve"]
+__all__ = ["PELVIS_ANGLES", "joint_angles_of", "landmarks_of", "observed", "observed_angles",
+           "same_sensor_runs", "solve"]
 
 #: The pelvis's ZXY angles in the subject's heading, OpenSim's names.
 PELVIS_ANGLES = ("pelvis_tilt", "pelvis_list", "pelvis_rotation")
@@ -81,7 +81,12 @@ def _by_runs(model, targets, opts: IKOptions, start, root=None) -> IKResult:
 def joint_angles_of(sk, Q, sensors: SensorSet, rotations, placements, H) -> dict[str, np.ndarray]:
     """The observed joints' ISB angles and, with a pelvis sensor, the pelvis' ZXY angles in the
     subject's heading; continuous (a subject turning round must not jump by 360 deg)."""
-    angles = {k: v for k, v in joint_angles(sk, Q).items() if observed(k, sensors)}
+    return observed_angles(joint_angles(sk, Q), sensors, rotations, placements, H)
+
+
+def observed_angles(angles, sensors: SensorSet, rotations, placements, H) -> dict[str, np.ndarray]:
+    """:func:`joint_angles_of` from the model's joint angles ``angles`` (all joints)."""
+    angles = {k: v for k, v in angles.items() if observed(k, sensors)}
     if sensors.pelvis:
         pelvis_world = rotations["pelvis"] @ placements["pelvis_imu"][:3, :3].T
         zxy = euler_zxy_from_matrix(np.einsum("ij,njk->nik", H.T, pelvis_world))

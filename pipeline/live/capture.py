@@ -1,0 +1,214 @@
+"""A live capture: samples in, joint angles out, frame by frame, calibrated as it goes.
+
+:class:`LiveCapture` reads a source (:mod:`pipeline.live.sources`) until it ends, the duration
+is reached or it is stopped, and for each block of frames the streams give
+(:mod:`pipeline.live.aligner`): keeps the samples (the capture, written at the end as ``pipeline
+ik`` writes a recording), turns them into orientations (:mod:`pipeline.live.orientation`) and,
+once calibrated, into configurations and joint angles (:mod:`pipeline.live.tracker`), handed to
+the viewer as they come (:mod:`pipeline.live.viewer`). Its states, said on the terminal and in the
+viewer: ``stand still`` until the capture has a still window of :data:`STILL_S` (every sensor at
+rest, :mod:`pipeline.process.still`); then it is calibrated on what it has
+(:mod:`pipeline.live.calibration`) and, until that calibration is final (``walk``: the walk
+checks the pose and gives the heading), again every :data:`RECALIBRATE_S` of capture; then
+``calibrated``. A calibration runs beside the frames (a thread) when the source is live, and in
+line when it is replayed as fast as it is processed (the frames then wait: the same result
+whatever the machine's speed).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pipeline.io.recording import Recording
+from pipeline.live.aligner import Aligner, Block
+from pipeline.live.calibration import LiveCalibration, calibrate_capture
+from pipeline.live.orientation import LiveOrientations
+from pipeline.live.store import CaptureStore, ColumnSpool
+from pipeline.live.tracker import Tracker
+from pipeline.model.measures import Measures
+from pipeline.process.options import IKOptions
+from pipeline.process.still import still_windows
+
+__all__ = ["ANGLE_COLUMNS", "RECALIBRATE_S", "STILL_S", "CaptureResult", "LiveCapture"]
+
+#: The live angles kept (every joint angle the model gives and the pelvis's).
+ANGLE_COLUMNS = [f"{side}_{joint}_{angle}" for side in ("right", "left")
+                 for joint, angles in (("hip", ("flexion", "adduction", "rotation")),
+                                       ("knee", ("flexion", "adduction", "rotation")),
+                                       ("ankle", ("flexion", "inversion")))
+                 for angle in angles] + ["pelvis_tilt", "pelvis_list", "pelvis_rotation"]
+
+#: The still window (s) the first calibration waits for.
+STILL_S = 1.0
+#: Until its calibration is final, the capture is calibrated again after this much more (s).
+RECALIBRATE_S = 2.0
+#: How often (s of capture) the capture looks for its still window.
+LOOK_S = 0.5
+
+
+@dataclass
+class CaptureResult:
+    """What a capture gave: the ``recording`` captured (our sensor names, on its grid), the live
+    ``angles`` (name -> (N,), rad; NaN before the first calibration), each frame's processing
+    time (``frame_s``, s: from its block's arrival to its angles, a calibration made in line not
+    counted), the calibrations (``calibrations``: at what time of the capture, how, final), and
+    what it said (``notes``)."""
+
+    recording: Recording
+    angles: dict[str, np.ndarray]
+    frame_s: np.ndarray
+    calibrations: list[tuple[float, str, bool]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+class LiveCapture:
+    """A capture from ``source`` of ``measures`` with ``opts`` (module docstring); ``viewer``:
+    what logs each block (or None), ``say``: where the states are said (the terminal)."""
+
+    def __init__(self, source, measures: Measures, opts: IKOptions, *, viewer=None,
+                 duration_s: float | None = None, in_line: bool = False,
+                 say: Callable[[str], None] = print) -> None:  # fmt: skip
+        self.source, self.measures, self.opts = source, measures, opts
+        self.viewer, self.duration_s, self.in_line, self.say = viewer, duration_s, in_line, say
+        self.header = dict(getattr(source, "header", {}) or {})
+        self.store = CaptureStore(source.names)
+        self.orient: LiveOrientations | None = None
+        self.tracker: Tracker | None = None
+        self.cal: LiveCalibration | None = None
+        self.state = ""
+        self._pending: threading.Thread | None = None
+        self._fresh: LiveCalibration | None = None
+        self._next_look = STILL_S
+        self._angles = ColumnSpool(ANGLE_COLUMNS)
+        self._frame_s = ColumnSpool(["s"])
+        self.result = CaptureResult(Recording(np.zeros(0), 1.0, {}), {}, np.zeros(0))
+
+    def run(self, stop: Callable[[], bool] = lambda: False) -> CaptureResult:
+        """Read the source until it ends, ``duration_s`` is reached or ``stop()``; the result."""
+        aligner = Aligner(self.source.names, self.source.rate_hz)
+        self._set_state("stand still")
+        try:
+            while not stop():
+                chunks = self.source.read()
+                if chunks is None:
+                    break
+                arrived = time.perf_counter()
+                for c in chunks:
+                    aligner.push(c.sensor, c.time, c.signals)
+                block = aligner.pull()
+                if block is not None and self._frames(block, arrived):
+                    break
+        finally:
+            self.source.close()
+            if self._pending is not None:
+                self._pending.join()
+        return self._result()
+
+    def _frames(self, block: Block, arrived: float) -> bool:
+        """One block (module docstring); True once ``duration_s`` is reached."""
+        if self.duration_s is not None:
+            keep = block.time < self.duration_s
+            if not keep.all():
+                block = _first(block, int(keep.sum()))
+        m = len(block.time)
+        if m == 0:
+            return True
+        if self.orient is None:
+            own = self.opts.filter is None and all(s.quat is not None
+                                                   for s in block.sensors.values())  # fmt: skip
+            self.orient = LiveOrientations(self.source.names, self.source.rate_hz, own,
+                                           self._world(own, block))  # fmt: skip
+        kinds = self.orient.update(block.sensors)
+        rotations = self.orient.chosen(kinds)
+        self.store.add(block, kinds)
+        began = time.perf_counter()
+        self._calibrate_if_due(float(block.time[-1]))
+        calibrating = time.perf_counter() - began  # in line: not the frames' own time
+        angles = {}
+        if self.tracker is not None:
+            _, angles, poses = self.tracker.solve(rotations)
+            if self.viewer is not None:
+                self.viewer.log(block.time, poses, angles, self.tracker.cal)
+        self._angles.append(angles, m)
+        self._frame_s.append({"s": np.full(m, (time.perf_counter() - arrived - calibrating) / m)},
+                             m)  # fmt: skip
+        return self.duration_s is not None and block.time[-1] >= self.duration_s - 1e-9
+
+    def _world(self, own: bool, block: Block) -> np.ndarray | None:
+        """The model's world for the streams' own orientations (offline's rule)."""
+        if not own:
+            return None
+        from pipeline.process.prepare import model_world
+
+        rec = Recording(block.time, self.source.rate_hz, block.sensors, self.header)
+        return model_world(rec, self.opts, False)[0]
+
+    def _calibrate_if_due(self, now_s: float) -> None:
+        if self._fresh is not None:  # a calibration finished beside the frames
+            self._use(self._fresh)
+            self._fresh = None
+        if self._pending is not None or (self.cal is not None and self.cal.final):
+            return
+        if self.cal is None:
+            if now_s < self._next_look:
+                return
+            self._next_look = now_s + LOOK_S
+            rec = self.store.recording(self.source.rate_hz, self.header)
+            if not any(w.t1 - w.t0 >= STILL_S for w in still_windows(rec)):
+                return
+        elif now_s < self.cal.at_s + RECALIBRATE_S:
+            return
+        self._start_calibration()
+
+    def _start_calibration(self) -> None:
+        rec = self.store.recording(self.source.rate_hz, self.header)
+        live = self.store.live_rotations()
+        if self.in_line:
+            self._use(calibrate_capture(rec, self.measures, self.opts, live))
+            return
+
+        def work() -> None:
+            try:
+                self._fresh = calibrate_capture(rec, self.measures, self.opts, live)
+            finally:
+                self._pending = None
+
+        self._pending = threading.Thread(target=work, name="live-calibration", daemon=True)
+        self._pending.start()
+
+    def _use(self, cal: LiveCalibration) -> None:
+        if self.orient is not None:
+            self.orient.nine_d = cal.nine_d
+        if cal.final:
+            self.store.forget_orientations()
+        self.cal, self.tracker = cal, Tracker(cal, self.opts.joint_limits)
+        self.result.calibrations.append((cal.at_s, cal.how, cal.final))
+        self._set_state("calibrated" if cal.final else "calibrated: walk a few steps to finish")
+
+    def _set_state(self, state: str) -> None:
+        if state != self.state:
+            self.state = state
+            self.say(f"live: {state}")
+            if self.viewer is not None:
+                self.viewer.state(state)
+
+    def _result(self) -> CaptureResult:
+        self.result.recording = self.store.recording(self.source.rate_hz, self.header)
+        self.result.angles = {k: v for k, v in self._angles.read().items() if np.isfinite(v).any()}
+        self.result.frame_s = self._frame_s.read()["s"]
+        for spool in (self.store, self._angles, self._frame_s):
+            spool.close()
+        return self.result
+
+
+def _first(block: Block, m: int) -> Block:
+    """The first ``m`` frames of a block."""
+    return Block(block.time[:m], {n: s.replace(**{g: getattr(s, g)[:m] for g in
+                                                  ("quat", "gyr", "acc", "mag")
+                                                  if getattr(s, g) is not None})
+                                  for n, s in block.sensors.items()})  # fmt: skip

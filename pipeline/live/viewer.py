@@ -1,0 +1,111 @@
+"""The live capture in the rerun viewer, as it comes, never holding the capture up.
+
+:class:`LiveViewer` logs with the rerun SDK what the offline recording shows, under the same
+entities (:mod:`pipeline.viz.scene`): each segment's pose (``world/model/<segment>``, its mesh
+once per calibration), the joint angles in degrees (``plots/<side>_<joint>/<angle>``), and the
+capture's state (``state``: stand still, calibrated). The capture hands it each block
+(:meth:`LiveViewer.log`), which only puts the block's last frame in a small queue, at most
+:data:`MAX_HZ` a second; a thread logs from the queue. A viewer that is slow or closed fills the
+queue and the frames it cannot take are dropped, the capture's own data never: the capture goes
+on at its pace whatever the viewer does.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["MAX_HZ", "LiveViewer"]
+
+#: The viewer is sent at most this many frames a second.
+MAX_HZ = 30.0
+_QUEUE = 8
+
+
+class LiveViewer:
+    """A rerun viewer of the capture ``name``: ``mode`` ``'spawn'`` (a viewer started here),
+    ``'web'`` (the web viewer on 127.0.0.1:``port``) or ``'save'`` (to ``path``, for tests)."""
+
+    def __init__(self, name: str, mode: str, *, path: Path | None = None,
+                 port: int = 9090) -> None:  # fmt: skip
+        import rerun as rr
+
+        self.rr = rr
+        self.stream = rr.RecordingStream(f"pipeline live {name}")
+        if mode == "spawn":
+            self.stream.spawn()
+        elif mode == "web":
+            uri = self.stream.serve_grpc()
+            rr.serve_web_viewer(web_port=port, open_browser=False, connect_to=uri)
+        elif mode == "save":
+            self.stream.save(str(path))
+        else:
+            raise ValueError(f"unknown viewer mode {mode!r}")
+        self.dropped, self._last, self._cal = 0, -np.inf, None
+        self._queue: queue.Queue = queue.Queue(maxsize=_QUEUE)
+        self._thread = threading.Thread(target=self._loop, name="live-viewer", daemon=True)
+        self._thread.start()
+
+    def state(self, text: str) -> None:
+        self._put(("state", text))
+
+    def log(self, time: np.ndarray, poses: dict, angles: dict[str, np.ndarray], cal) -> None:
+        """A block: its last frame's segment ``poses`` (segment -> (R (m, 3, 3), p (m, 3))) and
+        ``angles`` at ``time`` (m,), if :data:`MAX_HZ` allows."""
+        t = float(time[-1])
+        if t - self._last < 1.0 / MAX_HZ:
+            return
+        self._last = t
+        frame = {seg: (R[-1], p[-1]) for seg, (R, p) in poses.items()}
+        self._put(("frame", t, frame, {k: float(v[-1]) for k, v in angles.items()},
+                   cal if cal is not self._cal else None))  # fmt: skip
+        self._cal = cal
+
+    def _put(self, item) -> None:
+        try:
+            self._queue.put_nowait(item)
+        except queue.Full:
+            self.dropped += 1
+
+    def _loop(self) -> None:
+        while (item := self._queue.get()) is not None:
+            try:
+                self._show(item)
+            except Exception:  # noqa: BLE001 - a viewer gone: the capture goes on without it
+                self.dropped += 1
+
+    def _show(self, item) -> None:
+        rr, s = self.rr, self.stream
+        if item[0] == "state":
+            s.log("state", rr.TextLog(item[1]))
+            return
+        _, t, frame, angles, cal = item
+        s.set_time("time", duration=t)
+        if cal is not None:
+            self._meshes(cal)
+        for seg, (R, p) in frame.items():
+            if np.all(np.isfinite(R)):
+                s.log(f"world/model/{seg}", rr.Transform3D(translation=p, mat3x3=R))
+        for key, value in angles.items():
+            side, joint, angle = key.split("_", 2) if key.count("_") >= 2 else ("", "", key)
+            entity = f"plots/{side}_{joint}/{angle}" if side in ("right", "left") else \
+                f"plots/{key}"  # fmt: skip
+            if np.isfinite(value):
+                s.log(entity, rr.Scalars(np.degrees(value)))
+
+    def _meshes(self, cal) -> None:
+        from pipeline.viz.model import segment_meshes
+
+        for seg, mesh in segment_meshes(cal.skeleton).items():
+            self.stream.log(f"world/model/{seg}/mesh", self.rr.Mesh3D(
+                vertex_positions=mesh.vertices, triangle_indices=mesh.triangles,
+                vertex_normals=mesh.normals), static=True)  # fmt: skip
+
+    def close(self) -> None:
+        """Log what is queued, then stop."""
+        self._queue.put(None)
+        self._thread.join(timeout=5.0)
+        self.stream.flush()
