@@ -17,30 +17,13 @@ from pipeline.calibration.conventions import (
     JOINTS,
     METHODS,
 )
+from pipeline.cli_examples import EXAMPLE_NEEDS, EXAMPLES
 from pipeline.cli_live import add_live_options, run_live_command
 from pipeline.cli_options import PORT, add_ik_options, int_from
 from pipeline.cli_startup import recording_writer, single_threaded_blas
 from pipeline.errors import InputError, QualityError, RecordingError, Terminated
 from pipeline.model.conventions import DEFAULT_KNEE, KNEE_MODES
 from pipeline.simulate.conventions import MOTIONS, STANDING_S
-
-EXAMPLES = {
-    "scale": "pipeline scale --sex f --height-m 1.62 --knee-width-m 0.095 --out out/subject.urdf",
-    "ik": "pipeline ik --orientations example:ximu3_lower_body --sex m --height-m 1.80 "
-    "--out out/ximu3",
-    "simulate": "pipeline simulate --out out/sim --motion gait --seed 0",
-    "orientations": "pipeline orientations --imu example:ximu3_lower_body --filter vqf "
-    "--out out/ximu3_orientations.sto",
-    "calibrate": "pipeline calibrate hinge --imu1 out/sim/imu/right_femur_imu.csv "
-    "--imu2 out/sim/imu/right_tibia_imu.csv --method ipopt --json",
-    "batch": "pipeline batch tests/data/batch_manifest.csv --out out/batch --workers 2",
-    "reproduce": "pipeline reproduce wang2023 --data ../shared/data/wang2023 --out out/wang2023",
-    "demo": "pipeline demo --out out/demo",
-    "view": "pipeline view out/demo/demo.rrd --web",
-    "live": "pipeline live --replay example:ximu3_lower_body --sex m --height-m 1.80 "
-    "--speed max --viewer none --out out/live",
-}
-
 
 DEBUG_HELP = "show tracebacks on errors (default: one line; before or after the command)"
 
@@ -49,11 +32,6 @@ def _version() -> str:
     from pipeline import __version__
 
     return __version__
-
-
-#: What an example needs first.
-EXAMPLE_NEEDS = {"orientations": "the simulate example's output",
-                 "calibrate": "the simulate example's output"}  # fmt: skip
 
 
 def _sub(sub, name: str, help_: str) -> argparse.ArgumentParser:
@@ -112,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "ik", "joint angles and landmarks from a recording (IMU orientations or raw "
              "signals)")
     add_ik_options(p)
+    p.add_argument("--verbose", action="store_true",
+                   help="also print the run's summary (<name>_summary.md; by default: the files "
+                   "written and the headline figures)")  # fmt: skip
     p.set_defaults(func=_cmd_ik)
 
     p = _sub(sub, "calibrate", "joint-constraint calibration of IMU placement (Hu 2021)")
@@ -188,6 +169,8 @@ def build_parser() -> argparse.ArgumentParser:
                    f"pose; 0.5-10), then a 1.5 s transition into gait (default {STANDING_S:g})")
     p.add_argument("--seed", type=int_from(0), default=0,
                    help="seed of the simulation (default 0)")  # fmt: skip
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace a previous demo's outputs in --out (default: refused)")
     p.set_defaults(func=_cmd_demo)
 
     p = _sub(sub, "view", "open a recording in the rerun viewer")
@@ -250,13 +233,16 @@ def _cmd_scale(args) -> int:
 
 
 def _cmd_ik(args) -> int:
-    from pipeline.commands.ik import run_settings, summary_text
+    from pipeline.commands.ik import run_settings, summary_text, written_text
     from pipeline.option import from_flag
     from pipeline.process.options import all_specs, resolve_settings
+    from pipeline.progress import shown
 
     values = {s.name: from_flag(s, getattr(args, s.name)) for s in all_specs()}
     settings = resolve_settings(args.config, values)
-    _say(summary_text(run_settings(settings, recorder=args.recorder)))
+    with shown("pipeline ik"):
+        run = run_settings(settings, recorder=args.recorder)
+    _say(summary_text(run) if args.verbose else written_text(run, settings))
     return 0
 
 
@@ -277,7 +263,11 @@ def _cmd_simulate(args) -> int:
     if standing is None:  # a calibration pose where the motion's rest pose is standing
         standing = (STANDING_S if args.motion in STANDING_MOTIONS and args.duration_s > STANDING_S
                     else 0.0)  # fmt: skip
-    _say(run_simulation(args.out, args.motion, args.duration_s, args.seed, standing))
+    from pipeline.progress import shown
+
+    with shown(f"pipeline simulate --motion {args.motion}"):
+        text = run_simulation(args.out, args.motion, args.duration_s, args.seed, standing)
+    _say(text)
     return 0
 
 
@@ -310,7 +300,8 @@ def _cmd_reproduce(args) -> int:
 def _cmd_demo(args) -> int:
     from pipeline.commands.demo import run_demo
 
-    _say(run_demo(args.out, seed=args.seed, standing_s=args.standing_s))
+    _say(run_demo(args.out, seed=args.seed, standing_s=args.standing_s,
+                  overwrite=args.overwrite))
     return 0
 
 

@@ -27,18 +27,27 @@ def single_threaded_blas() -> None:
 
 def recording_writer(argv: list[str] | None):
     """``pipeline ik`` run as the program, its recording wanted: the recording's writer forked
-    first, before the parser and the heavy imports, so that it imports NumPy, pyarrow and rerun's
-    native writer on the second core meanwhile (:mod:`pipeline.viz.background`; ``run_ik`` hands
-    it the job or closes it)."""
+    first, before the parser and the heavy imports, so that it imports NumPy, pyarrow, rerun's
+    native writer and matplotlib (the report's figures) on the second core meanwhile
+    (:mod:`pipeline.viz.background`; ``run_ik`` hands it the job or closes it)."""
     words = sys.argv[1:] if argv is None else []
-    if words[:1] != ["ik"] or any(w in ("--no-rerun", "-h", "--help") for w in words):
+    if words[:1] != ["ik"] or any(w in ("-h", "--help") for w in words) or (
+            "--no-rerun" in words and "--no-report" in words):  # fmt: skip
         return None
     from pipeline.viz.background import BackgroundRecording
 
-    return BackgroundRecording.start(warm=_warm_recording)
+    report = "--no-report" not in words
+    return BackgroundRecording.start(warm=_warm_outputs if report else _warm_recording)
 
 
 def _warm_recording() -> None:
     from pipeline.viz.scene import warm_recording  # no Pinocchio: the child only logs
 
     warm_recording()
+
+
+def _warm_outputs() -> None:
+    from pipeline.report.plots import warm_plots
+
+    _warm_recording()
+    warm_plots()

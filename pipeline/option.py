@@ -43,7 +43,8 @@ _TRUE, _FALSE = ("true", "1", "yes"), ("false", "0", "no")
 class Spec:
     """One option: its ``name`` (the field's), ``kind`` (:data:`KINDS`), ``help`` text,
     ``default``, ``choices``, the configuration file's ``section`` (``subject``, ``sensors`` or
-    ``ik``), whether it is ``required``, ``metavar`` and hidden ``aliases`` of its flag."""
+    ``ik``), whether it is ``required``, ``metavar``, hidden ``aliases`` of its flag and, for a
+    true ``bool``, what its ``--no-`` flag does (``off``: that flag's help)."""
 
     name: str
     kind: str
@@ -54,6 +55,7 @@ class Spec:
     required: bool = False
     metavar: str | tuple[str, ...] | None = None
     aliases: tuple[str, ...] = ()
+    off: str | None = None
 
     @property
     def flag(self) -> str:
@@ -88,12 +90,14 @@ def option(
     required: bool = False,
     metavar: str | tuple[str, ...] | None = None,
     aliases: tuple[str, ...] = (),
+    off: str | None = None,
 ) -> object:
     """A dataclass field that is an option (module docstring); ``default`` is the field's."""
     if kind not in KINDS:
         raise ValueError(f"unknown option kind {kind!r}; expected one of {KINDS}")
     meta = {"option": dict(kind=kind, help=help, choices=tuple(choices), section=section,
-                           required=required, metavar=metavar, aliases=tuple(aliases))}  # fmt: skip
+                           required=required, metavar=metavar, aliases=tuple(aliases),
+                           off=off)}  # fmt: skip
     if isinstance(default, dict):
         return dataclasses.field(default_factory=dict, metadata=meta)
     if required:
@@ -123,10 +127,15 @@ def add_flags(parser: argparse.ArgumentParser, options: list[Spec]) -> None:
     for s in options:
         said = "(default:" in s.help  # the help says what its default means
         text = s.help if said else f"{s.help} ({s.default_text()})"
+        if s.kind == "bool" and s.default is True:  # --no-x: what it does; by default, the help
+            text = f"{s.off or 'not: ' + s.help} (by default: {s.help})"
         common = dict(dest=s.name, default=None, help=text)
         names = [s.flag]
         if s.kind == "bool":
             parser.add_argument(*names, action="store_const", const=not s.default, **common)
+            if s.default is True:  # --x, the default said explicitly (e.g. over a config file)
+                parser.add_argument(f"--{s.name.replace('_', '-')}", action="store_const",
+                                    const=True, dest=s.name, default=None, help=argparse.SUPPRESS)
         elif s.kind == "vec3":
             parser.add_argument(*names, type=float, nargs=3, metavar=s.metavar or ("X", "Y", "Z"),
                                 **common)  # fmt: skip

@@ -2,8 +2,9 @@
 
 The core install (``pip install imu-skeleton-pipeline``) is what ``pipeline ik`` and ``pipeline
 demo`` need; ``[batch]`` adds Dask for ``pipeline batch``, ``[reproduce]`` the MATLAB and C3D
-readers and matplotlib for ``pipeline reproduce``, ``[live]`` Lab Streaming Layer for ``pipeline
-live --lsl``, ``[all]`` every one (:data:`EXTRAS`).
+readers and matplotlib for ``pipeline reproduce``, ``[report]`` matplotlib for the reports
+(``<name>_report.html``), ``[live]`` Lab Streaming Layer for ``pipeline live --lsl``, ``[all]``
+every one (:data:`EXTRAS`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ __all__ = ["EXTRAS", "need"]
 
 #: Module -> the extra that installs it.
 EXTRAS = {"distributed": "batch", "dask": "batch", "matio": "reproduce", "ezc3d": "reproduce",
-          "matplotlib": "reproduce", "pylsl": "live"}  # fmt: skip
+          "matplotlib": "report", "pylsl": "live"}  # fmt: skip
 
 
 def need(module: str, what: str) -> ModuleType:

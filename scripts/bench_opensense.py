@@ -221,9 +221,9 @@ def run_opensense(osim, model, sto: Path, rot, work: Path, heading_axis: str = "
 # ---- ours ----------------------------------------------------------------------------------------
 @contextlib.contextmanager
 def timed_solve_ik(record: list, **fixed):
-    """Wrap the solve_ik that pipeline.process.run calls, to record its CPU time (``fixed``:
+    """Wrap the solve_ik that pipeline.process.solve calls, to record its CPU time (``fixed``:
     keyword arguments added to the call, e.g. ``stride=1`` for the sequential solver)."""
-    import pipeline.process.run as ikmod
+    import pipeline.process.solve as ikmod
 
     original = ikmod.solve_ik
 
@@ -292,16 +292,17 @@ def floor_command() -> float:
     return best
 
 
-def whole_command(sto: Path, rot) -> tuple[float, float]:
-    """Wall time of the whole ``pipeline ik`` command in a child process: (best, median) of 5
-    runs after one that caches the bytecode."""
+def whole_command(sto: Path, rot, *extra: str) -> tuple[float, float]:
+    """Wall time of the whole ``pipeline ik`` command (``extra``: its flags) in a child process:
+    (best, median) of 5 runs after one that caches the bytecode."""
     import subprocess
 
     walls = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(6):
             args = [sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex",
-                    SEX, "--height-m", str(HEIGHT_M), "--out", tmp]  # fmt: skip
+                    SEX, "--height-m", str(HEIGHT_M), "--out", tmp, "--overwrite",
+                    *extra]  # fmt: skip
             if any(rot):
                 args += ["--sensor-to-model", *(repr(float(r)) for r in rot)]
             t0 = time.perf_counter()
@@ -426,15 +427,21 @@ def bench_file(osim, sto: Path, rot, geometry, torso: bool) -> list[str]:
         f"difference {np.degrees(dq):.4f} deg (both within the 1e-4 rad tolerance of the optimum)"
     )
     whole, whole_med = whole_command(sto, rot)
+    bare, bare_med = whole_command(sto, rot, "--no-report")
     floor = floor_command()
     os_whole = ref["place_wall"] + ref["ik_wall"]
     lines.append(
         f"Whole command: `pipeline ik` (a new process: imports, reading, calibration, AoR "
-        f"correction, IK, .mot, landmarks CSV, URDF, rerun recording, summary, config) "
+        f"correction, IK, .mot, landmarks CSV, URDF, rerun recording, summary, config, report) "
         f"{whole:.2f} s wall (best of 5; median {whole_med:.2f} s) vs OpenSense placement + IK "
         f"tool run() {os_whole:.2f} s: {os_whole / whole:.1f}x (median {os_whole / whole_med:.1f}x)"
         f" (IK only, anatomical free: "
         f"{(n_ours / max(ours[('anatomical', 'free')]['ik_cpu'], 1e-9)) / fps_ref:.0f}x)"
+    )
+    lines.append(
+        f"Whole command without the report (`--no-report`: no matplotlib) {bare:.2f} s wall "
+        f"(best of 5; median {bare_med:.2f} s): {os_whole / bare:.1f}x (median "
+        f"{os_whole / bare_med:.1f}x)"
     )
     lines.append(
         f"Floor: a new process that only imports NumPy and Pinocchio takes {floor:.2f} s "
@@ -495,8 +502,8 @@ def main() -> int:
     try:
         import opensim as osim
     except ImportError:
-        print("skipped: pip install opensim to run this benchmark")
-        return 0
+        print("bench_opensense: needs the opensim package (pip install opensim)", file=sys.stderr)
+        return 2
     with contextlib.suppress(Exception):
         osim.Logger.setLevelString("Error")
     from pipeline.model.measures import Measures
@@ -505,8 +512,9 @@ def main() -> int:
     files = [f for f in FILES if args.only in (None, f)]
     missing = [f for f in files if not (args.data / f).is_file()]
     if missing:
-        print(f"skipped: {missing} not found in {args.data}")
-        return 0
+        print(f"bench_opensense: {missing} not found in {args.data} (--data: the folder of "
+              "OpenSim's .sto files, ../shared/data/opensim)", file=sys.stderr)
+        return 2
     geometry, _ = geometry_from_measures(Measures(SEX, HEIGHT_M))
     print(
         f"OpenSim {osim.__version__} vs pipeline; model {SEX} {HEIGHT_M:.2f} m (thigh "

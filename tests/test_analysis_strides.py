@@ -51,14 +51,17 @@ def test_a_pause_is_no_stride_and_a_shank_has_no_length():
 def test_the_csv_has_exactly_the_issues_columns():
     _, strides = _strides(strides=4, seed=1)
     rows = list(csv.reader(io.StringIO(strides_csv(strides))))
-    assert tuple(rows[0]) == STRIDE_COLUMNS == (
+    assert tuple(rows[0]) == ("stride", *STRIDE_COLUMNS, "in_means")
+    assert STRIDE_COLUMNS == (
         "side", "start_s", "end_s", "stride_time_s", "stance_share", "stride_length_m",
         "speed_m_s", "cadence_steps_min", "clearance_m", "turn_deg", "straight",
         "steady")  # fmt: skip
-    assert len(rows) == 1 + len(strides) and {r[0] for r in rows[1:]} == {"left"}
-    assert {r[-2] for r in rows[1:]} == {"true"}
-    assert [r[-1] for r in rows[1:]] == ["false", "true", "false"]  # the walk's start and stop
-    assert abs(float(rows[1][5]) - 1.3) < 0.02
+    assert len(rows) == 1 + len(strides) and {r[1] for r in rows[1:]} == {"left"}
+    assert [r[0] for r in rows[1:]] == ["1", "2", "3"]
+    assert {r[-3] for r in rows[1:]} == {"true"}
+    assert [r[-2] for r in rows[1:]] == ["false", "true", "false"]  # the walk's start and stop
+    assert [r[-1] for r in rows[1:]] == ["false", "true", "false"]  # in the means
+    assert abs(float(rows[1][6]) - 1.3) < 0.02
 
 
 def test_the_summary_by_side_over_the_straight_steady_strides():

@@ -247,15 +247,15 @@ def test_sigterm_during_ik_leaves_all_or_nothing(tmp_path, processes_with):
         # all or nothing: the seven outputs (.mot, .csv, .urdf, .rrd, summary, configuration,
         # figures) or none. A signal after the outputs were committed (while Python exits) still
         # leaves the complete set.
-        assert len(files) in (0, 7), (proc.returncode, files, err)
+        assert len(files) in (0, 8), (proc.returncode, files, err)
         if proc.returncode == 143 and files:  # after the commit, while the command ended
-            assert "the outputs were complete before it (7 files" in err, err
+            assert "the outputs were complete before it (8 files" in err, err
             outcomes.add("finished")
         elif proc.returncode == 143:
             assert "no output was written" in err
             outcomes.add("interrupted")
         elif proc.returncode == 0:
-            assert len(files) == 7
+            assert len(files) == 8
             outcomes.add("finished")
     assert "interrupted" in outcomes
 
@@ -309,7 +309,7 @@ def test_simulate_then_ik_the_helps_own_chain(tmp_path, capsys):
                  "--height-m", "1.75", "--no-rerun", "--out", str(tmp_path / "ik")]) == 0
     from pipeline.io.mot import read_mot
 
-    knee = read_mot(tmp_path / "ik" / "imu_ik.mot").columns["knee_angle_r"]
+    knee = read_mot(tmp_path / "ik" / "sim_ik.mot").columns["knee_angle_r"]
     assert np.nanmax(knee) - np.nanmin(knee) > np.radians(40)  # gait's knee swings ~60 deg
     assert "try --knee" not in capsys.readouterr().err
 

@@ -53,6 +53,9 @@ def test_rows_run_fail_alone_and_a_rerun_skips_what_is_complete(trials, tmp_path
     assert "no such file" in rows[1]["message"]
     assert (out / "s1" / "walk0" / "walk0_ik.mot").is_file()
     assert (out / "s1" / "walk1" / "walk1_config.toml").read_text().count('knee = "hinge"') == 1
+    group = (out / "batch_report.html").read_text()  # the group report: every row, side by side
+    assert group.count("<td>s1</td><td>walk") == 2 and "no figures (failed or not run)" in group
+    assert (out / "s1" / "walk0" / "walk0_report.html").is_file()
     again, _ = run_batch(m, out, workers=1, progress=False)
     assert "0 ok, 1 failed, 2 skipped" in again
     assert _summary(out)[0]["frames"] == "400"  # the skipped row's figures, read back

@@ -77,6 +77,11 @@ def test_recording_shows_the_moving_model(result):
     assert counts["/plots/left_hip/flexion_truth"] == 1500
 
 
-def test_cli_demo_runs(tmp_path, capsys):
+def test_cli_demo_runs_and_refuses_a_previous_demo_unless_overwrite(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path / "d")]) == 0
     assert "pipeline view" in capsys.readouterr().out
+    before = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "d").iterdir()}
+    assert main(["demo", "--out", str(tmp_path / "d")]) == 2
+    assert "a previous demo's outputs are there (subject.urdf" in capsys.readouterr().err
+    assert {p.name: p.stat().st_mtime_ns for p in (tmp_path / "d").iterdir()} == before
+    assert main(["demo", "--out", str(tmp_path / "d"), "--overwrite"]) == 0

@@ -162,7 +162,7 @@ def test_a_failing_recording_leaves_no_output(tmp_path, monkeypatch):
     if not sto.exists():
         pytest.skip("../shared/data/opensim not present")
 
-    monkeypatch.setattr(ik, "_record", _broken_recording)
+    monkeypatch.setattr(ik, "_record_and_report", _broken_recording)
     out = tmp_path / "out"
     with pytest.raises((RuntimeError, ValueError), match="format changed"):
         ik.run_ik(sto, Measures("m", 1.8), out)
@@ -202,17 +202,17 @@ def test_a_second_run_into_the_same_folder_is_refused_or_replaces_the_first(tmp_
             "--out", str(out)]  # fmt: skip
     assert main([*args, "--osim"]) == 0
     before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
-    assert "imu.osim" in before
+    assert "sim.osim" in before
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert "a previous run's outputs are there (" in err and "imu_ik.mot" in err
+    assert "a previous run's outputs are there (" in err and "sim_ik.mot" in err
     assert "--overwrite" in err
     assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before  # untouched
     (out / "notes.txt").write_text("mine")
     assert main([*args, "--overwrite"]) == 0
-    assert "imu.osim" not in {p.name for p in out.iterdir()}  # the first run's, not rewritten
+    assert "sim.osim" not in {p.name for p in out.iterdir()}  # the first run's, not rewritten
     assert (out / "notes.txt").read_text() == "mine"  # not an output of this recording
-    assert "overwrite" not in (out / "imu_config.toml").read_text()
+    assert "overwrite" not in (out / "sim_config.toml").read_text()
 
 
 @pytest.mark.dataset
@@ -252,3 +252,14 @@ def test_a_dropout_is_blank_named_and_the_rest_kept(tmp_path, capsys):
     for name in ("knee_angle_l", "ankle_angle_l", "hip_flexion_r", "hip_flexion_l"):
         assert np.isfinite(b[name]).all()
         assert np.max(np.abs(np.asarray(b[name]) - np.asarray(a[name]))) < 0.5, name
+
+
+def test_name_gives_the_outputs_name_and_a_path_is_refused():
+    from pipeline.commands.ik import output_name
+    from pipeline.errors import InputError
+
+    assert output_name("subject01", "any/imu") == "subject01"
+    assert output_name(None, "example:ximu3_lower_body") == "ximu3_lower_body"
+    for bad in ("a/b", "..", ""):
+        with pytest.raises(InputError, match="expected a name, not a path"):
+            output_name(bad, "walk.sto")

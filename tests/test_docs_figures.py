@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -295,3 +296,33 @@ def test_a_documented_figure_is_its_results_files(doc, doc_re, result, result_re
     assert measured, f"{result}: no match for {result_re!r}"
     assert float(quoted.group(1)) == float(measured.group(1)), (doc, quoted.group(0),
                                                                  measured.group(0))
+
+
+@pytest.mark.slow
+def test_methods_figures_of_the_shipped_ximu3_walk_are_what_a_run_gives():
+    """methods.md's figures of the x-IMU3 example (no results file: computed here): VQF 9-D
+    against the vendor's fusion, the knees' largest flexion, the functional calibration's halves
+    and residuals."""
+    from pipeline.io.formats import read_recording
+    from pipeline.model.measures import Measures
+    from pipeline.process.run import process_recording
+
+    rec = read_recording("example:ximu3_lower_body")
+    vendor = process_recording(rec, Measures("m", 1.8))
+    vqf = process_recording(rec, Measures("m", 1.8), filter="vqf")
+    text = (ROOT / "docs" / "methods.md").read_text(encoding="utf-8")
+    knees, rms, r = [], [], []
+    for side in ("right", "left"):
+        a = np.degrees(vendor.joint_angles[f"{side}_knee_flexion"])
+        b = np.degrees(vqf.joint_angles[f"{side}_knee_flexion"])
+        knees += [np.nanmax(a), np.nanmax(b)]
+        rms.append(np.sqrt(np.nanmean((a - b) ** 2)))
+        r.append(np.corrcoef(a, b)[0, 1])
+    assert min(r) > 0.99 and max(rms) < 1.0
+    said = re.search(r"\(r > 0\.99, within 1° RMS, both knees to (\d+)-(\d+)°\)", text)
+    assert said and (int(said[1]), int(said[2])) == (round(min(knees)), round(max(knees)))
+    halves = [c.split_half_deg for c in vendor.knee_calibrations]
+    res = [c.residual_rad_s for c in vendor.knee_calibrations]
+    said = re.search(r"\(halves (\d+)-(\d+)° apart, residual ([\d.]+)-([\d.]+) rad/s\)", text)
+    assert said and (int(said[1]), int(said[2])) == (round(min(halves)), round(max(halves)))
+    assert (float(said[3]), float(said[4])) == (round(min(res), 2), round(max(res), 2))

@@ -174,3 +174,14 @@ def test_an_ximu3_folder_mapped_by_device_id():
     swapped = dict(ids, tibia_r_imu="64F61CB3", tibia_l_imu="64F61B2A")  # a map decides
     np.testing.assert_array_equal(read_recording(folder, swapped).sensors["tibia_r_imu"].gyr,
                                   by_label.sensors["tibia_l_imu"].gyr)  # fmt: skip
+
+
+def test_a_generic_folder_name_gives_its_parents(tmp_path):
+    from pipeline.io.formats import recording_name
+
+    (tmp_path / "S02" / "imu").mkdir(parents=True)
+    (tmp_path / "S02" / "walk_fast").mkdir()
+    assert recording_name(tmp_path / "S02" / "imu") == "S02"  # not every subject's "imu"
+    assert recording_name(tmp_path / "S02" / "walk_fast") == "walk_fast"
+    assert recording_name(tmp_path / "S02" / "imu" / "trial.sto") == "trial"
+    assert recording_name("example:ximu3_lower_body") == "ximu3_lower_body"

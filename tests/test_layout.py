@@ -93,7 +93,7 @@ def test_packages_state_their_stage_and_export_their_public_names():
     import importlib
 
     packages = ("io", "model", "calibration", "ik", "analysis", "simulate", "viz", "commands",
-                "process", "live")  # fmt: skip
+                "process", "live", "report")  # fmt: skip
     for pkg in packages:
         module = importlib.import_module(f"pipeline.{pkg}")
         assert module.__doc__ and len(module.__doc__) > 80, pkg

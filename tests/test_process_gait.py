@@ -66,12 +66,12 @@ def test_pipeline_ik_writes_the_s02_strides(tmp_path):
     pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
     assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
                  "--height-m", "1.72", "--no-rerun", "--out", str(tmp_path)]) == 0  # fmt: skip
-    rows = list(csv.DictReader((tmp_path / "imu_strides.csv").open()))
+    rows = list(csv.DictReader((tmp_path / "gaittoolbox_s02_strides.csv").open()))
     straight = [float(r["stride_length_m"]) for r in rows if r["straight"] == "true"]
     assert len(rows) >= 8 and 1.3 < np.median(straight) < 1.6  # Vicon: 1.17-1.56 m
-    fig = json.loads((tmp_path / "imu_figures.json").read_text())
+    fig = json.loads((tmp_path / "gaittoolbox_s02_figures.json").read_text())
     assert fig["strides"] == len(rows) and 1.2 < fig["stride_time_s"] < 1.6
-    assert "Strides (`<name>_strides.csv`" in (tmp_path / "imu_summary.md").read_text()
+    assert "Strides (`<name>_strides.csv`" in (tmp_path / "gaittoolbox_s02_summary.md").read_text()
 
 
 def test_the_stance_weight_and_a_path_needs_both_feet():
@@ -129,7 +129,7 @@ def test_s02_the_body_walks_the_room(tmp_path):
     assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
                  "--height-m", "1.72", "--no-rerun", "--landmarks", "world", "--out",
                  str(tmp_path)]) == 0  # fmt: skip
-    mot = read_mot(tmp_path / "imu_ik.mot").columns
+    mot = read_mot(tmp_path / "gaittoolbox_s02_ik.mot").columns
     path = np.column_stack([mot[f"pelvis_t{a}"] for a in "xyz"])
     assert 0.8 < np.median(path[:, 1]) < 1.05  # the pelvis's height above the floor (m)
     m = sio.loadmat(S02 / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
@@ -138,7 +138,7 @@ def test_s02_the_body_walks_the_room(tmp_path):
     assert walked > 7.0 and err.mean() < 0.025 * walked
     import csv
 
-    rows = list(csv.DictReader((tmp_path / "imu_landmarks.csv").open()))
+    rows = list(csv.DictReader((tmp_path / "gaittoolbox_s02_landmarks.csv").open()))
     hjc = np.array([[float(r[f"right_HJC_{a}"]) for a in "xz"] for r in rows])
     assert np.ptp(hjc, axis=0).max() > 2.0  # in the room, not relative to the pelvis
 

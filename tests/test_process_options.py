@@ -31,8 +31,8 @@ def test_defaults_are_the_documented_ones():
 
 
 def test_output_switches_are_apart_from_the_processing_options():
-    assert {s.name for s in specs(OutputOptions)} == {"out", "rerun", "osim", "landmarks",
-                                                      "overwrite", "strict"}
+    assert {s.name for s in specs(OutputOptions)} == {"out", "name", "rerun", "report", "osim",
+                                                      "landmarks", "overwrite", "strict"}
     assert not {"rerun", "osim", "strict", "sensor_map", "orientations"} & {
         s.name for s in specs(IKOptions)}
 
@@ -95,6 +95,7 @@ def _value(spec):
         "pelvis_width_m": ("0.25",),
         "knee_axis_femur": ("0", "0.1", "1"), "knee_axis_tibia": ("0.1", "0", "1"),
         "sensor_to_model": ("-1.5708", "0", "0"), "foot_length_m": ("0.25",),
+        "name": ("subject01",),
     }
     if spec.name in by_name:
         return by_name[spec.name]

@@ -69,9 +69,9 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     # the simulated knee is a hinge about the population AoR: the case Wang eq 9-13 corrects
     # exactly (without it the standing knee's ISB offset stays, see tests/test_commands_demo.py)
     assert main(["ik", "--orientations", str(raw), "--sex", "m", "--height-m", "1.75",
-                 "--no-rerun", "--correction", "aor",
+                 "--no-rerun", "--correction", "aor", "--name", "raw",
                  "--out", str(out)]) == 0  # fmt: skip
-    summary = (out / "raw_summary.md").read_text()
+    summary = (out / "raw_summary.md").read_text()  # --name: "raw" alone names no recording
     assert "input: raw signals, orientations by VQF (9-D)" in summary
     assert "Functional knee calibration" in summary
     assert "vertical was not checked" not in summary  # the filter's world is vertical

@@ -14,7 +14,8 @@ from pipeline.model.skeleton import Skeleton
 from pipeline.rotations import matrix_from_quat
 from pipeline.simulate.model import simulate_trial
 from pipeline.simulate.motions import joint_trajectories, ramp
-from pipeline.simulate.walk import FLAT, PUSH_OFF, walk_trajectories
+from pipeline.simulate.walk import walk_trajectories
+from pipeline.simulate.walk_feet import FLAT, PUSH_OFF
 
 MEASURES = Measures("m", 1.75)
 STANDING = 2.0

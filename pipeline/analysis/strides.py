@@ -29,7 +29,8 @@ import numpy as np
 from pipeline.analysis.foot_trajectory import FootTrajectory
 from pipeline.analysis.gait_events import GaitEvents
 
-__all__ = ["MAX_STRIDE_S", "MERGED_SHARE", "STRAIGHT_TURN_DEG", "STRIDE_COLUMNS", "Stride",
+__all__ = ["MAX_STRIDE_S", "MERGED_SHARE", "STRAIGHT_TURN_DEG", "STRIDES_CSV_COLUMNS",
+           "STRIDE_COLUMNS", "Stride",
            "foot_strides", "in_the_means", "left_out", "mark_steady", "stride_rows",
            "stride_summary", "stride_table", "strides_csv"]  # fmt: skip
 
@@ -163,10 +164,16 @@ def stride_summary(strides: list[Stride]) -> dict[str, dict[str, tuple[float, fl
     return out
 
 
+#: ``<name>_strides.csv``'s columns: the stride's number (from 1, as ``<name>_cycles.csv``
+#: refers to it), :data:`STRIDE_COLUMNS`, and whether it counts in the means.
+STRIDES_CSV_COLUMNS = ("stride", *STRIDE_COLUMNS, "in_means")
+
+
 def strides_csv(strides: list[Stride]) -> str:
-    """``<name>_strides.csv``: :data:`STRIDE_COLUMNS`, one row per stride (SI units, 6
-    significant digits; ``straight`` and ``steady`` as ``true``/``false``; an empty cell where a
-    value is not measured)."""
+    """``<name>_strides.csv``: :data:`STRIDES_CSV_COLUMNS`, one row per stride (SI units, 6
+    significant digits: ``stance_share`` a fraction of the stride; ``straight``, ``steady`` and
+    ``in_means`` (:func:`in_the_means`) as ``true``/``false``; an empty cell where a value is not
+    measured)."""
     from pipeline.io.tables import csv_text
 
     def cell(v):
@@ -174,12 +181,13 @@ def strides_csv(strides: list[Stride]) -> str:
             return "true" if v else "false"
         return "" if isinstance(v, float) and not np.isfinite(v) else v
 
-    rows = [{c: cell(getattr(s, c)) for c in STRIDE_COLUMNS} for s in strides]
-    return csv_text(rows, STRIDE_COLUMNS)
+    rows = [{"stride": k + 1, **{c: cell(getattr(s, c)) for c in STRIDE_COLUMNS},
+             "in_means": cell(in_the_means(s))} for k, s in enumerate(strides)]  # fmt: skip
+    return csv_text(rows, STRIDES_CSV_COLUMNS)
 
 
 #: The summary's parameters: column -> (label, scale, digits).
-_SHOWN = {"stride_time_s": ("stride time (s)", 1.0, 2), "stance_share": ("stance (%)", 100.0, 1),
+_SHOWN = {"stride_time_s": ("stride time (s)", 1.0, 2), "stance_share": ("stance share", 1.0, 3),
           "stride_length_m": ("stride length (m)", 1.0, 2), "speed_m_s": ("speed (m/s)", 1.0, 2),
           "cadence_steps_min": ("cadence (steps/min)", 1.0, 1),
           "clearance_m": ("clearance (cm)", 100.0, 1)}  # fmt: skip

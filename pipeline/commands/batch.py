@@ -26,7 +26,8 @@ nothing, as ``pipeline ik``).
   ``<name>_figures.json``. It is replaced (atomically) when the batch starts, every row
   ``pending``, and when it ends; SIGTERM or Ctrl-C stops the batch, in one process as on Dask:
   the summary then says which rows finished and which did not run (``not run``), every finished
-  trial complete (exit 143 or 130; rerun to continue).
+  trial complete (exit 143 or 130; rerun to continue). A finished batch also writes
+  ``DIR/batch_report.html``, the group report (:mod:`pipeline.commands.batch_outputs`).
 * ``scheduler``: ``tcp://HOST:PORT`` (or ``tls://``), checked before connecting; a service that
   does not answer as a Dask scheduler within :data:`CONNECT_TIMEOUT_S` is refused.
 """
@@ -39,18 +40,13 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
+from pipeline.commands.batch_outputs import SUMMARY_COLUMNS, trial_figures, write_summary
 from pipeline.errors import InputError, Terminated
 
 __all__ = ["REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "option_columns", "read_manifest", "run_batch",
            "run_row"]  # fmt: skip
 
 REQUIRED_COLUMNS = ("subject", "sex", "height_m", "orientations")
-#: The strides' means per trial (both sides; empty without strides).
-STRIDE_COLUMNS = ("strides", "stride_time_s", "stride_length_m", "speed_m_s", "cadence_steps_min",
-                  "stance_share")  # fmt: skip
-SUMMARY_COLUMNS = ("row", "subject", "orientations", "status", "message", "frames",
-                   "residual_median_deg", "flags", *STRIDE_COLUMNS, "seconds",
-                   "out_dir")  # fmt: skip
 _OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml", "_figures.json")
 #: Seconds to wait for a Dask scheduler's answer.
 CONNECT_TIMEOUT_S = 10
@@ -71,9 +67,10 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
     """The manifest's rows as option values (``None`` where a cell is empty), each with its
     ``row`` number (1 = the first data row), ``line`` and ``subject``; refused with the file, the
     column and the line when a column is unknown or a cell malformed."""
+    from pipeline.examples import resolve
     from pipeline.option import from_cell
 
-    path = Path(path)
+    path = resolve(path)
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
@@ -127,6 +124,8 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
 
         path_component(recording_name(str(row["orientations"])), path,
                        f"orientations (line {line})")  # fmt: skip
+        if row.get("name"):
+            path_component(str(row["name"]), path, f"name (line {line})")
         rows.append(row)
     return rows
 
@@ -160,7 +159,7 @@ def path_component(name: str, file: Path, field: str) -> str:
 def _out_dir(out: Path, row: Mapping[str, object]) -> Path:
     from pipeline.commands.ik import recording_name
 
-    return out / str(row["subject"]) / recording_name(str(row["orientations"]))
+    return out / str(row["subject"]) / (row.get("name") or recording_name(str(row["orientations"])))
 
 
 def _check_distinct_folders(rows: list[dict], out: Path, manifest: Path) -> None:
@@ -178,11 +177,11 @@ def _check_distinct_folders(rows: list[dict], out: Path, manifest: Path) -> None
 def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[str, object]:
     """One manifest row through ``pipeline ik`` (what a worker runs); never raises: a failure is
     the row's ``status`` and ``message``."""
-    from pipeline.commands.ik import recording_name, run_settings
+    from pipeline.commands.ik import output_name, run_settings
     from pipeline.process.options import resolve_settings
 
     folder = _out_dir(Path(out), row)
-    name = recording_name(str(row["orientations"]))
+    name = output_name(row.get("name") or None, str(row["orientations"]))
     result: dict[str, object] = {c: "" for c in SUMMARY_COLUMNS}
     result.update(row=row["row"], subject=row["subject"], orientations=row["orientations"],
                   out_dir=str(folder))  # fmt: skip
@@ -191,9 +190,10 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
     values.update(out=str(folder), overwrite=True)  # a row's folder is the batch's own
     try:
         settings = resolve_settings(row.get("config"), values)
+        name = output_name(settings.outputs.name, str(row["orientations"]))
         if not force and _done(folder, name, settings):
             result.update(status="skipped", message="outputs of the same configuration complete "
-                          "(--force redoes them)", **_figures(folder / f"{name}_figures.json"))
+                          "(--force redoes them)", **trial_figures(folder / f"{name}_figures.json"))
             return result
         run_settings(settings)
     except (InputError, OSError, ValueError) as exc:
@@ -204,16 +204,20 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
                       seconds=f"{time.perf_counter() - t0:.2f}")  # fmt: skip
         return result
     result.update(status="ok", seconds=f"{time.perf_counter() - t0:.2f}",
-                  **_figures(folder / f"{name}_figures.json"))  # fmt: skip
+                  **trial_figures(folder / f"{name}_figures.json"))  # fmt: skip
     return result
 
 
 def _done(folder: Path, name: str, settings) -> bool:
     """The folder holds every output ``settings`` ask for, written by the same resolved
     configuration (the ``_config.toml`` without its comment lines)."""
+    import importlib.util
+
     from pipeline.process.options import settings_text
 
     wanted = list(_OUTPUTS) + [".rrd"] * settings.outputs.rerun + [".osim"] * settings.outputs.osim
+    if settings.outputs.report and importlib.util.find_spec("matplotlib") is not None:
+        wanted.append("_report.html")
     if not all((folder / f"{name}{s}").is_file() for s in wanted):
         return False
     try:
@@ -225,23 +229,6 @@ def _done(folder: Path, name: str, settings) -> bool:
         return [ln for ln in text.splitlines() if ln.strip() and not ln.startswith("#")]
 
     return body(written) == body(settings_text(settings))
-
-
-def _figures(path: Path) -> dict[str, str]:
-    """Frames, median residual, the number of flags and the strides' means, from a run's
-    ``_figures.json``."""
-    import json
-
-    try:
-        fig = json.loads(path.read_text(encoding="utf-8"))
-        out = {"frames": str(fig["frames"]),
-               "residual_median_deg": f"{fig['residual_median_deg']:.2f}",
-               "flags": str(len(fig["flags"])), "strides": str(fig.get("strides", ""))}
-        for c in STRIDE_COLUMNS[1:]:
-            out[c] = "" if fig.get(c) is None else f"{fig[c]:.4g}"
-        return out
-    except (OSError, ValueError, KeyError, TypeError):
-        return dict.fromkeys(("frames", "residual_median_deg", "flags", *STRIDE_COLUMNS), "")
 
 
 def run_batch(
@@ -274,7 +261,7 @@ def run_batch(
     except (KeyboardInterrupt, Terminated):
         _write_summary(out, rows, results, "not run")
         raise
-    ordered = _write_summary(out, rows, results, "not run")
+    ordered = _write_summary(out, rows, results, "not run", final=True)
     counts = {s: sum(r["status"] == s for r in ordered) for s in ("ok", "failed", "skipped")}
     lines = [f"{len(rows)} trials {where} in {time.perf_counter() - t0:.1f} s: "
              f"{counts['ok']} ok, {counts['failed']} failed, {counts['skipped']} skipped; "
@@ -373,11 +360,9 @@ def _probe_dask(host: str, port: int, address: str) -> None:
                      f"({why})", field="scheduler")  # fmt: skip
 
 
-def _write_summary(out: Path, rows, results: dict, missing: str) -> list[dict]:
-    """``batch_summary.csv`` replaced atomically: every row, ``missing`` where it has no result."""
-    from pipeline.io.atomic import output_set
-    from pipeline.io.tables import csv_text
-
+def _write_summary(out: Path, rows, results: dict, missing: str, final: bool = False) -> list[dict]:
+    """``batch_summary.csv`` replaced atomically: every row, ``missing`` where it has no result;
+    ``final``: with the group report (:func:`~pipeline.commands.batch_outputs.write_summary`)."""
     ordered = []
     for r in rows:
         res = results.get(int(r["row"]))
@@ -386,7 +371,5 @@ def _write_summary(out: Path, rows, results: dict, missing: str) -> list[dict]:
             res.update(row=r["row"], subject=r["subject"], orientations=r["orientations"],
                        status=missing, out_dir=str(_out_dir(out, r)))  # fmt: skip
         ordered.append(res)
-    with output_set() as outs:
-        with outs.open(out / "batch_summary.csv") as fh:
-            fh.write(csv_text(ordered, SUMMARY_COLUMNS))
+    write_summary(out, ordered, report=final)
     return ordered

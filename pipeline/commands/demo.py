@@ -44,7 +44,7 @@ from pipeline.simulate.conventions import STANDING_S
 from pipeline.simulate.model import simulate_trial
 from pipeline.viz.model import log_motion
 
-__all__ = ["SUBJECT", "DemoResult", "demo", "run_demo"]
+__all__ = ["DEMO_FILES", "SUBJECT", "DemoResult", "demo", "run_demo"]
 
 SUBJECT = Measures("f", 1.62, knee_width_m=0.095, ankle_width_m=0.066)
 #: The standing time the demo accepts (s): the calibration pose needs half a second of rest.
@@ -66,9 +66,21 @@ class DemoResult:
     seconds: float
 
 
-def run_demo(out_dir: str | Path = "out/demo", seed: int = 0,
-             standing_s: float = STANDING_S) -> str:  # fmt: skip
-    """``pipeline demo``: run and return the text to print (the report and where files went)."""
+#: The files the demo writes.
+DEMO_FILES = ("subject.urdf", "demo_ik_model.urdf", "demo_ik.mot", "demo_landmarks.csv",
+              "demo.rrd", "demo_report.md")  # fmt: skip
+
+
+def run_demo(out_dir: str | Path = "out/demo", seed: int = 0, standing_s: float = STANDING_S,
+             overwrite: bool = False) -> str:  # fmt: skip
+    """``pipeline demo``: run and return the text to print (the report and where files went); a
+    previous demo's files in ``out_dir`` are refused, as ``pipeline ik`` refuses a previous run's,
+    unless ``overwrite``."""
+    previous = [n for n in DEMO_FILES if (Path(out_dir) / n).exists()]
+    if previous and not overwrite:
+        raise InputError(f"a previous demo's outputs are there ({', '.join(previous)}): give "
+                         "another --out, or --overwrite to replace them", file=out_dir,
+                         field="out")  # fmt: skip
     res = demo(out_dir, seed, standing_s=standing_s)
     names = ", ".join(p.name for p in res.files)
     return (
@@ -181,9 +193,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
                          timings, total, offset, standing_s)  # fmt: skip
         with out.open(out_dir / "demo_report.md") as fh:
             fh.write(report)
-        names = ("demo_report.md", "demo_ik.mot", "demo_landmarks.csv", "subject.urdf",
-                 "demo_ik_model.urdf", "demo.rrd")  # fmt: skip
-    files = tuple(out_dir / n for n in names)
+    files = tuple(out_dir / n for n in DEMO_FILES)
     return DemoResult(report, tuple(axis_err), angle_rms, landmark_rms, tuple(offset), files,
                       total)  # fmt: skip
 

@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.analysis.strides import strides_csv
+from pipeline.analysis.cycles import Cycles, cycle_angles, cycles_csv, cycles_figures
+from pipeline.analysis.strides import left_out, strides_csv
 from pipeline.commands.ik_summary import summary_text
 from pipeline.errors import InputError, QualityError
 from pipeline.io.atomic import output_dir, output_set
@@ -40,8 +41,10 @@ from pipeline.process.options import (
     settings_text,
 )
 from pipeline.process.run import IKRun, mot_columns, process_recording
+from pipeline.progress import step
 
-__all__ = ["figures_json", "load_orientations", "recording_name", "run_ik", "run_settings",
+__all__ = ["figures_json", "load_orientations", "output_name", "recording_name", "run_ik",
+           "run_settings", "written_text",
            "summary_text", "write_landmarks_csv", "write_outputs"]
 
 
@@ -105,13 +108,23 @@ def run_settings(settings: IKSettings, *, recorder=None) -> IKRun:
     static = None
     if inputs.static_trial is not None:
         static = load_orientations(inputs.static_trial, inputs.sensor_map, inputs.ignore)
-    name = recording_name(orientations)
+    name = output_name(outputs.name, orientations)
     output_dir(out_dir, create=False)
     taken: list[str] = []
     with output_lock(out_dir, f"pipeline ik of {orientations}", taken):
         for note in taken:
             print(f"note: {note}", file=sys.stderr)
         return _write_run(trial, static, name, settings, recorder)
+
+
+def output_name(given: str | None, recording: str | Path) -> str:
+    """The outputs' name: ``given`` (``--name``: one path component), else the recording's
+    (:func:`~pipeline.io.formats.recording_name`)."""
+    if given is None:
+        return recording_name(recording)
+    if not given or given in (".", "..") or "/" in given or os.sep in given:
+        raise InputError(f"expected a name, not a path: {given!r}", field="name")
+    return given
 
 
 def _not_into(recording: Path, out_dir: Path) -> None:
@@ -133,16 +146,14 @@ def _write_run(trial, static, name: str, settings: IKSettings, recorder) -> IKRu
         names = ", ".join(p.name for p in previous)
         raise InputError(f"a previous run's outputs are there ({names}): give another --out, "
                          "or --overwrite to replace them", file=out_dir, field="out")
-    background = outputs.rerun and trial.n_samples <= BACKGROUND_FRAMES
+    background = (outputs.rerun or outputs.report) and trial.n_samples <= BACKGROUND_FRAMES
     if recorder is not None and not background:
         recorder.close()  # a long recording logs here (one process bounds the memory)
         recorder = None
     worker = recorder
     if worker is None and background:
         from pipeline.viz.background import BackgroundRecording
-        from pipeline.viz.scene import warm_recording
-
-        worker = BackgroundRecording.start(warm=warm_recording)
+        worker = BackgroundRecording.start(warm=_warm_outputs)
     try:
         with output_set() as out:
             try:
@@ -161,7 +172,23 @@ def _write_run(trial, static, name: str, settings: IKSettings, recorder) -> IKRu
 
 #: Every file ``pipeline ik`` may write for a recording ``<name>``.
 OUTPUT_SUFFIXES = (".rrd", ".urdf", "_ik.mot", "_landmarks.csv", ".osim", "_summary.md",
-                   "_config.toml", "_figures.json", "_strides.csv")  # fmt: skip
+                   "_config.toml", "_figures.json", "_strides.csv", "_cycles.csv",
+                   "_report.html")  # fmt: skip
+
+
+def written_text(run: IKRun, settings: IKSettings) -> str:
+    """What ``pipeline ik`` prints: the headline (frames, strides, warnings) and the files it
+    wrote (the summary stays in ``<name>_summary.md``; ``--verbose`` prints it)."""
+    out_dir = Path(settings.outputs.out)
+    name = output_name(settings.outputs.name, settings.inputs.orientations)
+    files = [p.name for p in previous_outputs(out_dir, name)]
+    n = len(run.gait.strides)
+    head = (f"{name}: {len(run.time)} frames, {run.time[-1] - run.time[0]:.1f} s; joints "
+            f"{', '.join(run.sensors.joints)}; {n} stride{'s' * (n != 1)}; "
+            f"{len(run.flags)} warning{'s' * (len(run.flags) != 1)}")  # fmt: skip
+    return "\n".join([head, f"wrote {len(files)} files to {out_dir}:",
+                      *(f"  {f}" for f in files),
+                      f"the summary: {out_dir / f'{name}_summary.md'} (--verbose prints it)"])
 
 
 def previous_outputs(out_dir: Path, name: str) -> list[Path]:
@@ -194,8 +221,11 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
     if outputs.landmarks == "world" and run.gait.pelvis_path is None:
         run.notes.append("--landmarks world: no pelvis path (a foot sensor on each foot walking "
                          "is needed): the landmarks are relative to the pelvis")  # fmt: skip
-    if outputs.rerun:  # first: the child writes it while the other files are written
-        _record(run, out.path(out_dir / f"{name}.rrd"), name, worker)
+    step("writing the outputs")
+    # first: the child writes the recording and the report while the other files are written
+    report = _report_job(out, out_dir, name, run) if outputs.report else None
+    rrd = out.path(out_dir / f"{name}.rrd") if outputs.rerun else None
+    _record_and_report(run, rrd, name, report, worker)
     run.skeleton.write_urdf(out.path(out_dir / f"{name}.urdf"))
     write_mot(out.path(out_dir / f"{name}_ik.mot"), run.time, mot_columns(run))
     with out.open(out_dir / f"{name}_landmarks.csv") as fh:
@@ -209,8 +239,10 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
     if run.gait.strides:
         with out.open(out_dir / f"{name}_strides.csv") as fh:
             fh.write(strides_csv(run.gait.strides))
+        with out.open(out_dir / f"{name}_cycles.csv") as fh:
+            fh.write(cycles_csv(run_cycles(run)))
     with out.open(out_dir / f"{name}_summary.md") as fh:
-        fh.write(summary_text(run))
+        fh.write(summary_text(run, name))
     with out.open(out_dir / f"{name}_config.toml") as fh:
         fh.write(_config(settings, name))
     with out.open(out_dir / f"{name}_figures.json") as fh:
@@ -218,6 +250,29 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
     if worker is not None:
         worker.wait()
     return run
+
+
+def _warm_outputs() -> None:
+    """The child's imports (:mod:`pipeline.viz.background`): the recording's and the report's."""
+    from pipeline.report.plots import warm_plots
+    from pipeline.viz.scene import warm_recording
+
+    warm_recording()
+    warm_plots()
+
+
+def _report_job(out, out_dir: Path, name: str, run: IKRun):
+    """``(temporary path, ReportParts)`` of ``<name>_report.html`` (:mod:`pipeline.report`);
+    None without matplotlib, a warning naming the extra."""
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        print(f"warning: no {name}_report.html: the report needs matplotlib, which the 'report' "
+              "extra installs: pip install 'imu-skeleton-pipeline[report]'", file=sys.stderr)
+        return None
+    from pipeline.report.page import report_parts
+
+    return str(out.path(out_dir / f"{name}_report.html")), report_parts(run, name)
 
 
 def _config(settings: IKSettings, name: str) -> str:
@@ -228,9 +283,17 @@ def _config(settings: IKSettings, name: str) -> str:
     return settings_text(settings, header)
 
 
+def run_cycles(run: IKRun) -> Cycles:
+    """The run's strides' joint angles over their cycles (:mod:`pipeline.analysis.cycles`)."""
+    return cycle_angles(run.time, run.joint_angles, run.gait.strides)
+
+
 def figures_json(run: IKRun) -> str:
     """The run's figures as JSON (what ``pipeline batch`` lists per trial): frames, duration,
-    median and 95th-percentile residual (deg), the quality flags."""
+    median and 95th-percentile residual (deg), the quality flags, the strides' means over the
+    straight, steady strides (SI units; ``stance_share`` a fraction) and why the others were left
+    out, and each joint's mean ± SD curve over the cycle per side (``cycles``, deg, 101 points:
+    :func:`pipeline.analysis.cycles.cycles_figures`)."""
     import json
 
     res = np.degrees(run.residual_rms)
@@ -238,7 +301,9 @@ def figures_json(run: IKRun) -> str:
            "residual_median_deg": float(np.nanmedian(res)),
            "residual_p95_deg": float(np.nanpercentile(res, 95)),
            "flags": list(run.flags), "joints": list(run.sensors.joints),
-           "strides": len(run.gait.strides), **_stride_means(run)}  # fmt: skip
+           "strides": len(run.gait.strides), **_stride_means(run),
+           "strides_left_out": left_out(run.gait.strides) if run.gait.strides else {},
+           "cycles": cycles_figures(run_cycles(run))}  # fmt: skip
     return json.dumps(fig, indent=1) + "\n"
 
 
@@ -290,17 +355,40 @@ def _footprints(run: IKRun, side: str) -> np.ndarray:
     return out
 
 
-def _record(run: IKRun, path: Path, name: str, worker) -> None:
-    """The run's ``.rrd`` (:func:`pipeline.viz.model.log_motion`), or, with a ``worker``, its
-    scene computed here (:func:`pipeline.viz.model.motion_scene`) and written by the child
-    (:func:`pipeline.viz.scene.log_scene`, no Pinocchio there): the same recording."""
-    args, kwargs = _recording_args(run, name)
+def _record_and_report(run: IKRun, rrd: Path | None, name: str, report, worker) -> None:
+    """The run's ``.rrd`` (:func:`pipeline.viz.model.log_motion`) at ``rrd`` (None: none) and its
+    report (``(path, parts)`` or None); with a ``worker``, the scene computed here
+    (:func:`pipeline.viz.model.motion_scene`) and both written by the child
+    (:func:`outputs_in_child`, no Pinocchio there): the same files."""
     if worker is None:
-        from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
+        if rrd is not None:
+            from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
 
-        log_motion(path, *args, **kwargs)
+            args, kwargs = _recording_args(run, name)
+            log_motion(rrd, *args, **kwargs)
+        if report is not None:
+            from pipeline.report.page import write_report
+
+            write_report(*report)
         return
-    from pipeline.viz.model import motion_scene
-    from pipeline.viz.scene import log_scene
+    scene = None
+    if rrd is not None:
+        from pipeline.viz.model import motion_scene
 
-    worker.submit(log_scene, str(path), motion_scene(*args, **kwargs))
+        args, kwargs = _recording_args(run, name)
+        scene = motion_scene(*args, **kwargs)
+    worker.submit(outputs_in_child, None if rrd is None else str(rrd), scene, report)
+
+
+def outputs_in_child(rrd: str | None, scene, report) -> None:
+    """The forked child's job (:mod:`pipeline.viz.background`): the recording from its scene
+    (:func:`pipeline.viz.scene.log_scene`) and the report (``(path, parts)``:
+    :func:`pipeline.report.page.write_report`), each where given."""
+    if rrd is not None:
+        from pipeline.viz.scene import log_scene
+
+        log_scene(rrd, scene)
+    if report is not None:
+        from pipeline.report.page import write_report
+
+        write_report(*report)

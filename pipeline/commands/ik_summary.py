@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.analysis.cycles import cycle_angles, cycle_table
 from pipeline.analysis.strides import stride_table
 from pipeline.calibration.conventions import DEFAULT_FILTER
 from pipeline.io.formats import recording_name
@@ -16,11 +17,12 @@ from pipeline.process.run import IKRun
 __all__ = ["summary_text"]
 
 
-def summary_text(run: IKRun) -> str:
-    """The run's ``_summary.md``: inputs, quality flags, corrections, calibrations, ranges."""
+def summary_text(run: IKRun, name: str | None = None) -> str:
+    """The run's ``_summary.md``: inputs, quality flags, corrections, calibrations, ranges;
+    ``name``: its outputs' (default: the recording's)."""
     source = Path(run.inputs.orientations) if run.inputs else Path(run.source or "recording")
     measures = run.measures
-    name = recording_name(source)
+    name = name or recording_name(source)
     fps = len(run.time) / max(run.seconds_ik, 1e-9)
     o = run.options
     what = "segment orientations" if o.segment_orientations else "sensor orientations"
@@ -28,7 +30,7 @@ def summary_text(run: IKRun) -> str:
         by = (o.filter or DEFAULT_FILTER).upper()
         what = f"raw signals, orientations by {by} ({run.filtered})"
     lines = [
-        f"# IK of {source.name}",
+        f"# IK of {name} ({source.name})" if name != source.name else f"# IK of {name}",
         "",
         *(f"**WARNING: {flag}**\n" for flag in run.flags),
         f"- subject: sex {measures.sex}, height {measures.height_m:.2f} m; model: {name}.urdf "
@@ -83,8 +85,13 @@ def summary_text(run: IKRun) -> str:
         lines.append("")
     if run.gait.strides:
         sources = "; ".join(f"{side}: {src}" for side, src in run.gait.sources.items())
-        lines += ["", f"Strides (`<name>_strides.csv`; events and foot paths from {sources}):",
+        lines += ["", f"Strides (`<name>_strides.csv`; events and foot paths from {sources}; "
+                  "the means over the straight, steady strides, the others counted):",
                   "", *stride_table(run.gait.strides), ""]  # fmt: skip
+        cycles = cycle_angles(run.time, run.joint_angles, run.gait.strides)
+        lines += ["Joint angles over the gait cycle (`<name>_cycles.csv`: each stride at 0-100 % "
+                  "of its time; here each curve's maximum, minimum and range, mean ± SD over the "
+                  "same strides):", "", *cycle_table(cycles), ""]  # fmt: skip
     if not any(j.endswith("_ankle") for j in run.sensors.joints):
         lines.append("- no foot sensors: the ankle is held neutral and not reported")
     lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]

@@ -45,7 +45,8 @@ def run_live(settings: IKSettings, live: LiveOptions, *, source=None,
     from pipeline.commands.ik import recording_name
 
     out_dir = Path(settings.outputs.out)
-    name = live.name or (recording_name(Path(live.replay)) if live.replay else "live")
+    name = settings.outputs.name or (recording_name(Path(live.replay)) if live.replay
+                                     else "live")  # fmt: skip
     output_dir(out_dir, create=False)
     with output_lock(out_dir, f"pipeline live ({name})", []):
         source = source if source is not None else _source(live, settings)

@@ -16,7 +16,8 @@ __all__ = ["EXAMPLES", "PREFIX", "path", "resolve"]
 _HERE = Path(__file__).resolve().parent
 #: Example name -> its file or folder here.
 EXAMPLES = {"opensense_imu_ik_test": "opensense_imu_ik_test.sto",
-            "ximu3_lower_body": "ximu3_lower_body"}  # fmt: skip
+            "ximu3_lower_body": "ximu3_lower_body",
+            "batch_manifest.csv": "batch_manifest.csv"}  # fmt: skip
 #: How a command's path names an example.
 PREFIX = "example:"
 

@@ -27,6 +27,7 @@ device id) names the others. Every entry of the map must match exactly one senso
 from __future__ import annotations
 
 import fnmatch
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -276,10 +277,22 @@ def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False
     return rec.with_sensors({renamed[n]: rec.sensors[n] for n in names})
 
 
+#: Folder names that say what a folder holds, not which recording it is: a recording in one is
+#: named after the folder above (``S02/imu`` -> ``S02``).
+GENERIC_NAMES = frozenset({"imu", "imus", "data", "raw", "sensors", "recording", "recordings",
+                           "export", "exports", "csv", "trial", "files", "input", "inputs"})
+
+
 def recording_name(path: str | Path) -> str:
     """The name a recording's outputs take: the file's stem, or the folder's name (an
-    ``example:<name>``'s)."""
+    ``example:<name>``'s); a folder with a generic name (:data:`GENERIC_NAMES`) takes its parent
+    folder's."""
     from pipeline.examples import resolve
 
     path = resolve(path)
-    return path.stem if path.suffix and not path.is_dir() else path.name
+    if path.suffix and not path.is_dir():
+        return path.stem
+    if path.name.lower() in GENERIC_NAMES:
+        parent = Path(os.path.abspath(path)).parent.name
+        return parent or path.name
+    return path.name

@@ -31,8 +31,6 @@ class LiveOptions:
     duration_s: float | None = option(None, "float", "stop after this many seconds of capture "
                                       "(default: at the replay's end, or Ctrl-C)", section="live",
                                       metavar="S")  # fmt: skip
-    name: str | None = option(None, "text", "the capture's name in --out (default: the replayed "
-                              "recording's, else live)", section="live")  # fmt: skip
     viewer: str = option("auto", "choice", "where the capture is shown as it comes: a spawned "
                          "rerun viewer, the web viewer, none, or auto (spawned where a display "
                          "is)", choices=VIEWERS, section="live")  # fmt: skip

@@ -12,7 +12,8 @@ and ``-1`` left:
 =================  ===================================================================
 joint              rotation1, rotation2, rotation3 (coordinate: axis in the parent frame)
 =================  ===================================================================
-``ground_pelvis``  pelvis_tilt (0 0 1), pelvis_list (1 0 0), pelvis_rotation (0 1 0)
+``ground_pelvis``  pelvis_tilt (0 0 1), pelvis_list (1 0 0), pelvis_rotation (0 1 0);
+                   translations pelvis_tx, pelvis_ty, pelvis_tz (m, along the ground's x, y, z)
 ``hip_r``          hip_flexion (0 0 1), hip_adduction (L 0 0), hip_rotation (0 L 0)
 ``knee_r``         knee_angle (0 0 -1), knee_adduction (L 0 0), knee_rotation (0 L 0)
 ``ankle_r``        ankle_angle (0 0 1), subtalar_angle (L 0 0), (none) (0 1 0)
@@ -22,14 +23,19 @@ so that ``R_parent^T R_child = Rz(a) Rx(b) Ry(c)`` with the ``.mot``'s angles, w
 model of the run (a hinge knee's motion is exactly its JCS angles). Joints the sensors do not
 observe are ``WeldJoint``s in the neutral pose, and without a pelvis sensor each femur is welded
 to the ground at its hip centre (the ``.mot`` then has no hip or pelvis angle). The ground is the
-heading frame of the calibration pose (``pelvis_*`` angles are relative to it), y up; the pelvis is
-held at the height that puts the standing feet on the floor (``y = 0``).
+heading frame of the calibration pose (``pelvis_*`` angles and ``pelvis_t*`` are in it), y up.
+``ground_pelvis`` is free, as in OpenSim's gait models: the ``.mot``'s pelvis path (a walk with
+a foot sensor on each foot) moves the body through the room; without one the pelvis stays at its
+default, the height that puts the standing feet on the floor (``y = 0``). The knee has its three
+rotations (flexion, ab/adduction, rotation), as the ``.mot`` does: a model replaying our ``.mot``
+needs no coordinate the ``.osim`` lacks.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from lxml import etree
@@ -38,7 +44,7 @@ from pipeline.model.conventions import LANDMARK_SEGMENT
 from pipeline.model.meshes import resolve_package_uri
 from pipeline.model.skeleton import Skeleton
 
-__all__ = ["OSIM_BODIES", "osim_text"]
+__all__ = ["OSIM_BODIES", "PELVIS_TRANSLATIONS", "osim_text"]
 
 #: Our segment -> OpenSim body name (``calcn``: the foot, as OpenSense's ``calcn_r_imu``).
 OSIM_BODIES = {"femur": "femur", "tibia": "tibia", "foot": "calcn"}
@@ -95,8 +101,9 @@ def osim_text(
     objects = _sub(_sub(model, "JointSet", name="jointset"), "objects")
     lowest = min(skeleton.frame_position(f)[1] for f in skeleton.landmark_frames)
     if pelvis:
-        _custom_joint(objects, skeleton, "ground_pelvis", "/ground", "pelvis",
-                      np.array([0.0, -lowest, 0.0]), np.eye(3), _PELVIS, 1.0)  # fmt: skip
+        joint = _custom_joint(objects, skeleton, _Link("ground_pelvis", "/ground", "pelvis",
+                                                       np.eye(4)), _PELVIS, 1.0)
+        _free(joint, np.array([0.0, -lowest, 0.0]))
     for side in legs:
         lat = 1.0 if side == "right" else -1.0
         for joint, (prox, dist, coords) in _JOINTS.items():
@@ -109,8 +116,10 @@ def osim_text(
                 T[1, 3] -= lowest
                 _weld(objects, jname, "/ground", _body(child), T)
             elif f"{side}_{joint}" in joints:
-                _custom_joint(objects, skeleton, jname, f"/bodyset/{_body(parent)}",
-                              _body(child), rel[:3, 3], np.eye(3), coords, lat)  # fmt: skip
+                T = np.eye(4)
+                T[:3, 3] = rel[:3, 3]
+                link = _Link(jname, f"/bodyset/{_body(parent)}", _body(child), T)
+                _custom_joint(objects, skeleton, link, coords, lat)
             else:
                 _weld(objects, jname, f"/bodyset/{_body(parent)}", _body(child), rel)
     markers = _sub(_sub(model, "MarkerSet", name="markerset"), "objects")
@@ -176,10 +185,42 @@ def _weld(objects, name: str, parent_path: str, child: str, T: np.ndarray) -> No
     _frames(_sub(objects, "WeldJoint", name=name), parent_path, child, T)
 
 
-def _custom_joint(objects, skeleton, name, parent_path, child, p, R, coords, lat) -> None:
+class _Link(NamedTuple):
+    """A joint's name, its parent frame's path, its child body and the joint frame in the
+    parent (4x4)."""
+
+    name: str
+    parent_path: str
+    child: str
+    T: np.ndarray
+
+
+#: ``ground_pelvis``'s translations, along the ground's x, y, z.
+PELVIS_TRANSLATIONS = ("pelvis_tx", "pelvis_ty", "pelvis_tz")
+
+
+def _free(joint, default: np.ndarray) -> None:
+    """Make the custom ``joint``'s translations :data:`PELVIS_TRANSLATIONS` (their defaults
+    ``default``, m)."""
+    cs = joint.find("coordinates")
+    for cname, value in zip(PELVIS_TRANSLATIONS, default, strict=True):
+        c = _sub(cs, "Coordinate", name=cname)
+        _sub(c, "default_value", repr(float(value)))
+        _sub(c, "range", [-100.0, 100.0])
+        _sub(c, "clamped", "false")
+        _sub(c, "locked", "false")
+    for ta in joint.findall("SpatialTransform/TransformAxis"):
+        if not ta.get("name").startswith("translation"):
+            continue
+        k = int(ta.get("name")[-1]) - 1
+        ta.find("coordinates").text = PELVIS_TRANSLATIONS[k]
+        ta.remove(ta.find("Constant"))
+        _sub(_sub(ta, "LinearFunction", name="function"), "coefficients", "1 0")
+
+
+def _custom_joint(objects, skeleton, link: _Link, coords, lat):
+    name, parent_path, child, T = link
     joint = _sub(objects, "CustomJoint", name=name)
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, p
     suffix = "" if name == "ground_pelvis" else f"_{name[-1]}"
     cs = _sub(joint, "coordinates")
     for cname, _ in coords:
@@ -206,6 +247,7 @@ def _custom_joint(objects, skeleton, name, parent_path, child, p, R, coords, lat
         _sub(ta, "coordinates", "")
         _sub(ta, "axis", axis)
         _sub(_sub(ta, "Constant", name="function"), "value", "0")
+    return joint
 
 
 def _range(skeleton: Skeleton, joint: str, coordinate: str) -> list[float]:

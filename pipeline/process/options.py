@@ -102,8 +102,8 @@ class IKOptions:
                           choices=HEADINGS, metavar="{anatomical,pelvis_imu:AXIS}")  # fmt: skip
     foot_length_m: float | None = option(None, "float", "heel-to-toe foot length in metres "
                                          "(default: 0.152 x height, Drillis & Contini 1966)")
-    joint_limits: bool = option(True, "bool", "keep the joints within the model's ranges (the "
-                                "flag --no-joint-limits lets them leave)")  # fmt: skip
+    joint_limits: bool = option(True, "bool", "keep the joints within the model's ranges",
+                                off="let the joints leave the model's ranges")
     calibration_method: str = option(DEFAULT_METHOD, "choice", "joint-constraint calibration of "
                                      "knees with raw signals, reported with its trust decision "
                                      "(none skips it)", choices=(*METHODS, "none"))  # fmt: skip
@@ -207,8 +207,14 @@ class OutputOptions:
     """What ``pipeline ik`` writes, and where."""
 
     out: str = option(None, "path", "output folder", required=True, metavar="DIR")
-    rerun: bool = option(True, "bool", "write the .rrd recording (the flag --no-rerun leaves it "
-                         "out)")  # fmt: skip
+    name: str | None = option(None, "text", "the outputs' name (<name>_ik.mot, ...; default: the "
+                              "recording's file or folder name; a generic folder name such as "
+                              "imu or data: its parent folder's)")  # fmt: skip
+    rerun: bool = option(True, "bool", "write the .rrd recording (rerun)",
+                         off="do not write the .rrd recording (rerun)")
+    report: bool = option(True, "bool", "write <name>_report.html, the one-page gait report "
+                          "(needs matplotlib, the 'report' extra: without it the run says so "
+                          "and writes the rest)", off="do not write <name>_report.html")
     osim: bool = option(False, "bool", "also write <name>.osim, an OpenSim model whose "
                         "coordinates are the .mot's columns")  # fmt: skip
     landmarks: str = option("pelvis", "choice", "landmark positions in <name>_landmarks.csv "

@@ -48,6 +48,7 @@ from pipeline.analysis.landmarks import frame_trajectories
 from pipeline.analysis.quality import quality_flags
 from pipeline.calibration.conventions import DEFAULT_METHOD
 from pipeline.calibration.correction import KneeCorrection
+from pipeline.calibration.heading import heading_rotation
 from pipeline.calibration.heading_offset import HeadingDrift, vertical_turn
 from pipeline.calibration.magnetometer import FieldTrust
 from pipeline.errors import InputError
@@ -76,6 +77,7 @@ from pipeline.process.prepare import Prepared, prepared
 from pipeline.process.sensors import SensorSet
 from pipeline.process.sides import Sides, exchange_of, in_one_heading, mirrored, side_evidence
 from pipeline.process.solve import PELVIS_ANGLES, joint_angles_of, landmarks_of, observed, solve
+from pipeline.progress import step
 
 __all__ = ["MOT_NAMES", "IKRun", "mot_columns", "process_recording"]
 
@@ -189,6 +191,7 @@ def process_recording(
 def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) -> IKRun | Sides:
     """One pass of steps 1-6; the :class:`Sides` evidence instead of a run where ``check_sides``
     and the legs' sensors read as named left for right."""
+    step("sensor checks, strides and orientations")
     s = prepared(trial, static, opts)
     geometry = _geometry(measures, opts)
     legs, method = s.sensors.legs, _method(opts)
@@ -199,6 +202,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
                  for side in legs if s.sensors.observes(side, "knee")}  # fmt: skip
     align = sensors_to_align(opts.drift, list(s.rotations), s.oriented.shared)
     knee_cal = []
+    step("functional calibration and headings")
     if opts.calibration_method != "none":
         thighs_shanks = {f"{side}_{seg}" for side in legs for seg in ("femur", "tibia")}
         knee_cal = calibrate_knees(s.trial, None, knee_axes, opts.calibration_method,
@@ -208,6 +212,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
         rotations, drifts = align_headings(s.trial, rotations, legs, align, knee_cal, method,
                                            s.notes)  # fmt: skip
     turns = {seg: vertical_turn(rotations[seg], s.rotations[seg]) for seg in align}
+    step("calibration pose")
     cal = _calibration(s, rotations, inputs)
     knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     if check_sides and in_one_heading(s.oriented.shared, drifts):
@@ -223,6 +228,7 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
                  if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
     placements, corrections = correct_knees(rotations, cal, knee_axes, knee_cal, opts.correction,
                                             unaligned, s.trial.rate_hz, s.notes)  # fmt: skip
+    step("inverse kinematics")
     run = _solved(s, geometry, opts, placements, rotations, cal)
     run.measures, run.posture, run.corrections = measures, posture, corrections
     run.knee_calibrations, run.heading_drifts, run.heading_turns = knee_cal, drifts, turns
@@ -292,7 +298,9 @@ def _geometry(measures: Measures, opts: IKOptions):
 
 
 def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
-    """OpenSim-style coordinate columns (radians; :func:`write_mot` converts to degrees)."""
+    """OpenSim-style coordinate columns (radians; :func:`write_mot` converts to degrees; the
+    pelvis's path ``pelvis_t[xyz]`` in metres, in the heading frame of the calibration pose: the
+    ground of the pelvis's angles and of the ``.osim``)."""
     cols = {k: run.joint_angles[k] for k in PELVIS_ANGLES if k in run.joint_angles}
     for side, suffix in (("right", "r"), ("left", "l")):
         for ours, theirs in MOT_NAMES.items():
@@ -300,5 +308,7 @@ def mot_columns(run: IKRun) -> dict[str, np.ndarray]:
             if key in run.joint_angles:
                 cols[f"{theirs}_{suffix}"] = run.joint_angles[key]
     if run.gait.pelvis_path is not None:  # metres: write_mot leaves *_t[xyz] as they are
-        cols.update({f"pelvis_t{a}": run.gait.pelvis_path[:, i] for i, a in enumerate("xyz")})
+        # in the heading frame of the calibration pose, as the pelvis's angles
+        path = run.gait.pelvis_path @ heading_rotation(run.heading_right)
+        cols.update({f"pelvis_t{a}": path[:, i] for i, a in enumerate("xyz")})
     return cols

@@ -60,28 +60,32 @@ contact. Here the feet's poses are prescribed and the legs follow by inverse kin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
-from scipy.interpolate import CubicSpline
 from scipy.ndimage import maximum_filter1d
 
 from pipeline.errors import InputError
 from pipeline.model.skeleton import Skeleton
+from pipeline.progress import step
 from pipeline.rotations import quat_xyzw_from_matrix, rot_x, rot_y, rot_z
 from pipeline.simulate.chain import UPRIGHT
-from pipeline.simulate.foot_walk import FC_SHARE, LOBES, bump_integral, min_jerk
-from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching, hip_ankle_distance_sq
+from pipeline.simulate.knee import Knee, draw_knee, flexion_reaching
 from pipeline.simulate.motions import ramp, standing_height
 from pipeline.simulate.subtalar import ankle_turns
+from pipeline.simulate.walk_feet import (
+    CLEARANCE_M,
+    MID_STANCE,
+    TURN_LENGTH_M,
+    WalkPlan,
+    arc_length,
+    foot_poses,
+    leg_length,
+    walk_plan,
+)
 
 __all__ = ["CLEARANCE_M", "FOOT_INVERSION_DEG", "PELVIS_SWAY_M", "PELVIS_TURN_DEG", "REACH",
            "SMOOTHING_S", "TURN_LENGTH_M", "WalkPlan", "walk_plan", "walk_trajectories"]
 
-#: Where the foot lies flat in a stride from its IC (shares of the stride; the lobes between).
-FLAT, PUSH_OFF = LOBES[0][1], LOBES[1][0]
-CLEARANCE_M = 0.05
 #: The hip-to-ankle distance at most, a share of the leg's length (the knee flexed ~9 deg), and
 #: the half-width (s) of the pelvis height's envelope (module docstring).
 REACH, SMOOTHING_S = 0.995, 0.1
@@ -89,8 +93,6 @@ REACH, SMOOTHING_S = 0.995, 0.1
 #: ahead of its mean walk (twice per stride, its speed +-8 %), as in gait (Perry & Burnfield,
 #: Gait Analysis, 2010, ch. 10: about 4 cm from side to side).
 PELVIS_SWAY_M = (0.02, 0.01)
-#: The right foot's mid-stance in the stride from its push-off (motion clock, strides).
-MID_STANCE = 0.85
 #: Amplitudes (deg) of the walking pelvis's rotation (about the vertical), obliquity (about the
 #: forward axis) and anterior tilt (about the lateral axis, twice per stride): Perry & Burnfield
 #: (Gait Analysis, 2010, ch. 10) give +-4, +-4, +-2 for an average walker, the rotation growing
@@ -101,7 +103,6 @@ MID_STANCE = 0.85
 #: ones the limits of :mod:`pipeline.process.sides`, :mod:`~pipeline.process.swap` and
 #: :mod:`~pipeline.process.slip` rest on (measured again); the benchmarks are regenerated.
 PELVIS_TURN_DEG = (6.0, 5.0, 2.5)
-TURN_LENGTH_M = 3.0
 #: The foot's inversion (deg, the sole turned medially) at initial contact and at the end of
 #: push-off, drawn per leg: it lands a little inverted and everts to flat in the loading
 #: response, then inverts as the heel rises about the oblique metatarsophalangeal line and the
@@ -110,134 +111,6 @@ TURN_LENGTH_M = 3.0
 FOOT_INVERSION_DEG = ((2.0, 5.0), (5.0, 10.0))
 ANKLE_HEIGHT_M = 0.08  # the model's ankle centre above the floor (motions.standing_height)
 _FINE = 4  # the kinematics' grid, times finer than the trial's
-
-
-@dataclass(frozen=True)
-class WalkPlan:
-    """The walk's design and truth: stride ``T`` (s of the motion clock), stride length ``L`` (m),
-    ``turn`` (rad) starting at arc length ``turn_at_m``; per side the push-off starts ``po``
-    (clock s; the first from the standing footprint) and footprints ``(k, 3)`` (the ankle
-    centre when flat, world) with headings ``(k,)``."""
-
-    T: float
-    L: float
-    turn: float
-    turn_at_m: float
-    push_off: dict[str, np.ndarray]
-    footprints: dict[str, np.ndarray]
-    headings: dict[str, np.ndarray]
-    path: CubicSpline
-    heading: CubicSpline
-
-    @property
-    def speed(self) -> float:
-        return self.L / self.T
-
-    def contacts(self, side: str) -> tuple[np.ndarray, np.ndarray]:
-        """The foot's initial and final contacts (motion clock s): each IC lands on the
-        footprint after the standing one, in order."""
-        po = self.push_off[side]
-        return po[:-1] + (1 - PUSH_OFF) * self.T, po + (FC_SHARE - PUSH_OFF) * self.T
-
-    def stride_lengths(self, side: str) -> np.ndarray:
-        """The horizontal length of each stride from one IC to the next (m)."""
-        return np.linalg.norm(np.diff(self.footprints[side][1:, :2], axis=0), axis=1)
-
-
-def _path(turn: float, turn_at: float, length: float) -> tuple[CubicSpline, CubicSpline]:
-    """The path's horizontal position and heading as cubic splines of the arc length."""
-    s = np.arange(-1.0, length + 1.0, 0.005)
-    psi = turn * min_jerk((s - turn_at) / TURN_LENGTH_M)[0]
-    d = np.stack([np.cos(psi), np.sin(psi)], axis=1)
-    xy = np.concatenate([[[0.0, 0.0]], np.cumsum(0.5 * (d[1:] + d[:-1]) * 0.005, axis=0)])
-    xy -= xy[np.searchsorted(s, 0.0)]
-    return CubicSpline(s, xy), CubicSpline(s, psi)
-
-
-def _arc(plan_T: float, v: float, tau: np.ndarray) -> np.ndarray:
-    c = 0.35 * plan_T
-    return v * (tau - c) + v * c * np.exp(-np.asarray(tau) / c)
-
-
-def _leg_length(skeleton: Skeleton) -> float:
-    return float(np.sqrt(hip_ankle_distance_sq(skeleton, skeleton.neutral(), "right")))
-
-
-def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
-              standing_feet: dict[str, np.ndarray]) -> WalkPlan:  # fmt: skip
-    """Draw a walk (stride ``T ~ U(1.0, 1.15)`` s, length ``~U(1.25, 1.4)`` leg lengths, a turn of
-    ``+-U(60, 120)`` deg after two strides) and place its footprints (module docstring)."""
-    leg = _leg_length(skeleton)
-    T, L = rng.uniform(1.0, 1.15), leg * rng.uniform(1.25, 1.4)
-    turn = np.deg2rad(rng.uniform(60, 120)) * rng.choice([-1.0, 1.0])
-    turn_at = 2 * L
-    n_strides = int(duration_s / T) + 2
-    path, heading = _path(turn, turn_at, L * (n_strides + 2))
-    half = abs(float(skeleton.relative_pose("right_HJC", "pelvis", skeleton.neutral())[2, 3]))
-    floor_z = np.mean([f[2] for f in standing_feet.values()])
-    push, prints, heads = {}, {}, {}
-    for side, first in (("right", 0.0), ("left", 0.5 * T)):
-        po = first + T * np.arange(n_strides)
-        ic = po[:-1] + (1 - PUSH_OFF) * T  # the IC after each push-off
-        s = _arc(T, L / T, ic + (MID_STANCE - 1 + PUSH_OFF) * T)  # the foot's mid-stance
-        psi = heading(s)
-        lateral = np.stack([np.sin(psi), -np.cos(psi), 0 * psi], 1) * (1 if side == "right" else -1)
-        xy = np.concatenate([path(s), np.zeros((s.size, 1))], axis=1) + half * lateral
-        xy[:, 2] = floor_z
-        push[side] = po
-        prints[side] = np.concatenate([standing_feet[side][None], xy])
-        heads[side] = np.concatenate([[0.0], psi])
-    return WalkPlan(T, L, turn, turn_at, push, prints, heads, path, heading)
-
-
-def _foot_frame(psi: np.ndarray, phi: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
-    return rot_z(psi) @ UPRIGHT @ rot_z(phi) @ rot_x(roll)
-
-
-def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray,
-               inversion: tuple[float, float] = (0.0, 0.0)):  # fmt: skip
-    """The foot frame's world rotation (N, 3, 3), origin (N, 3) and inversion (N,) (rad, the sole
-    turned medially on either side) at clock times ``tau``; ``inversion`` (rad) the foot's at
-    initial contact and at the end of push-off (module docstring)."""
-    T, po = plan.T, plan.push_off[side]
-    F, H = plan.footprints[side], plan.headings[side]
-    at_ic, at_toe_off = inversion
-    # per lobe (loading, push-off, swing): the pitch's turn and the inversion's
-    rolls = (-at_ic, at_toe_off, at_ic - at_toe_off)
-    phi, roll = np.zeros_like(tau), np.zeros_like(tau)
-    for j, p in enumerate(po):
-        ic = p - PUSH_OFF * T
-        for (a, b, turn), r in zip(LOBES, rolls, strict=True):
-            if j == 0 and a == 0.0:
-                continue  # the standing footprint: no loading response
-            done = bump_integral((tau - ic - a * T) / ((b - a) * T))
-            phi += np.deg2rad(turn) * done
-            roll += r * done
-    inverted = roll.copy()
-    roll *= 1.0 if side == "right" else -1.0  # the sole turned medially; z points right
-    psi = np.zeros_like(tau)
-    pos = np.repeat(F[:1], tau.size, axis=0)
-    for j, p in enumerate(po[: len(F) - 1]):
-        fc, nxt = p + (FC_SHARE - PUSH_OFF) * T, p + (1 - PUSH_OFF) * T
-        u = (tau - fc) / (nxt - fc)
-        m = min_jerk(u)[0]
-        dpsi = H[j + 1] - H[j]
-        psi += dpsi * m
-        toe_j = F[j] + _foot_frame(H[j], 0.0) @ toe
-        heel_n = F[j + 1] + _foot_frame(H[j + 1], 0.0) @ heel
-        a = toe_j - _foot_frame(np.full_like(tau, H[j]), phi, roll) @ toe
-        b = heel_n - _foot_frame(np.full_like(tau, H[j + 1]), phi, roll) @ heel
-        lift = 64 * CLEARANCE_M * np.clip(u, 0, 1) ** 3 * (1 - np.clip(u, 0, 1)) ** 3
-        swing = (1 - m)[:, None] * a + m[:, None] * b + lift[:, None] * [0.0, 0.0, 1.0]
-        pivot_toe = (tau >= p) & (tau < fc)
-        in_swing = (tau >= fc) & (tau < nxt)
-        pivot_heel = (tau >= nxt) & (tau < nxt + FLAT * T)
-        flat = tau >= nxt + FLAT * T
-        pos = np.where(pivot_toe[:, None], a, pos)
-        pos = np.where(in_swing[:, None], swing, pos)
-        pos = np.where(pivot_heel[:, None], b, pos)
-        pos = np.where(flat[:, None], F[j + 1], pos)
-    return _foot_frame(psi, phi, roll), pos, inverted
 
 
 def _five_point(x: np.ndarray, h: float) -> np.ndarray:
@@ -301,10 +174,10 @@ def walk_trajectories(
     feet = {x: skeleton.data.oMf[skeleton.frame_id(f"{x}_foot")].translation.copy()
             for x in skeleton.legs}  # fmt: skip
     plan = walk_plan(skeleton, float(tf[-1] - standing_s), rng, feet)
-    foot_len = 0.31 * _leg_length(skeleton)  # foot 0.152, leg 0.485 of the height
+    foot_len = 0.31 * leg_length(skeleton)  # foot 0.152, leg 0.485 of the height
     heel = np.array([-0.25 * foot_len, -ANKLE_HEIGHT_M, 0.0])
     toe = np.array([0.55 * foot_len, -ANKLE_HEIGHT_M, 0.0])
-    sp = _arc(plan.T, plan.speed, tau)
+    sp = arc_length(plan.T, plan.speed, tau)
     R = rot_z(plan.heading(sp)) @ UPRIGHT @ _pelvis_turns(tau / plan.T, s, rng)
     knee = {x: draw_knee(skeleton, x, rng) for x in skeleton.legs}
     inversion = {x: np.deg2rad([rng.uniform(*r) for r in FOOT_INVERSION_DEG])
@@ -322,8 +195,11 @@ def walk_trajectories(
     subtalar = ankle_turns(skeleton, {x: poses[x][2] for x in skeleton.legs}, rng)
     Q = np.empty((tf.size, model.nq))
     qk = q0.copy()
+    pelvis_q = quat_xyzw_from_matrix(R)
     for k in range(tf.size):
-        qk[:3], qk[3:7] = p[k], quat_xyzw_from_matrix(R[k])
+        if k % 500 == 0:
+            step(f"the legs' joints: {k / tf.size:.0%} of the walk")
+        qk[:3], qk[3:7] = p[k], pelvis_q[k]
         for index, angle in subtalar:
             qk[index] = angle[k]
         for x in skeleton.legs:
@@ -363,7 +239,7 @@ def _pelvis_drop(skeleton, p, R, poses, s, dt) -> np.ndarray:
     a sample needs the least drop that keeps every ankle within ``(1 - (1 - REACH) s)`` of the
     leg's length from its hip (module docstring). Zero standing (``s = 0``)."""
     q = skeleton.neutral()
-    leg = _leg_length(skeleton)
+    leg = leg_length(skeleton)
     need = np.zeros(s.size)
     for x in skeleton.legs:
         hjc = skeleton.relative_pose(f"{x}_HJC", "pelvis", q)[:3, 3]

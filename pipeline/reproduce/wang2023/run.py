@@ -39,7 +39,9 @@ def reproduce_wang2023(
     """Run the reproduction; write its files into ``out_dir`` (all or none); return a summary."""
     data_dir, out_dir = Path(data_dir), Path(out_dir)
     if not data_dir.exists():
-        raise InputError("dataset directory not found", file=data_dir)
+        raise InputError("dataset directory not found: the published data (raw/, xsens/) are at "
+                         "github.com/wangzhengtao1993/AnatomicalLandmarkTrajectoriesBasedonIMUData",
+                         file=data_dir)  # fmt: skip
     stage = run_omc_stage(data_dir, progress=progress)
     files = omc_tables(stage)
     imc_stage = None
