@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _sub(sub, "scale", "build a subject-scaled URDF from the regression equations")
     _add_anthropometrics(p)
     p.add_argument("--knee", choices=KNEE_MODES, default=DEFAULT_KNEE,
-                   help=f"knee model (default {DEFAULT_KNEE})")  # fmt: skip
+                   help=f"knee model (default {DEFAULT_KNEE})")
     for seg in ("femur", "tibia"):
         p.add_argument(
             f"--knee-axis-{seg}",
@@ -92,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_ik_options(p)
     p.add_argument("--verbose", action="store_true",
                    help="also print the run's summary (<name>_summary.md; by default: the files "
-                   "written and the headline figures)")  # fmt: skip
+                   "written and the headline figures)")
     p.set_defaults(func=_cmd_ik)
 
     p = _sub(sub, "calibrate", "joint-constraint calibration of IMU placement (Hu 2021)")
@@ -103,30 +103,30 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"optimiser (default {DEFAULT_METHOD}): ipopt is the most accurate and "
                    "fastest, with robust losses and priors; gn (Gauss-Newton, Hu eq 7-15) is "
                    "as accurate on well-excited trials; dwpso and gwo are the paper's swarms, "
-                   "kept for comparison (slower; check that they report 'determined')")  # fmt: skip
+                   "kept for comparison (slower; check that they report 'determined')")
     p.add_argument("--iterations", type=int_from(1),
                    help="iteration limit (default: gn 50, ipopt 100, swarms 150 per stage)")
     p.add_argument("--population", type=int_from(2),
                    help="particles (dwpso) or wolves (gwo) (default 40)")
     p.add_argument("--seed", type=int_from(0), default=0,
-                   help="seed of the random starts and swarms (default 0)")  # fmt: skip
+                   help="seed of the random starts and swarms (default 0)")
     p.add_argument("--json", action="store_true",
-                   help="print the result as JSON (default: a text table)")  # fmt: skip
+                   help="print the result as JSON (default: a text table)")
     p.set_defaults(func=_cmd_calibrate)
 
     p = _sub(sub, "simulate", "simulate IMU trials with known truth")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     p.add_argument("--motion", choices=MOTIONS, default="gait",
-                   help="simulated motion (default gait)")  # fmt: skip
+                   help="simulated motion (default gait)")
     p.add_argument("--duration-s", type=float, default=15.0,
-                   help="duration in seconds (default 15; at most 600)")  # fmt: skip
+                   help="duration in seconds (default 15; at most 600)")
     p.add_argument("--standing-s", type=float,
                    help="seconds standing still in the neutral pose first (a calibration pose "
                    f"for pipeline ik), then a 1.5 s transition into the motion (default "
                    f"{STANDING_S:g} for gait and static, whose rest pose is standing; 0 for the "
                    "others)")
     p.add_argument("--seed", type=int_from(0), default=0,
-                   help="seed of the motion, placements and noise (default 0)")  # fmt: skip
+                   help="seed of the motion, placements and noise (default 0)")
     p.set_defaults(func=_cmd_simulate)
 
     p = _sub(sub, "orientations", "raw IMU signals to an OpenSense-compatible orientation .sto")
@@ -163,12 +163,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _sub(sub, "demo", "end-to-end run on a simulated subject (no external data)")
     p.add_argument("--out", type=Path, default=Path("out/demo"),
-                   help="output directory (default out/demo)")  # fmt: skip
+                   help="output directory (default out/demo)")
     p.add_argument("--standing-s", type=float, default=STANDING_S,
                    help="seconds standing still in the neutral pose first (the calibration "
                    f"pose; 0.5-10), then a 1.5 s transition into gait (default {STANDING_S:g})")
     p.add_argument("--seed", type=int_from(0), default=0,
-                   help="seed of the simulation (default 0)")  # fmt: skip
+                   help="seed of the simulation (default 0)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace a previous demo's outputs in --out (default: refused)")
     p.set_defaults(func=_cmd_demo)
@@ -178,9 +178,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 (default: the native viewer)")
     p.add_argument("--port", type=PORT, default=9090,
-                   help="port of the web viewer with --web (default 9090)")  # fmt: skip
+                   help="port of the web viewer with --web (default 9090)")
     p.add_argument("--grpc-port", type=PORT, default=9876,
-                   help="port serving the recording's data with --web (default 9876)")  # fmt: skip
+                   help="port serving the recording's data with --web (default 9876)")
     p.set_defaults(func=_cmd_view)
 
     p = _sub(sub, "live", "joint angles and the skeleton while the subject moves: Lab Streaming "
@@ -220,7 +220,7 @@ def _say(text: str) -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         if not isinstance(exc, BrokenPipeError):
             print(f"warning: could not print to standard output ({exc.strerror or exc}); the "
-                  "outputs are written", file=sys.stderr)  # fmt: skip
+                  "outputs are written", file=sys.stderr)
 
 
 def _cmd_scale(args) -> int:
@@ -262,7 +262,7 @@ def _cmd_simulate(args) -> int:
     standing = args.standing_s
     if standing is None:  # a calibration pose where the motion's rest pose is standing
         standing = (STANDING_S if args.motion in STANDING_MOTIONS and args.duration_s > STANDING_S
-                    else 0.0)  # fmt: skip
+                    else 0.0)
     from pipeline.progress import shown
 
     with shown(f"pipeline simulate --motion {args.motion}"):
@@ -276,7 +276,7 @@ def _cmd_orientations(args) -> int:
 
     _say(run_orientations(args.imu, args.out, filter=args.filter,
                            sensor_map=_pairs(args.sensor_map, "--sensor-map"),
-                           ignore=tuple(args.ignore)))  # fmt: skip
+                           ignore=tuple(args.ignore)))
     return 0
 
 
@@ -285,7 +285,7 @@ def _cmd_batch(args) -> int:
     from pipeline.commands.batch import run_batch
 
     text, failed = run_batch(args.manifest, args.out, workers=args.workers,
-                             scheduler=args.scheduler, force=args.force)  # fmt: skip
+                             scheduler=args.scheduler, force=args.force)
     _say(text)
     return 1 if failed else 0
 

@@ -27,4 +27,4 @@ EXAMPLES = {
 #: What an example needs first.
 EXAMPLE_NEEDS = {"calibrate": "the simulate example's output",
                  "reproduce": "the published dataset, from github.com/wangzhengtao1993/"
-                 "AnatomicalLandmarkTrajectoriesBasedonIMUData"}  # fmt: skip
+                 "AnatomicalLandmarkTrajectoriesBasedonIMUData"}

@@ -41,12 +41,12 @@ def run_live_command(args) -> int:
     own = {s.name: from_flag(s, getattr(args, s.name)) for s in specs(LiveOptions)}
     live = LiveOptions(**{k: v for k, v in own.items() if v is not None})
     values = {s.name: from_flag(s, getattr(args, s.name)) for s in all_specs()
-              if s.name not in ("orientations", "static_trial")}  # fmt: skip
+              if s.name not in ("orientations", "static_trial")}
     values["orientations"] = live.replay or "lsl"
     settings = resolve_settings(args.config, values)
     result = run_live(settings, live)
     print(f"live: {result.recording.n_samples} frames captured; written to "
-          f"{settings.outputs.out}")  # fmt: skip
+          f"{settings.outputs.out}")
     return 0
 
 

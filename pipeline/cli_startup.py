@@ -32,7 +32,7 @@ def recording_writer(argv: list[str] | None):
     (:mod:`pipeline.viz.background`; ``run_ik`` hands it the job or closes it)."""
     words = sys.argv[1:] if argv is None else []
     if words[:1] != ["ik"] or any(w in ("-h", "--help") for w in words) or (
-            "--no-rerun" in words and "--no-report" in words):  # fmt: skip
+            "--no-rerun" in words and "--no-report" in words):
         return None
     from pipeline.viz.background import BackgroundRecording
 

@@ -25,7 +25,7 @@ def lowpass(x: np.ndarray, rate_hz: float, cutoff_hz: float) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     if not (np.isfinite(rate_hz) and rate_hz > 0 and np.isfinite(cutoff_hz) and cutoff_hz > 0):
         raise InputError(f"expected a positive rate and cut-off, got {rate_hz}, {cutoff_hz}",
-                         field="cutoff_hz")  # fmt: skip
+                         field="cutoff_hz")
     sigma = _SIGMA_PER_CUTOFF / cutoff_hz * rate_hz  # samples
     half = int(np.ceil(4 * sigma))
     if half < 1 or x.shape[0] < 2:
@@ -38,5 +38,5 @@ def lowpass(x: np.ndarray, rate_hz: float, cutoff_hz: float) -> np.ndarray:
     if pad < half:  # a signal shorter than the kernel: pad the rest with its end values
         padded = np.pad(padded, ((half - pad, half - pad), (0, 0)), mode="edge")
     out = np.stack([np.convolve(padded[:, j], k, mode="valid") for j in range(flat.shape[1])],
-                   axis=1)  # fmt: skip
+                   axis=1)
     return out.reshape(x.shape)

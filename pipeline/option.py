@@ -97,7 +97,7 @@ def option(
         raise ValueError(f"unknown option kind {kind!r}; expected one of {KINDS}")
     meta = {"option": dict(kind=kind, help=help, choices=tuple(choices), section=section,
                            required=required, metavar=metavar, aliases=tuple(aliases),
-                           off=off)}  # fmt: skip
+                           off=off)}
     if isinstance(default, dict):
         return dataclasses.field(default_factory=dict, metadata=meta)
     if required:
@@ -114,7 +114,7 @@ def specs(*classes: type) -> list[Spec]:
             if meta is None:
                 continue
             default = {} if f.default_factory is dict else (
-                None if f.default is dataclasses.MISSING else f.default)  # fmt: skip
+                None if f.default is dataclasses.MISSING else f.default)
             out.append(Spec(f.name, default=default, **meta))
     return out
 
@@ -138,15 +138,15 @@ def add_flags(parser: argparse.ArgumentParser, options: list[Spec]) -> None:
                                     const=True, dest=s.name, default=None, help=argparse.SUPPRESS)
         elif s.kind == "vec3":
             parser.add_argument(*names, type=float, nargs=3, metavar=s.metavar or ("X", "Y", "Z"),
-                                **common)  # fmt: skip
+                                **common)
         elif s.kind == "words":  # a flag given twice adds to the first (--ignore a --ignore b)
             parser.add_argument(*names, action="extend", nargs="+", metavar=s.metavar, **common)
         elif s.kind == "pairs":
             parser.add_argument(*names, action="extend", nargs="+",
-                                metavar=s.metavar or "NAME=VALUE", **common)  # fmt: skip
+                                metavar=s.metavar or "NAME=VALUE", **common)
             for alias in s.aliases:
                 parser.add_argument(alias, action="extend", nargs="+", dest=s.name, default=None,
-                                    help=argparse.SUPPRESS)  # fmt: skip
+                                    help=argparse.SUPPRESS)
         elif s.kind == "choice":
             parser.add_argument(*names, choices=s.choices, metavar=s.metavar, **common)
         else:
@@ -184,18 +184,18 @@ def from_flag(spec: Spec, value: object) -> object:
 
 _TOML_TYPES = {"text": (str,), "words": (list,), "choice": (str,), "path": (str,),
                "float": (float, int), "int": (int,), "bool": (bool,), "vec3": (list,),
-               "pairs": (dict,)}  # fmt: skip
+               "pairs": (dict,)}
 _TYPE_NAMES = {"text": "text", "words": "a list of texts", "choice": "text",
                "path": "text (a path)", "float": "a number", "int": "a whole number",
                "bool": "true or false", "vec3": "a list of three numbers",
-               "pairs": "a table of name = text"}  # fmt: skip
+               "pairs": "a table of name = text"}
 
 
 def from_toml(spec: Spec, value: object, base: Path, file: Path) -> object:
     """A configuration file's value of ``spec`` checked for its type (paths made absolute
     against ``base``); refused naming ``file`` and the key."""
     ok = isinstance(value, _TOML_TYPES[spec.kind]) and not (
-        isinstance(value, bool) and spec.kind != "bool")  # fmt: skip
+        isinstance(value, bool) and spec.kind != "bool")
     if ok and spec.kind == "vec3":
         ok = len(value) == 3 and all(  # type: ignore[arg-type]
             isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)  # type: ignore[union-attr]
@@ -205,10 +205,10 @@ def from_toml(spec: Spec, value: object, base: Path, file: Path) -> object:
         for k, v in value.items():  # type: ignore[union-attr]
             if not isinstance(v, str):
                 raise InputError(f"expected text, got {v!r}", file=file,
-                                 field=f"{spec.section}.{k}")  # fmt: skip
+                                 field=f"{spec.section}.{k}")
     if not ok:
         raise InputError(f"expected {_TYPE_NAMES[spec.kind]}, got {value!r}", file=file,
-                         field=spec.key)  # fmt: skip
+                         field=spec.key)
     if spec.kind == "path":
         return _absolute(str(value), base)
     if spec.kind == "vec3":
@@ -259,7 +259,7 @@ def from_cell(spec: Spec, text: str, base: Path, file: Path, line: int) -> objec
             return v
     except ValueError:
         what = {"float": "a number", "int": "a whole number",
-                "vec3": "three numbers separated by spaces"}[spec.kind]  # fmt: skip
+                "vec3": "three numbers separated by spaces"}[spec.kind]
         raise InputError(f"expected {what}, got {text!r}", file=file, field=field) from None
     if spec.kind == "bool":
         low = text.strip().lower()

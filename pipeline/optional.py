@@ -18,7 +18,7 @@ __all__ = ["EXTRAS", "need"]
 
 #: Module -> the extra that installs it.
 EXTRAS = {"distributed": "batch", "dask": "batch", "matio": "reproduce", "ezc3d": "reproduce",
-          "matplotlib": "report", "pylsl": "live"}  # fmt: skip
+          "matplotlib": "report", "pylsl": "live"}
 
 
 def need(module: str, what: str) -> ModuleType:

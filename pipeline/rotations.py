@@ -159,7 +159,7 @@ def log3(R: np.ndarray) -> np.ndarray:
     """
     m, single = _stack(R, 2)
     v = 0.5 * np.stack([m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0],
-                        m[:, 1, 0] - m[:, 0, 1]], axis=-1)  # fmt: skip
+                        m[:, 1, 0] - m[:, 0, 1]], axis=-1)
     c = 0.5 * (m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2] - 1.0)
     s = np.sqrt(np.einsum("ni,ni->n", v, v))
     tiny = s < 1e-12

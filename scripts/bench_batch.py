@@ -21,7 +21,7 @@ from pathlib import Path
 from pipeline.commands.batch import run_batch
 
 WALK = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim" / \
-    "xsens_walking_orientations.sto"  # fmt: skip
+    "xsens_walking_orientations.sto"
 
 
 def main() -> None:
@@ -33,9 +33,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         manifest = Path(tmp) / "manifest.csv"
         manifest.write_text("subject,sex,height_m,orientations,sensor_to_model\n"
-                            + "\n".join(rows) + "\n")  # fmt: skip
+                            + "\n".join(rows) + "\n")
         configs = [("one process", dict(workers=1)), ("1 local worker", None),
-                   ("2 local workers", dict(workers=2))]  # fmt: skip
+                   ("2 local workers", dict(workers=2))]
         for label, kw in configs:
             out = Path(tmp) / label.replace(" ", "_")
             t0 = time.perf_counter()
@@ -43,11 +43,11 @@ def main() -> None:
                 from distributed import LocalCluster
 
                 with LocalCluster(n_workers=1, threads_per_worker=1,
-                                  dashboard_address=None) as c:  # fmt: skip
+                                  dashboard_address=None) as c:
                     start = time.perf_counter()
                     run_batch(manifest, out, scheduler=c.scheduler_address, progress=False)
                     results.append((label, args.trials, time.perf_counter() - start,
-                                    start - t0))  # fmt: skip
+                                    start - t0))
                 continue
             run_batch(manifest, out, progress=False, **kw)
             results.append((label, args.trials, time.perf_counter() - t0, 0.0))
@@ -57,9 +57,9 @@ def main() -> None:
         with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as c:
             start = time.perf_counter()
             run_batch(manifest, Path(tmp) / "cluster", scheduler=c.scheduler_address,
-                      progress=False)  # fmt: skip
+                      progress=False)
             results.append(("LocalCluster (2 workers) via --scheduler", args.trials,
-                            time.perf_counter() - start, start - t0))  # fmt: skip
+                            time.perf_counter() - start, start - t0))
     print(f"pipeline batch throughput, {args.trials} x {WALK.name} (2,432 frames each), "
           f"{os.cpu_count()} cores")
     print("| configuration | trials | wall s | trials/min | cluster start s |")

@@ -70,7 +70,7 @@ def main() -> None:
             kw = {}
         # one solve each (the user path adds an independent verification start)
         runs = [(m, partial(calibrate, d, tr.joint, m, seed=0, verify_start=False, **kw))
-                for m in METHODS]  # fmt: skip
+                for m in METHODS]
         runs.append(("ipopt", partial(calibrate_ipopt, d, tr.joint, **kw)))
         runs.append(("ipopt-cauchy", partial(calibrate_ipopt, d, tr.joint, loss="cauchy", **kw)))
         if tr.kind == "still_thigh":

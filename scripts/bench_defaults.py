@@ -66,7 +66,7 @@ SAGITTAL = ("hip_flexion", "knee_flexion", "ankle_flexion")
 #: (factor, option name, candidates); the default is IKOptions()'s value.
 FACTORS = (("correction", ("none", "aor", "functional")), ("knee", ("free", "hinge")),
            ("posture", ("measured", "neutral")), ("drift", ("auto", "joints")),
-           ("filter", ("vqf", "pi")))  # fmt: skip
+           ("filter", ("vqf", "pi")))
 
 
 def default_of(name: str):
@@ -80,7 +80,7 @@ def candidates() -> list[tuple[str, dict]]:
     out = [("defaults", {})]
     for name, values in FACTORS:
         out += [(f"{name} {v}", {name: v}) for v in values
-                if v != default_of(name) or name == "filter"]  # fmt: skip
+                if v != default_of(name) or name == "filter"]
     return out
 
 
@@ -101,21 +101,21 @@ def note_halves(source: str, changes: dict, run) -> None:
     if changes.get("correction") == "aor":
         for side, c in run.corrections.items():
             HALVES.append((source, side, None if c.halves_apart is None
-                           else float(np.degrees(c.halves_apart))))  # fmt: skip
+                           else float(np.degrees(c.halves_apart))))
 
 
 # ---- simulator ---------------------------------------------------------------------------------
 def sim_inputs(seed: int, artefacts: Artefacts | None, motion: str = "gait"):
     geometry, _ = geometry_from_measures(SIM_SUBJECT)
     sk = Skeleton.build(geometry, knee="free", root="freeflyer",
-                        ankle="free" if motion == "walk" else "universal")  # fmt: skip
+                        ankle="free" if motion == "walk" else "universal")
     trial = simulate_trial(sk, motion, duration_s=20.0, seed=seed, standing_s=3.0,
-                           artefacts=artefacts)  # fmt: skip
+                           artefacts=artefacts)
 
     def rec(**keep):
         return Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(**{
             k: getattr(i.recording, k) for k, on in keep.items() if on})
-            for f, i in trial.imus.items()})  # fmt: skip
+            for f, i in trial.imus.items()})
 
     return trial, {
         "orientations": (rec(quat=1, gyr=1, acc=1, mag=1), {"sensor_to_model": (-np.pi / 2, 0, 0)}),
@@ -143,7 +143,7 @@ def median_errors(run, truth: dict, start: int, skip: tuple[str, ...] = ()) -> t
     """The median RMSE (deg) against the simulator's truth from sample ``start`` on, over the
     sagittal angles and over the other axes (joints whose name starts with ``skip`` left out)."""
     rms = {k: float(np.sqrt(np.mean(np.degrees(run.joint_angles[k] - truth[k])[start:] ** 2)))
-           for k in run.joint_angles if k in truth and not k.startswith(skip)}  # fmt: skip
+           for k in run.joint_angles if k in truth and not k.startswith(skip)}
     return (float(np.median([v for k, v in rms.items() if k.endswith(SAGITTAL)])),
             float(np.median([v for k, v in rms.items() if not k.endswith(SAGITTAL)])))
 
@@ -162,7 +162,7 @@ def s02_scores(changes: dict) -> tuple[float, float]:
         cols = mot_columns(run)
         for ref, table in (("vicon", vicon), ("markers", markers)):
             meds[ref].append(np.median([real.angle_scores(cols[c], table.columns[c])["rmse"]
-                                        for c in real.SAGITTAL]))  # fmt: skip
+                                        for c in real.SAGITTAL]))
     return float(np.median(meds["vicon"])), float(np.median(meds["markers"]))
 
 
@@ -174,7 +174,7 @@ def opensense_reference(work: Path):
 
     out = work / "opensense.npz"
     done = subprocess.run([sys.executable, __file__, "--opensense", str(out)],
-                          capture_output=True, text=True)  # fmt: skip
+                          capture_output=True, text=True)
     if done.returncode != 0 or not out.exists():
         return None
     z = np.load(out)
@@ -206,7 +206,7 @@ def opensense_score(changes: dict, ref) -> float:
         return float("nan")
     trial = read_orientations_sto(OPENSIM_WALK)
     run = process_recording(trial, Measures(bo.SEX, bo.HEIGHT_M),
-                            sensor_to_model=(-np.pi / 2, 0.0, 0.0), **changes)  # fmt: skip
+                            sensor_to_model=(-np.pi / 2, 0.0, 0.0), **changes)
     note_halves("OpenSense walk", changes, run)
     ours = {"time": run.time, "columns": mot_columns(run)}
     diffs = [bo.agreement(ref, ours, f"{c}_{s}")[0] for c in bo.COMPARED for s in "rl"]
@@ -253,10 +253,10 @@ def report(rows, with_opensense: bool) -> str:
              f"Defaults: correction {d.correction}, knee {d.knee}, posture {d.posture}, "
              f"drift {d.drift}, {filt}.", "",
              "| options | " + " | ".join(SCORES) + " |",
-             "|---|" + "---|" * len(SCORES)]  # fmt: skip
+             "|---|" + "---|" * len(SCORES)]
     for label, vals in rows:
         lines.append(f"| {label} | " + " | ".join("-" if np.isnan(v) else f"{v:.2f}"
-                                                  for v in vals) + " |")  # fmt: skip
+                                                  for v in vals) + " |")
     lines += ["", "Per factor, each value's mean rank over the scores that apply (1 = best):", ""]
     by = dict(rows)
     for name, values in FACTORS:
@@ -275,7 +275,7 @@ def report(rows, with_opensense: bool) -> str:
         best = min(mean, key=mean.get)
         lines.append(f"- {name}: " + ", ".join(f"{v} {mean[v]:.2f}" for v in values)
                      + f" -> best {best}" + (" (the default)" if best == default_of(name)
-                                             else f" (default {default_of(name)})"))  # fmt: skip
+                                             else f" (default {default_of(name)})"))
     if not with_opensense:
         lines.append("- (opensim not installed: the OpenSense column is empty)")
     lines += ["", "The support test of `--correction aor`: per knee, the angle (deg) between the "

@@ -82,14 +82,14 @@ def report(args) -> None:
     model = Skeleton.build(geometry, knee="hinge", root="freeflyer")
     t0 = time.perf_counter()
     trial = simulate_trial(model, "gait", duration_s=STANDING_S + 60 * args.minutes,
-                           seed=args.seed, standing_s=STANDING_S)  # fmt: skip
+                           seed=args.seed, standing_s=STANDING_S)
     sim_s = time.perf_counter() - t0
     rate = 100.0
     n0 = int(STANDING_S * rate)
     runs = {}
     for label, mag, drift in (("6-D, no alignment", False, "none"),
                               ("6-D, joint alignment", False, "auto"),
-                              ("9-D (magnetometer)", True, "auto")):  # fmt: skip
+                              ("9-D (magnetometer)", True, "auto")):
         sensors = {}
         for frame, imu in trial.imus.items():
             s = imu.recording.sensor
@@ -111,7 +111,7 @@ def report(args) -> None:
     for key, d in run.heading_drifts.items():
         print(f"| {key.replace('_', ' ')} | {np.degrees(d.psi.min()):.1f} | "
               f"{np.degrees(d.psi.max()):.1f} | {d.drift_deg:.1f} | {d.residual_deg:.2f} | "
-              f"{d.before_deg:.2f} |")  # fmt: skip
+              f"{d.before_deg:.2f} |")
     skipped = [n for n in run.notes if "heading not aligned" in n]
     for n in skipped:
         print(f"- {n}")
@@ -123,11 +123,11 @@ def report(args) -> None:
     print("|---|" + "---|---|" * len(labels))
     for m in range(len(minutes[labels[0]])):
         cells = " | ".join(f"{minutes[lab][m][0]:.2f} | {minutes[lab][m][1]:.2f}"
-                           for lab in labels)  # fmt: skip
+                           for lab in labels)
         print(f"| {m + 1} | {cells} |")
     print()
     groups = ["hip flexion", "hip other", "knee flexion", "knee other", "ankle flexion",
-              "ankle other", "leg landmarks mm", "foot landmarks mm"]  # fmt: skip
+              "ankle other", "leg landmarks mm", "foot landmarks mm"]
     print("whole trial, RMS errors against the truth (deg; landmarks mm, pelvis frame):")
     print("| input | " + " | ".join(groups) + " | s |")
     print("|---|" + "---|" * (len(groups) + 1))

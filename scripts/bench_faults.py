@@ -98,7 +98,7 @@ def _slip(rec: Recording, names: tuple[str, ...], axis: np.ndarray | None = None
 
     return rec.with_sensors({**rec.sensors, **{n: rec.sensors[n].replace(
         gyr=slip(rec.sensors[n].gyr), acc=slip(rec.sensors[n].acc),
-        mag=slip(rec.sensors[n].mag)) for n in names}})  # fmt: skip
+        mag=slip(rec.sensors[n].mag)) for n in names}})
 
 
 def slipping(rec: Recording) -> Recording:
@@ -187,7 +187,7 @@ FAULTS = {"saturated gyroscope (+-250 deg/s)": (saturated, TARGET, TOUCHED),
           "left and right legs' sensors named for each other": (mirrored_legs, "femur_r_imu",
                                                                  LEGS_TOUCHED),
           "pelvis belt turning 30 deg around the waist halfway": (belt_turning, PELVIS,
-                                                                  PELVIS_TOUCHED)}  # fmt: skip
+                                                                  PELVIS_TOUCHED)}
 
 
 def _named(run, base, sensor: str) -> str:
@@ -196,7 +196,7 @@ def _named(run, base, sensor: str) -> str:
     notes (a heading aligned differently) are not a detection."""
     said = [f for f in run.flags if f not in base.flags]
     said += [n for n in run.notes if n not in base.notes and n.startswith(sensor)
-             and "magnetometer not trusted" in n]  # fmt: skip
+             and "magnetometer not trusted" in n]
     return "; ".join(said)
 
 
@@ -216,13 +216,13 @@ def _leans(run) -> str:
     """The run's measured standing leans, for the summary."""
     lean = run.posture.lean if run.posture else {}
     return ", ".join(f"{side} {np.degrees(lean[f'{side}_tibia']):+.1f} deg" for side in
-                     ("right", "left") if f"{side}_tibia" in lean) or "no lean"  # fmt: skip
+                     ("right", "left") if f"{side}_tibia" in lean) or "no lean"
 
 
 def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
     base = process_recording(rec, measures, filter="vqf")
     lines = [f"## {label}", "", "| fault | detected | what the run said | untouched joints "
-             "(deg) | its joints (deg) |", "|---|---|---|---|---|"]  # fmt: skip
+             "(deg) | its joints (deg) |", "|---|---|---|---|---|"]
     peak = np.degrees(np.abs(rec.sensors[TARGET].gyr).max())
     heading_turn = {}  # fault -> how far the subject's anatomical heading turned (deg)
     for name, (inject, sensor, joints) in FAULTS.items():
@@ -243,15 +243,15 @@ def bench(rec: Recording, measures: Measures, label: str) -> list[str]:
             verdict = "no: harmless (the calibration absorbs it)"
         lines.append(f"| {name} | {verdict} | {text} | {untouched:.2f} | {touched:.2f} |")
         heading_turn[name] = np.degrees(np.arccos(np.clip(run.heading_right @ base.heading_right,
-                                                          -1, 1)))  # fmt: skip
+                                                          -1, 1)))
     rows = [r for r in lines[4:] if "not applicable" not in r]
     missed = [r.split(" | ")[0][2:] for r in rows if "| **no** |" in r]
     moved = [float(r.split(" | ")[3]) for r in rows  # faults of the thigh touch the hip too
              if r.split(" | ")[3] not in ("-", "nan") and "| thigh and shank" not in r
              and "| pelvis" not in r and "| left and right" not in r
-             and "| right and left" not in r]  # fmt: skip
+             and "| right and left" not in r]
     belt = [(r.split(" | ")[3], r.split(" | ")[4].rstrip(" |"), heading_turn[r.split(" | ")[0][2:]])
-            for r in rows if r.startswith("| pelvis belt")]  # fmt: skip
+            for r in rows if r.startswith("| pelvis belt")]
     lines += ["", f"Detected and named: {len(rows) - len(missed)} of {len(rows)} faults"
               + (f"; not detected: {', '.join(missed)}" if missed else "") + ". Untouched joints "
               f"(the shank's faults) moved by up to {max(moved):.2f} deg (target 0.5): "
@@ -277,9 +277,9 @@ def simulated_walk() -> tuple[Recording, Measures]:
 
     measures = Measures("m", 1.75)
     sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=5, standing_s=3.0,
-                           artefacts=Artefacts())  # fmt: skip
+                           artefacts=Artefacts())
     return trial.raw_recording(), measures
 
 
@@ -299,9 +299,9 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("results/bench_faults.txt"))
     args = ap.parse_args()
     lines = ["# Fault injection (scripts/bench_faults.py): one fault in the right shank's sensor",
-             ""]  # fmt: skip
+             ""]
     lines += bench(*simulated_walk(), "The simulator (the walk with a free ankle, soft tissue, "
-                   "wandering biases, the floor's field; 9-D)")  # fmt: skip
+                   "wandering biases, the floor's field; 9-D)")
     if (args.data / "gaittoolbox_s02").exists():
         lines += bench(*s02(args.data), "S02 (the real walk, raw signals through VQF)")
         lines += time_faults.section(args.data)

@@ -28,7 +28,7 @@ DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
 def load(path: Path) -> dict[str, np.ndarray]:
     d = scipy.io.loadmat(path, squeeze_me=True)
     out = {k: np.ascontiguousarray(d[k], dtype=float) for k in ("imu_gyr", "imu_acc", "imu_mag",
-                                                                 "opt_quat")}  # fmt: skip
+                                                                 "opt_quat")}
     out["rate"] = float(d["sampling_rate"])
     out["scored"] = np.asarray(d["movement"], bool) & np.all(np.isfinite(out["opt_quat"]), axis=1)
     out["opt_quat"] = np.where(np.isfinite(out["opt_quat"]), out["opt_quat"], [[1.0, 0, 0, 0]])
@@ -68,7 +68,7 @@ def main() -> None:
         paper = mahony_filter(t, tr["imu_gyr"], tr["imu_acc"]).quat
         rows.append((path.stem, inclination_rmse(q6, tr), inclination_rmse(q9, tr),
                      heading_rmse(q9, tr), inclination_rmse(paper, tr), inclination_rmse(qpi, tr),
-                     res["vqf_s"], res["pi_s"], len(t)))  # fmt: skip
+                     res["vqf_s"], res["pi_s"], len(t)))
     print("BROAD, RMSE in degrees over the scored (movement) samples")
     print(f"PI tuned: {TUNED}")
     print("| trial | VQF 6-D incl. | VQF 9-D incl. | VQF 9-D heading | PI paper incl. | "

@@ -34,7 +34,7 @@ from pipeline.simulate.foot_walk import foot_walk
 #: Our sensor names -> the S02 sensor ids (its README).
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 #: The walking samples of S02 (its README).
 WALK = (1120, 2075)
 RATE = 100.0
@@ -48,7 +48,7 @@ def vicon_events(data: Path) -> dict[str, dict[str, np.ndarray]]:
     from scipy.spatial.transform import Rotation
 
     m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
+                    struct_as_record=False)
     root = np.asarray(m["Root"], float)
     forward = Rotation.from_rotvec(np.radians(root[:, :3])).as_matrix()[:, :, 2]
     forward[:, 2] = 0.0
@@ -82,7 +82,7 @@ def _stats(e: np.ndarray, scale: float = 1.0, digits: int = 1) -> str:
     if len(e) == 0:
         return "n/a"
     return (f"{np.mean(e):+.{digits}f} ± {np.std(e):.{digits}f} (median abs "
-            f"{np.median(np.abs(e)):.{digits}f}, n={len(e)})")  # fmt: skip
+            f"{np.median(np.abs(e)):.{digits}f}, n={len(e)})")
 
 
 def s02(data: Path) -> list[str]:
@@ -93,7 +93,7 @@ def s02(data: Path) -> list[str]:
     lines = ["## S02 (real walk, Xsens MTw on the feet; truth: Vicon heel, toe and sacrum)", "",
              "| side | IC error (ms) | FC error (ms) | stride time error (ms) | straight stride "
              "length error (cm) | straight stride length error (%) | strides (straight) |",
-             "|---|---|---|---|---|---|---|"]  # fmt: skip
+             "|---|---|---|---|---|---|---|"]
     all_len, all_pct, all_ic, all_t, turning = [], [], [], [], []
     fc_early, fc_late = [], []
     for side in ("right", "left"):
@@ -102,14 +102,14 @@ def s02(data: Path) -> list[str]:
         fc_err = _nearest(ev.fc / RATE, tr["fc"])
         fc_early.append(1000 * np.median(-fc_err[fc_err < 0]))
         fc_late += [f"{side} {1000 * e:+.0f} ms at {t:.1f} s"
-                    for e, t in zip(fc_err, ev.fc / RATE, strict=True) if e > 0]  # fmt: skip
+                    for e, t in zip(fc_err, ev.fc / RATE, strict=True) if e > 0]
         strides = [s for s in gait.strides if s.side == side]
         t_err, l_err, pct = [], [], []
         for s in strides:
             k0 = np.argmin(np.abs(tr["ic"] - s.start_s))
             k1 = np.argmin(np.abs(tr["ic"] - s.end_s))
             if (abs(tr["ic"][k0] - s.start_s) > 0.15 or abs(tr["ic"][k1] - s.end_s) > 0.15
-                    or k1 != k0 + 1):  # fmt: skip
+                    or k1 != k0 + 1):
                 continue
             t_err.append(s.stride_time_s - (tr["ic"][k1] - tr["ic"][k0]))
             h = tr["heel"]
@@ -124,7 +124,7 @@ def s02(data: Path) -> list[str]:
         straight = sum(s.straight for s in strides)
         lines.append(f"| {side} | {_stats(ic_err, 1000, 0)} | {_stats(fc_err, 1000, 0)} | "
                      f"{_stats(np.array(t_err), 1000, 0)} | {_stats(np.array(l_err), 100)} | "
-                     f"{_stats(np.array(pct))} | {len(strides)} ({straight}) |")  # fmt: skip
+                     f"{_stats(np.array(pct))} | {len(strides)} ({straight}) |")
         all_len += l_err
         all_pct += pct
         all_ic += list(ic_err[np.isfinite(ic_err)])
@@ -152,7 +152,7 @@ def s02(data: Path) -> list[str]:
               "which lags the toe's lift-off); stance shares are therefore ~4 points below a "
               "marker-based one. After it: " + ("; ".join(fc_late) or "none") + " (a step that "
               "barely pitches the foot, as a pivot in a turn, has no push-off).", "",
-              *pelvis_path(data)]  # fmt: skip
+              *pelvis_path(data)]
     return lines
 
 
@@ -181,21 +181,21 @@ def pelvis_path(data: Path) -> list[str]:
 
     run = process_recording(read_recording(data / "imu", S02_MAP), Measures("m", 1.72))
     m = sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
+                    struct_as_record=False)
     window = slice(1000, 2200)
     err, walked = path_error(run.gait.pelvis_path[window], m["Root"][window, 3:] / 1000.0)
     return ["", "The pelvis's horizontal path (pipeline ik, defaults) against the Vicon pelvis "
             "origin, samples 1000-2200, after the best rotation and shift: "
             f"mean {100 * err.mean():.1f} cm, 95th percentile {100 * np.percentile(err, 95):.1f} "
             f"cm, largest {100 * err.max():.1f} cm over {walked:.2f} m walked: mean "
-            f"{100 * err.mean() / walked:.1f} % of the distance (target 2 %)."]  # fmt: skip
+            f"{100 * err.mean() / walked:.1f} % of the distance (target 2 %)."]
 
 
 def simulated(seeds=(0, 1, 2)) -> list[str]:
     lines = ["## The simulated foot (pipeline.simulate.foot_walk: 10 strides of 1.3 m, turns of "
              "90 and -45 deg, noise)", "",
              "| seed | IC error (ms) | FC error (ms) | stride length error (cm) | turn error "
-             "(deg) |", "|---|---|---|---|---|"]  # fmt: skip
+             "(deg) |", "|---|---|---|---|---|"]
     for seed in seeds:
         w = foot_walk(strides=10, seed=seed, turns_deg=(0, 0, 90, 0, 0, -45))
         ev = gait_events(w.gyr, w.acc, w.rate_hz)
@@ -206,7 +206,7 @@ def simulated(seeds=(0, 1, 2)) -> list[str]:
         length = np.array([s.stride_length_m for s in strides]) - w.length[1:len(strides) + 1]
         turn = np.array([s.turn_deg for s in strides]) - w.turn_deg[1:len(strides) + 1]
         lines.append(f"| {seed} | {_stats(ic, 1000)} | {_stats(fc, 1000)} | "
-                     f"{_stats(length, 100, 2)} | {_stats(turn)} |")  # fmt: skip
+                     f"{_stats(length, 100, 2)} | {_stats(turn)} |")
     return lines
 
 
@@ -224,7 +224,7 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
 
     measures, standing = Measures("m", 1.75), 3.0
     sk = Skeleton.build(geometry_from_measures(measures)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     lines = ["", "## The simulated skeleton walking (pipeline.simulate.walk: feet that rest on "
              "the floor and invert in push-off, a free ankle, a turn of 60-120 deg, soft tissue, "
              "bias and the floor's field; `pipeline ik` defaults on the raw signals)", "",
@@ -232,7 +232,7 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
              "pelvis path: mean / 95th pct (cm), % of the distance |", "|---|---|---|---|---|"]
     for seed in seeds:
         sim = simulate_trial(sk, "walk", duration_s=20.0, seed=seed, standing_s=standing,
-                             artefacts=Artefacts())  # fmt: skip
+                             artefacts=Artefacts())
         run = process_recording(sim.raw_recording(), measures)
         tau = ramp(sim.time, standing)[3]
         ic_err, time_err, length_err = [], [], []
@@ -251,7 +251,7 @@ def simulated_walk(seeds=(0, 1, 2)) -> list[str]:
         lines.append(f"| {seed} | {_stats(np.array(ic_err), 1000)} | "
                      f"{_stats(np.array(time_err), 1000)} | {_stats(np.array(length_err), 100)} | "
                      f"{100 * err.mean():.1f} / {100 * np.percentile(err, 95):.1f}, "
-                     f"{100 * err.mean() / walked:.1f} % of {walked:.1f} m |")  # fmt: skip
+                     f"{100 * err.mean() / walked:.1f} % of {walked:.1f} m |")
     return lines
 
 
@@ -261,7 +261,7 @@ def plausibility() -> list[str]:
     gait = gait_of(read_recording("example:ximu3_lower_body"), notes)
     rows = [f"{s.side} {s.start_s:.1f}-{s.end_s:.1f} s: {s.stride_length_m:.2f} m, "
             f"{s.stride_time_s:.2f} s, stance {100 * s.stance_share:.0f} %, clearance "
-            f"{100 * s.clearance_m:.1f} cm" for s in gait.strides]  # fmt: skip
+            f"{100 * s.clearance_m:.1f} cm" for s in gait.strides]
     return ["", "## Plausibility: the x-IMU3 example (no truth)", "",
             f"{len(gait.strides)} strides: " + ("; ".join(rows) or "none") + "."
             + (" Notes: " + "; ".join(notes) if notes else "")]
@@ -277,7 +277,7 @@ def main() -> None:
     data = args.data / "gaittoolbox_s02"
     lines += s02(data) if data.exists() else [f"S02 not found in {data}: skipped"]
     lines += speeds() + shuffling(read_recording(data / "imu", S02_MAP) if data.exists()
-                                  else None) + qmt_run(args.data)  # fmt: skip
+                                  else None) + qmt_run(args.data)
     lines += plausibility()
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)

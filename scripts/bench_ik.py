@@ -59,7 +59,7 @@ def _fallback_model(knee: str) -> pin.Model:
         "hip_Z": (-1.047, 3.142), "hip_X": (-1.571, 1.047), "hip_Y": (-1.571, 1.047),
         "knee": (0.0, 3.142), "knee_Z": (0.0, 3.142), "knee_X": (-0.524, 0.524),
         "knee_Y": (-0.785, 0.785), "ankle_Z": (-1.571, 0.785), "ankle_X": (-0.524, 0.785),
-    }  # fmt: skip
+    }
     hip = chain(0, [("hip_Z", z), ("hip_X", x), ("hip_Y", y)], (0, -0.08, 0.08), lims)
     if knee == "free":
         kn = chain(hip, [("knee_Z", -z), ("knee_X", x), ("knee_Y", y)], (0, -0.42, 0), lims)

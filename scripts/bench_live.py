@@ -47,7 +47,7 @@ def paths(rec: Recording) -> dict[str, tuple[Recording, IKOptions]]:
     six = rec.with_sensors({n: s.replace(quat=None, mag=None) for n, s in rec.sensors.items()})
     return {"vendor": (rec, IKOptions(sensor_to_model=(-np.pi / 2, 0.0, 0.0))),
             "VQF 9-D": (raw, IKOptions(filter="vqf")),
-            "VQF 6-D": (six, IKOptions(filter="vqf"))}  # fmt: skip
+            "VQF 6-D": (six, IKOptions(filter="vqf"))}
 
 
 def capture(rec: Recording, opts: IKOptions, watch=None):
@@ -95,7 +95,7 @@ def repeated(rec: Recording, seconds: float) -> Recording:
     t = np.arange(n) / rec.rate_hz
     sensors = {name: s.replace(**{g: np.tile(getattr(s, g), (k, 1)) for g in
                                   ("quat", "gyr", "acc", "mag") if getattr(s, g) is not None})
-               for name, s in rec.sensors.items()}  # fmt: skip
+               for name, s in rec.sensors.items()}
     return Recording(t, rec.rate_hz, sensors, dict(rec.header))
 
 
@@ -150,7 +150,7 @@ def latency_section(rec: Recording) -> tuple[list[str], float]:
             lines.append(f"| {label} | {r.rate_hz:.0f} | {p50:.2f} | {p99:.2f} | "
                          f"{1e3 / p99:.0f} | {final:.1f} | "
                          + (f"{sag:.2f} | {np.median(list(rms.values())):.2f} | {worst} "
-                            f"{rms[worst]:.2f} |" if rms else "- | - | - |"))  # fmt: skip
+                            f"{rms[worst]:.2f} |" if rms else "- | - | - |"))
     return lines, p99_100
 
 
@@ -175,7 +175,7 @@ def long_section(rec: Recording, hours: float) -> list[str]:
             f"MB after 10 minutes, {seen.get(seconds - 1.0, 0):.0f} MB at the end (peak "
             f"{peak:.0f} MB, the replayed recording itself included); latency p50/p99 "
             f"{first[0]:.2f}/{first[1]:.2f} ms over the first 10 minutes, {last[0]:.2f}/"
-            f"{last[1]:.2f} ms over the last.", ""]  # fmt: skip
+            f"{last[1]:.2f} ms over the last.", ""]
 
 
 def main() -> None:
@@ -188,7 +188,7 @@ def main() -> None:
     lines, p99 = latency_section(rec)
     head = ["# Live capture (scripts/bench_live.py)", "",
             f"p99 per frame (100 Hz, 7 sensors): {p99:.2f} ms (target {TARGET_MS:g}; vendor "
-            "orientations; the other inputs below)", ""]  # fmt: skip
+            "orientations; the other inputs below)", ""]
     text = "\n".join(head + lines + [""] + long_section(rec, args.hours)) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)

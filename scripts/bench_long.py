@@ -27,7 +27,7 @@ from pipeline.io.opensim import read_orientations_sto, write_orientations_sto
 from pipeline.io.recording import Recording
 
 WALK = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim" / \
-    "xsens_walking_orientations.sto"  # fmt: skip
+    "xsens_walking_orientations.sto"
 
 
 def tiled(n: int) -> Recording:
@@ -45,7 +45,7 @@ def run(n: int, tmp: Path) -> tuple[float, float, int]:
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex",
                     "m", "--height-m", "1.80", "--sensor-to-model", "-1.5708", "0", "0",
-                    "--out", str(out)], check=True, capture_output=True)  # fmt: skip
+                    "--out", str(out)], check=True, capture_output=True)
     wall = time.perf_counter() - t0
     peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss  # KiB, max over children
     size = sum(p.stat().st_size for p in out.iterdir())

@@ -61,7 +61,7 @@ FILES = {
     "xsens_walking_orientations.sto": (-np.pi / 2, 0.0, 0.0),
 }
 VARIANTS = (("anatomical", "hinge"), ("anatomical", "free"),
-            ("pelvis_imu:-z", "hinge"), ("pelvis_imu:-z", "free"))  # fmt: skip
+            ("pelvis_imu:-z", "hinge"), ("pelvis_imu:-z", "free"))
 COMPARED = ("hip_flexion", "hip_adduction", "hip_rotation", "knee_angle")
 HEIGHT_M, SEX = 1.80, "m"
 
@@ -118,7 +118,7 @@ def build_opensim_model(osim, geometry, torso: bool = False):
         osim, "ground_pelvis", m.getGround(), (0.0, 0.0, 0.0), pelvis,
         [("pelvis_tilt", (0, 0, 1)), ("pelvis_list", (1, 0, 0)), ("pelvis_rotation", (0, 1, 0))],
         [("pelvis_tx", (1, 0, 0)), ("pelvis_ty", (0, 1, 0)), ("pelvis_tz", (0, 0, 1))],
-    ))  # fmt: skip
+    ))
     for side, sx in (("right", "r"), ("left", "l")):
         g = geometry.for_side(side)
         sgn = 1.0 if side == "right" else -1.0  # OpenSim gait models: -x, -y hip axes on the left
@@ -129,11 +129,11 @@ def build_opensim_model(osim, geometry, torso: bool = False):
             osim, f"hip_{sx}", pelvis, g.hip, femur,
             [(f"hip_flexion_{sx}", (0, 0, 1)), (f"hip_adduction_{sx}", (sgn, 0, 0)),
              (f"hip_rotation_{sx}", (0, sgn, 0))],
-        ))  # fmt: skip
+        ))
         m.addJoint(_pin_joint(osim, f"knee_{sx}", f"knee_angle_{sx}", femur, g.kjc_femur, tibia,
-                              flip=True))  # fmt: skip
+                              flip=True))
         m.addJoint(_pin_joint(osim, f"ankle_{sx}", f"ankle_angle_{sx}", tibia, g.ajc_tibia, calcn,
-                              flip=False))  # fmt: skip
+                              flip=False))
     if torso:
         t = body("torso", 34.2, (0.0, 0.3, 0.0), (1.5, 0.75, 1.4))
         h = HEIGHT_M / 1.80
@@ -141,7 +141,7 @@ def build_opensim_model(osim, geometry, torso: bool = False):
             osim, "back", pelvis, (-0.1 * h, 0.08 * h, 0.0), t,
             [("lumbar_extension", (0, 0, 1)), ("lumbar_bending", (1, 0, 0)),
              ("lumbar_rotation", (0, 1, 0))],
-        ))  # fmt: skip
+        ))
     m.finalizeConnections()
     cs = m.getCoordinateSet()
     for i in range(cs.getSize()):
@@ -209,7 +209,7 @@ def run_opensense(osim, model, sto: Path, rot, work: Path, heading_axis: str = "
         "place_wall": place_wall, "place_cpu": place_cpu, "read_wall": read_wall,
         "ik_wall": ik_wall, "ik_cpu": ik_cpu, "residual_rms": None, "sensors": None,
         "heading_axis": heading_axis,
-    }  # fmt: skip
+    }
     errs = sorted(results.glob("*rror*.sto"))
     if errs:
         e_labels, e = read_table(errs[0])
@@ -254,7 +254,7 @@ def run_ours(trial, rot, heading: str, knee: str, work: Path, **solver) -> dict:
             # at the mercy of a shared machine's hiccups; OpenSense's 5-20 s average them out
             run = process_recording(trial, Measures(SEX, HEIGHT_M), knee=knee,
                                     sensor_to_model=rot, heading=heading,
-                                    correction="none")  # fmt: skip
+                                    correction="none")
             walls.append(run.seconds_ik)
         run.skeleton.write_urdf(work / f"ours_{knee}.urdf")
     total = (time.perf_counter() - t0) / REPEATS
@@ -263,7 +263,7 @@ def run_ours(trial, rot, heading: str, knee: str, work: Path, **solver) -> dict:
         "ik_cpu": float(np.median(cpu)), "ik_cpu_min": float(min(cpu)), "total_wall": total,
         "residual_rms": run.residual_rms,
         "right": run.heading_right, "notes": run.notes,
-    }  # fmt: skip
+    }
 
 
 FLOOR = "import numpy, pinocchio"
@@ -287,7 +287,7 @@ def floor_command() -> float:
     for _ in range(5):
         t0 = time.perf_counter()
         subprocess.run([sys.executable, "-c", FLOOR], check=True, capture_output=True,
-                       env=_command_env())  # fmt: skip
+                       env=_command_env())
         best = min(best, time.perf_counter() - t0)
     return best
 
@@ -302,7 +302,7 @@ def whole_command(sto: Path, rot, *extra: str) -> tuple[float, float]:
         for i in range(6):
             args = [sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex",
                     SEX, "--height-m", str(HEIGHT_M), "--out", tmp, "--overwrite",
-                    *extra]  # fmt: skip
+                    *extra]
             if any(rot):
                 args += ["--sensor-to-model", *(repr(float(r)) for r in rot)]
             t0 = time.perf_counter()
@@ -421,7 +421,7 @@ def bench_file(osim, sto: Path, rot, geometry, torso: bool) -> list[str]:
     )
     free = ours[("anatomical", "free")]
     dq = max(np.nanmax(np.abs(free["columns"][c] - sequential["columns"][c]))
-             for c in free["columns"] if c != "time")  # fmt: skip
+             for c in free["columns"] if c != "time")
     lines.append(
         f"Strided (blocks of frames, the default) vs sequential solver: largest joint-angle "
         f"difference {np.degrees(dq):.4f} deg (both within the 1e-4 rad tolerance of the optimum)"

@@ -65,7 +65,7 @@ NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg !=
 
 
 def trial_and_inputs(motion: str, seed: int, *, mag: bool = True, knee: str = "hinge",
-                     realistic: bool = False):  # fmt: skip
+                     realistic: bool = False):
     geometry, _ = geometry_from_measures(SUBJECT)
     model = Skeleton.build(geometry, knee=knee, root="freeflyer")
     trial = simulate_trial(model, motion, duration_s=STANDING_S + MOTION_S, seed=seed,
@@ -101,13 +101,13 @@ def errors(trial, run, n0: int) -> dict[str, float]:
         b = np.einsum("nji,nj->ni", Re, est - pe)[n0:]
         foot = name.split("_", 1)[1] in ("HEE", "MT1", "MT5", "TOE")
         sq["foot landmarks mm" if foot else "leg landmarks mm"].extend(
-            np.sum((a - b) ** 2, axis=1).tolist())  # fmt: skip
+            np.sum((a - b) ** 2, axis=1).tolist())
     res.update({k: 1e3 * float(np.sqrt(np.mean(v))) for k, v in sq.items()})
     return res
 
 
 GROUPS = ("hip flexion", "hip other", "knee flexion", "knee other", "ankle flexion", "ankle other",
-          "leg landmarks mm", "foot landmarks mm")  # fmt: skip
+          "leg landmarks mm", "foot landmarks mm")
 #: The standard set of --all: (title, options).
 STANDARD = (
     ("ideal, hinge knee, 9-D, defaults", {}),
@@ -125,18 +125,18 @@ def table(seeds, motions, *, mag=True, knee="hinge", realistic=False, correction
     correction = correction or IKOptions().correction
     n0 = int(STANDING_S * 100)
     lines = ["| motion | seed | input | " + " | ".join(GROUPS) + " | s |",
-             "|---|---|---|" + "---|" * (len(GROUPS) + 1)]  # fmt: skip
+             "|---|---|---|" + "---|" * (len(GROUPS) + 1)]
     for motion in motions:
         for seed in seeds:
             trial, raw, oriented = trial_and_inputs(motion, seed, mag=mag, knee=knee,
-                                                    realistic=realistic)  # fmt: skip
+                                                    realistic=realistic)
             pose = {"supine_hip_flexion": "supine", "still_thigh": "seated"}.get(motion, "standing")
             for label, rec, kw in (("vqf", raw, {"filter": "vqf"}), ("pi", raw, {"filter": "pi"}),
                                    ("orientations", oriented,
-                                    {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)})):  # fmt: skip
+                                    {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)})):
                 t0 = time.perf_counter()
                 run = process_recording(rec, SUBJECT, calibration_pose=pose,
-                                        correction=correction, **kw)  # fmt: skip
+                                        correction=correction, **kw)
                 seconds = time.perf_counter() - t0
                 e = errors(trial, run, n0)
                 cells = " | ".join(f"{e.get(g, float('nan')):.2f}" for g in GROUPS)
@@ -160,14 +160,14 @@ def main() -> None:
     args = ap.parse_args()
     head = (f"raw path vs truth: {STANDING_S:g} s standing + {MOTION_S:g} s of motion at 100 Hz; "
             "RMS errors (deg; landmarks mm, pelvis frame); seconds of process_recording "
-            "(the knees' joint-constraint calibration included)")  # fmt: skip
+            "(the knees' joint-constraint calibration included)")
     if not args.all:
         print(head)
         print(table(args.seeds, args.motions, mag=not args.no_mag, knee=args.knee,
-                    realistic=args.realistic, correction=args.correction))  # fmt: skip
+                    realistic=args.realistic, correction=args.correction))
         return
     parts = ["# The raw-signal path on the simulator: `python scripts/bench_raw_path.py --all`", "",
-             head + ".", ""]  # fmt: skip
+             head + ".", ""]
     for title, opts in STANDARD:
         print(title, flush=True)
         parts += [f"## {title}", "", table(args.seeds, args.motions, **opts)]

@@ -52,21 +52,21 @@ DATA = ROOT.parent / "shared" / "data" / "gaittoolbox_s02"
 SUBJECT = Measures("m", 1.72)  # the dataset's README: height from the Vicon segments
 SENSOR_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
               "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-              "calcn_r_imu": "00B40C48"}  # fmt: skip
+              "calcn_r_imu": "00B40C48"}
 WALK, STANDING = slice(1120, 2075), slice(200, 1000)
 SAGITTAL = ("hip_flexion_r", "hip_flexion_l", "knee_angle_r", "knee_angle_l", "ankle_angle_r",
-            "ankle_angle_l")  # fmt: skip
+            "ankle_angle_l")
 FRONTAL = ("hip_adduction_r", "hip_adduction_l", "hip_rotation_r", "hip_rotation_l")
 INPUTS = {"vendor": "the vendor's orientations", "vqf9": "VQF with magnetometers",
           "vqf6": "VQF without magnetometers", "pi6": "PI filter without magnetometers"}
 #: The options varied, each value besides the default one at a time.
 OPTIONS = (("correction", ("none", "aor", "functional")), ("knee", ("free", "hinge")),
-           ("posture", ("measured", "neutral")), ("drift", ("auto", "joints", "none")))  # fmt: skip
+           ("posture", ("measured", "neutral")), ("drift", ("auto", "joints", "none")))
 #: Option sets: the defaults, then (label, changes) for each other value; last, the subject's
 #: measured pelvis width (``--pelvis-width-m``, from the Vicon ASIS markers: asis_width).
 VARIANTS = (("defaults", {}), *((f"{name} {v}", {name: v}) for name, values in OPTIONS
                                 for v in values if v != getattr(IKOptions(), name)),
-            ("pelvis width measured", {"pelvis_width_m": "measured"}))  # fmt: skip
+            ("pelvis width measured", {"pelvis_width_m": "measured"}))
 #: Issue 23's targets (deg, mm): the median of the six sagittal RMSEs per input, each knee's and
 #: ankle's RMSE, the hip ab/adduction's r, the knee and ankle centres' RMS error.
 MEDIAN_TARGET = {"vendor": 3.5, "vqf9": 3.5, "vqf6": 4.0, "pi6": 4.0}
@@ -75,7 +75,7 @@ KJC_TARGET_MM, AJC_TARGET_MM = 25.0, 35.0
 #: Our model's segment frames -> the Vicon segments (every Vicon segment's z axis is anterior).
 SEGMENTS = {"pelvis": "Root", "right_femur": "R_Femur", "left_femur": "L_Femur",
             "right_tibia": "R_Tibia", "left_tibia": "L_Tibia", "right_foot": "R_Foot",
-            "left_foot": "L_Foot"}  # fmt: skip
+            "left_foot": "L_Foot"}
 
 
 def recording(data: Path, path: str):
@@ -84,7 +84,7 @@ def recording(data: Path, path: str):
         return rec, {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)}
     keep_mag = path == "vqf9"
     sensors = {n: s.replace(quat=None, mag=s.mag if keep_mag else None)
-               for n, s in rec.sensors.items()}  # fmt: skip
+               for n, s in rec.sensors.items()}
     return rec.with_sensors(sensors), {"filter": "pi" if path == "pi6" else "vqf"}
 
 
@@ -97,7 +97,7 @@ def angle_scores(ours: np.ndarray, truth: np.ndarray) -> dict[str, float]:
             "mean": float(np.mean(e)),
             "r": float(np.corrcoef(ours[WALK], truth[WALK])[0, 1]),
             "rom": float(np.degrees(np.ptp(ours[WALK]))),
-            "rom_truth": float(np.degrees(np.ptp(truth[WALK])))}  # fmt: skip
+            "rom_truth": float(np.degrees(np.ptp(truth[WALK])))}
 
 
 @functools.cache
@@ -106,7 +106,7 @@ def vicon_mat(data: Path) -> dict:
     import scipy.io as sio
 
     return sio.loadmat(data / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                       struct_as_record=False)  # fmt: skip
+                       struct_as_record=False)
 
 
 def vicon_rotations(data: Path, segment: str) -> np.ndarray:
@@ -121,10 +121,10 @@ def vicon_centres(data: Path) -> dict[str, np.ndarray]:
     """Knee and ankle centres relative to the hip centres' midpoint, (N, 3) m, in the Vicon
     pelvis frame (OpenSim axes) and in its heading frame (forward, up, right)."""
     rows = np.genfromtxt(data / "vicon" / "S02-Trial-Walk-1_joint_centres_pelvis.csv",
-                         delimiter=",", names=True)  # fmt: skip
+                         delimiter=",", names=True)
     out = {}
     mid = 0.5 * np.stack([np.stack([rows[f"hjc_{s}_os_{a}"] for a in "xyz"], 1) for s in "rl"]
-                         ).sum(0)  # fmt: skip
+                         ).sum(0)
     for s in "rl":
         for j in ("kjc", "ajc"):
             out[f"pelvis {j}_{s}"] = np.stack([rows[f"{j}_{s}_os_{a}"] for a in "xyz"], 1) - mid
@@ -140,7 +140,7 @@ def vicon_centres(data: Path) -> dict[str, np.ndarray]:
         for j, J in (("kjc", "KJC"), ("ajc", "AJC")):
             v = np.asarray(m[f"{S}{J}"], float) / 1000.0 - hjc
             out[f"heading {j}_{s}"] = np.stack([np.sum(v * fwd, 1), v @ up, np.sum(v * right, 1)],
-                                               1)  # fmt: skip
+                                               1)
     return out
 
 
@@ -168,7 +168,7 @@ def model_centres(skeleton, Q: np.ndarray, lm: dict) -> dict[str, np.ndarray]:
             v = lm[f"{side}_{J}"] - mid
             out[f"pelvis {j}_{s}"] = np.einsum("nji,nj->ni", R, v)
             out[f"heading {j}_{s}"] = np.stack([np.sum(v * fwd, 1), v @ up, np.sum(v * right, 1)],
-                                               1)  # fmt: skip
+                                               1)
     return out
 
 
@@ -187,7 +187,7 @@ def our_inclinations(run, axis: int = 0) -> dict[str, np.ndarray]:
     frontal roll, the elevation of its axis to the subject's right (the pelvis's obliquity)."""
     frames = frame_trajectories(run.skeleton, run.q, list(SEGMENTS))
     return {s: _elevation(R[:, :, axis], np.array([0.0, 1.0, 0.0]))
-            for s, (R, _) in frames.items()}  # fmt: skip
+            for s, (R, _) in frames.items()}
 
 
 def vicon_inclinations(data: Path, axis: int = 0) -> dict[str, np.ndarray]:
@@ -211,9 +211,9 @@ def vicon_lengths(data: Path) -> dict[str, float]:
     (m) of the Vicon model over the walk."""
     m = vicon_mat(data)
     c = {k: np.asarray(m[k], float)[WALK] / 1000.0 for k in
-         ("RHJC", "RKJC", "RAJC", "LHJC", "LKJC", "LAJC")}  # fmt: skip
+         ("RHJC", "RKJC", "RAJC", "LHJC", "LKJC", "LAJC")}
     return _lengths({f"{side}_{j}": c[f"{side[0].upper()}{j}"] for side in ("right", "left")
-                     for j in ("HJC", "KJC", "AJC")})  # fmt: skip
+                     for j in ("HJC", "KJC", "AJC")})
 
 
 def our_lengths(run) -> dict[str, float]:
@@ -237,7 +237,7 @@ def _lengths(p: dict) -> dict[str, float]:
 #: adduction and rotation and the ankle's inversion are not in the references (Vicon's knee is a
 #: hinge): driven, they stay at zero.
 DRIVEN = {"hip_Z": "hip_flexion", "hip_X": "hip_adduction", "hip_Y": "hip_rotation",
-          "knee_Z": "knee_angle", "ankle_Z": "ankle_angle"}  # fmt: skip
+          "knee_Z": "knee_angle", "ankle_Z": "ankle_angle"}
 
 
 def driven_centres(run, table) -> dict[str, np.ndarray]:
@@ -272,13 +272,13 @@ def centre_offsets(ours: dict, truth: dict) -> dict[str, tuple[float, float]]:
         e = ours[k][WALK] - truth[k][WALK]
         mean = np.nanmean(e, axis=0)
         out[k] = (float(1000 * np.linalg.norm(mean)),
-                  float(1000 * np.sqrt(np.nanmean(np.sum((e - mean) ** 2, 1)))))  # fmt: skip
+                  float(1000 * np.sqrt(np.nanmean(np.sum((e - mean) ** 2, 1)))))
     return out
 
 
 def centre_errors(ours: dict, truth: dict) -> dict[str, float]:
     return {k: float(1000 * np.sqrt(np.mean(np.sum((ours[k][WALK] - truth[k][WALK]) ** 2, 1))))
-            for k in truth if k in ours}  # fmt: skip
+            for k in truth if k in ours}
 
 
 def asis_width(data: Path) -> float:
@@ -299,7 +299,7 @@ def run_one(data: Path, path: str, changes: dict, refs: dict):
     seconds = time.perf_counter() - t0
     cols = mot_columns(run)
     scores = {ref: {c: angle_scores(cols[c], table.columns[c]) for c in SAGITTAL + FRONTAL}
-              for ref, table in refs["angles"].items()}  # fmt: skip
+              for ref, table in refs["angles"].items()}
     return run, cols, scores, centre_errors(our_centres(run), refs["centres"]), seconds
 
 
@@ -345,9 +345,9 @@ def main() -> None:
                 curves[path] = cols
             med = np.median([scores["vicon"][c]["rmse"] for c in SAGITTAL])
             print(f"{path:7s} {label:22s} median sagittal RMSE {med:.1f} deg ({seconds:.1f} s)",
-                  flush=True)  # fmt: skip
+                  flush=True)
     text = report(rows) + section(args.data, SENSOR_MAP, SUBJECT, INPUTS, SAGITTAL,
-                                  refs["angles"]) + limits(rows, refs)  # fmt: skip
+                                  refs["angles"]) + limits(rows, refs)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_real_gait.txt").write_text(text)
     figure(curves, vicon, args.out / "bench_real_gait.png")
@@ -356,7 +356,7 @@ def main() -> None:
 
 def _short(c: str) -> str:
     return c.replace("_angle", "").replace("_flexion", "").replace("_adduction", " add").replace(
-        "_rotation", " rot").replace("_r", " r").replace("_l", " l")  # fmt: skip
+        "_rotation", " rot").replace("_r", " r").replace("_l", " l")
 
 
 def report(rows) -> str:
@@ -365,16 +365,16 @@ def report(rows) -> str:
              "the standing offset removed / Pearson r (deg). Sagittal against "
              "`_vicon_ik.mot`; `median` is the median of the six sagittal RMSEs.", "",
              "| input | options | " + " | ".join(_short(c) for c in SAGITTAL) + " | median |",
-             "|---|---|" + "---|" * (len(SAGITTAL) + 1)]  # fmt: skip
+             "|---|---|" + "---|" * (len(SAGITTAL) + 1)]
     for path, label, scores, _, _, _ in rows:
         s = scores["vicon"]
         cells = [f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
-                 for c in SAGITTAL]  # fmt: skip
+                 for c in SAGITTAL]
         med = np.median([s[c]["rmse"] for c in SAGITTAL])
         lines.append(f"| {path} | {label} | " + " | ".join(cells) + f" | **{med:.1f}** |")
     lines += ["", "Range of motion over the walk (deg), defaults, ours / Vicon:", "",
               "| input | " + " | ".join(_short(c) for c in SAGITTAL) + " |",
-              "|---|" + "---|" * len(SAGITTAL)]  # fmt: skip
+              "|---|" + "---|" * len(SAGITTAL)]
     for path, label, scores, _, _, _ in rows:
         if label == "defaults":
             s = scores["vicon"]
@@ -384,7 +384,7 @@ def report(rows) -> str:
               "optical reference (the two optical methods disagree most here: the marker-based "
               "fit and the Vicon segments' rotation about the femur):", "",
               "| input | reference | " + " | ".join(_short(c) for c in FRONTAL) + " |",
-              "|---|---|" + "---|" * len(FRONTAL)]  # fmt: skip
+              "|---|---|" + "---|" * len(FRONTAL)]
     for path, label, scores, _, _, _ in rows:
         if label != "defaults":
             continue
@@ -392,28 +392,28 @@ def report(rows) -> str:
             s = scores[ref]
             lines.append(f"| {path} | {ref} | " + " | ".join(
                 f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
-                for c in FRONTAL) + " |")  # fmt: skip
+                for c in FRONTAL) + " |")
     lines += ["", "Sagittal against the marker-based reference (`_markers_ik.mot`), defaults:", "",
               "| input | " + " | ".join(_short(c) for c in SAGITTAL) + " | median |",
-              "|---|" + "---|" * (len(SAGITTAL) + 1)]  # fmt: skip
+              "|---|" + "---|" * (len(SAGITTAL) + 1)]
     for path, label, scores, _, _, _ in rows:
         if label == "defaults":
             s = scores["markers"]
             med = np.median([s[c]["rmse"] for c in SAGITTAL])
             lines.append(f"| {path} | " + " | ".join(
                 f"{s[c]['rmse']:.1f} / {s[c]['rmse_offset']:.1f} / {s[c]['r']:.2f}"
-                for c in SAGITTAL) + f" | {med:.1f} |")  # fmt: skip
+                for c in SAGITTAL) + f" | {med:.1f} |")
     keys = ["pelvis kjc_r", "pelvis kjc_l", "pelvis ajc_r", "pelvis ajc_l", "heading kjc_r",
-            "heading kjc_l", "heading ajc_r", "heading ajc_l"]  # fmt: skip
+            "heading kjc_l", "heading ajc_r", "heading ajc_l"]
     lines += ["", "Knee and ankle centres relative to the hip centres' midpoint, RMS 3-D error "
               "(mm) over the walk: in each system's pelvis frame, and in the pelvis's heading "
               "frame (the vertical and the pelvis's forward direction: free of the two pelvis "
               "frames' different tilt):", "",
               "| input | options | " + " | ".join(keys) + " | seconds |",
-              "|---|---|" + "---|" * (len(keys) + 1)]  # fmt: skip
+              "|---|---|" + "---|" * (len(keys) + 1)]
     for path, label, _, centres, seconds, _ in rows:
         lines.append(f"| {path} | {label} | " + " | ".join(f"{centres[k]:.0f}" for k in keys)
-                     + f" | {seconds:.1f} |")  # fmt: skip
+                     + f" | {seconds:.1f} |")
     lines += ["", "What each default run did (its notes on headings, magnetometers, posture):", ""]
     for path, label, _, _, _, run in rows:
         if label != "defaults":
@@ -442,7 +442,7 @@ def limits(rows, refs) -> str:
         med = np.median([v[c]["rmse"] for c in SAGITTAL])
         add = [f"{v[f'hip_adduction_{x}']['r']:.2f} / {m[f'hip_adduction_{x}']['r']:.2f}"
                + (" ok" if max(v[f"hip_adduction_{x}"]["r"], m[f"hip_adduction_{x}"]["r"])
-                  >= ADDUCTION_R_TARGET else " **no**") for x in "rl"]  # fmt: skip
+                  >= ADDUCTION_R_TARGET else " **no**") for x in "rl"]
         lines.append(
             f"| {path} | {_met(med, MEDIAN_TARGET[path])} ({MEDIAN_TARGET[path]:g}) | "
             + " | ".join(_met(v[c]["rmse"], KNEE_TARGET if "knee" in c else ANKLE_TARGET)
@@ -455,7 +455,7 @@ def limits(rows, refs) -> str:
               "(deg). A difference from Vicon smaller than this cannot be told from the "
               "references' own disagreement.", "",
               "| " + " | ".join(_short(c) for c in SAGITTAL + FRONTAL) + " |",
-              "|" + "---|" * len(SAGITTAL + FRONTAL)]  # fmt: skip
+              "|" + "---|" * len(SAGITTAL + FRONTAL)]
     vic, mar = refs["angles"]["vicon"], refs["angles"]["markers"]
     floor = {c: angle_scores(mar.columns[c], vic.columns[c]) for c in SAGITTAL + FRONTAL}
     lines.append("| " + " | ".join(f"{floor[c]['rmse']:.1f} / {floor[c]['rmse_offset']:.1f} / "
@@ -469,23 +469,23 @@ def limits(rows, refs) -> str:
               "skin, the two models' joint definitions as the joints flex), per input (defaults), "
               "and the same of the two optical references:", "",
               "| input | as scored | standing offset removed | walk's mean removed |",
-              "|---|---|---|---|"]  # fmt: skip
+              "|---|---|---|---|"]
     for path, scores in [(p, sc["vicon"]) for p, _, sc, _, _, _ in defaults] + [
-            ("optical floor", floor)]:  # fmt: skip
+            ("optical floor", floor)]:
         lines.append(f"| {path} | " + " | ".join(
             f"{np.median([scores[c][key] for c in SAGITTAL]):.1f}"
-            for key in ("rmse", "rmse_offset", "rmse_walk_mean")) + " |")  # fmt: skip
+            for key in ("rmse", "rmse_offset", "rmse_walk_mean")) + " |")
     lines += ["", "Each sagittal angle's mean error over the walk (deg, ours less the reference; "
               "defaults) against Vicon / the markers, and the markers' against Vicon. The "
               "references' ankle zero comes from their foot segments' frames (built on markers "
               "on the heel and toes), ours from the sole flat on the floor with the tibia "
               "upright: the ankles' offsets are partly a matter of definition.", "",
               "| input | " + " | ".join(_short(c) for c in SAGITTAL) + " |",
-              "|---|" + "---|" * len(SAGITTAL)]  # fmt: skip
+              "|---|" + "---|" * len(SAGITTAL)]
     for path, _, sc, _, _, _ in defaults:
         lines.append(f"| {path} | " + " | ".join(
             f"{sc['vicon'][c]['mean']:+.1f} / {sc['markers'][c]['mean']:+.1f}"
-            for c in SAGITTAL) + " |")  # fmt: skip
+            for c in SAGITTAL) + " |")
     lines.append("| markers | " + " | ".join(f"{floor[c]['mean']:+.1f}" for c in SAGITTAL) + " |")
     lines += ["", "**Segments**: each segment's sagittal inclination (its anterior axis's "
               "elevation, free of the heading) against the Vicon segment's: standing offset / "
@@ -496,12 +496,12 @@ def limits(rows, refs) -> str:
               "against Vicon's markers (the sensor on the skin, or the markers), which no "
               "filter removes.", "",
               "| segment | " + " | ".join(p for p, *_ in defaults) + " |",
-              "|---|" + "---|" * len(defaults)]  # fmt: skip
+              "|---|" + "---|" * len(defaults)]
     incl = {p: our_inclinations(run) for p, _, _, _, _, run in defaults}
     for seg, truth in refs["inclinations"].items():
         lines.append(f"| {seg} | " + " | ".join(
             "{:+.1f} / {:+.1f} / {:.1f}".format(*inclination_errors(incl[p][seg], truth))
-            for p in incl) + " |")  # fmt: skip
+            for p in incl) + " |")
     lines += ["", "**Frontal plane** (the hip ab/adduction's r target): each segment's frontal "
               "roll (its lateral axis's elevation, free of the heading; the pelvis's obliquity) "
               "against the Vicon segment's over the walk: Pearson r and range, ours / Vicon "
@@ -511,7 +511,7 @@ def limits(rows, refs) -> str:
               "a segment's axial rotation as it flexes, and Vicon's femur and tibia share their "
               "lateral axis (its knee is a hinge): the pelvis's row is the cleanest.", "",
               "| segment | " + " | ".join(p for p, *_ in defaults) + " |",
-              "|---|" + "---|" * len(defaults)]  # fmt: skip
+              "|---|" + "---|" * len(defaults)]
     rolls = {p: our_inclinations(run, axis=2) for p, _, _, _, _, run in defaults}
     for seg in ("pelvis", "right_femur", "left_femur", "right_tibia", "left_tibia"):
         truth = refs["rolls"][seg][WALK]
@@ -522,25 +522,25 @@ def limits(rows, refs) -> str:
               "pelvis frame, defaults; then the dimensions (m) of the scaled model (from height "
               "and sex, no measurement of this subject) against Vicon's:", "",
               "| input | " + " | ".join(f"{j}_{x}" for j in ("kjc", "ajc") for x in "rl") + " |",
-              "|---|" + "---|" * 4]  # fmt: skip
+              "|---|" + "---|" * 4]
     for path, _, _, _, _, run in defaults:
         off = centre_offsets(our_centres(run), refs["centres"])
         lines.append(f"| {path} | " + " | ".join(
             f"{off[f'pelvis {j}_{x}'][0]:.0f} + {off[f'pelvis {j}_{x}'][1]:.0f}"
-            for j in ("kjc", "ajc") for x in "rl") + " |")  # fmt: skip
+            for j in ("kjc", "ajc") for x in "rl") + " |")
     lines += ["", "The same centres (RMS 3-D error, pelvis frame, mm) of the scaled model with its "
               "legs' joints set to each optical reference's angles (the knee a hinge, as Vicon's): "
               "what the model's dimensions and frames leave when the angles are the optical ones, "
               "with the template's hip width (defaults) and with the measured one:", "",
               "| model | angles | kjc_r | kjc_l | ajc_r | ajc_l |", "|---|---|---|---|---|---|"]
     for label, run in ((r[1], r[5]) for r in rows if r[0] == "vendor"
-                       and r[1] in ("defaults", "pelvis width measured")):  # fmt: skip
+                       and r[1] in ("defaults", "pelvis width measured")):
         for ref, table in refs["angles"].items():
             err = centre_errors(driven_centres(run, table), refs["centres"])
             lines.append(f"| {label} | {ref} | " + " | ".join(
                 f"{err[f'pelvis {j}_{x}']:.0f}" for j in ("kjc", "ajc") for x in "rl") + " |")
     side = {k: abs(float(np.nanmean(v[STANDING, 2]))) for k, v in refs["centres"].items()
-            if k.startswith("heading")}  # fmt: skip
+            if k.startswith("heading")}
     lines += ["", "The same centres' mean error over the walk in the pelvis's heading frame, "
               "forward / up / right (mm), defaults. The lateral part is the stance's width: "
               "standing, Vicon puts the hip centres {:.0f} mm, the knees {:.0f} / {:.0f} mm and "
@@ -549,7 +549,7 @@ def limits(rows, refs) -> str:
                   500 * refs["lengths"]["hip width"], *(1000 * side[f"heading {j}_{x}"]
                                                         for j in ("kjc", "ajc") for x in "rl")),
               "", "| input | " + " | ".join(f"{j}_{x}" for j in ("kjc", "ajc") for x in "rl")
-              + " |", "|---|" + "---|" * 4]  # fmt: skip
+              + " |", "|---|" + "---|" * 4]
     for path, _, _, _, _, run in defaults:
         ours = our_centres(run)
         cells = []

@@ -48,7 +48,7 @@ SEEDS = (0, 1, 2)
 SETS = {"without the feet's sensors": ("calcn_r_imu", "calcn_l_imu"),
         "without the pelvis's sensor": ("pelvis_imu",),
         "the right leg and the pelvis": ("femur_l_imu", "tibia_l_imu", "calcn_l_imu"),
-        "the left leg and the pelvis": ("femur_r_imu", "tibia_r_imu", "calcn_r_imu")}  # fmt: skip
+        "the left leg and the pelvis": ("femur_r_imu", "tibia_r_imu", "calcn_r_imu")}
 #: The x-IMU3 example's subject (the README's example command).
 XIMU3_SUBJECT = Measures("m", 1.80)
 
@@ -96,7 +96,7 @@ def s02_rows(data: Path) -> list[tuple[str, str, list[str], float]]:
                 d = rms_change(cols[c], ref[c], real.WALK)
                 moved.append(d)
                 cells.append(f"{real.angle_scores(cols[c], vicon.columns[c])['rmse']:.1f} "
-                             f"({d:.1f})")  # fmt: skip
+                             f"({d:.1f})")
             rows.append((path, label, cells, max(moved, default=0.0)))
             print(f"S02 {path:6s} {label:30s} " + " | ".join(cells), flush=True)
     return rows
@@ -109,13 +109,13 @@ def ximu3_rows() -> list[tuple[str, str, list[str], float]]:
     rows = []
     for path, keep_mag in (("vqf9", True), ("vqf6", False)):
         raw = rec.with_sensors({n: s.replace(quat=None, mag=s.mag if keep_mag else None)
-                                for n, s in rec.sensors.items()})  # fmt: skip
+                                for n, s in rec.sensors.items()})
         ref = None
         for label, r in changes(raw).items():
             cols = mot_columns(process_recording(r, XIMU3_SUBJECT, filter="vqf"))
             ref = cols if ref is None else ref
             moved = [rms_change(cols[c], ref[c]) if written(cols, c) else None
-                     for c in real.SAGITTAL]  # fmt: skip
+                     for c in real.SAGITTAL]
             cells = ["-" if d is None else f"{d:.1f}" for d in moved]
             rows.append((path, label, cells, max((d for d in moved if d is not None), default=0.0)))
             print(f"x-IMU3 {path} {label:30s} " + " | ".join(cells), flush=True)
@@ -139,16 +139,16 @@ def sim_rows() -> list[tuple[int, str, str, float, float, str]]:
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(SIM_SUBJECT)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     rows = []
     for seed in SIM_SEEDS:
         trial = simulate_trial(sk, "walk", duration_s=20.0, seed=seed, standing_s=3.0,
-                               artefacts=Artefacts())  # fmt: skip
+                               artefacts=Artefacts())
         truth = joint_angles(trial.skeleton, trial.q)
         for path, mag in (("vqf9", True), ("vqf6", False)):
             rec = trial.raw_recording(magnetometers=mag)
             for label, r in {"as recorded": rec, **{f"remounted (seed {k})": remounted(rec, k)
-                                                    for k in SEEDS}}.items():  # fmt: skip
+                                                    for k in SEEDS}}.items():
                 run = process_recording(r, SIM_SUBJECT, filter="vqf")
                 sag, other = median_errors(run, truth, 300, skip=("pelvis",))
                 hips = hip_methods(run)
@@ -160,7 +160,7 @@ def sim_rows() -> list[tuple[int, str, str, float, float, str]]:
 #: How a hip's thigh got the pelvis's heading, from the run's notes (the first that matches).
 HIP_METHODS = (("the hip centre's acceleration", "centre"), ("thigh's flexion axis", "other thigh"),
                ("pelvis's medio-lateral line", "pelvis line"),
-               ("keeps its thigh sensor's heading", "own heading (flagged)"))  # fmt: skip
+               ("keeps its thigh sensor's heading", "own heading (flagged)"))
 
 
 def hip_methods(run) -> str:
@@ -169,7 +169,7 @@ def hip_methods(run) -> str:
     for side in ("right", "left"):
         notes = [n for n in run.notes if n.startswith(f"{side} hip:")]
         found.append(next((short for key, short in HIP_METHODS if any(key in n for n in notes)),
-                          "-"))  # fmt: skip
+                          "-"))
     return " / ".join(found)
 
 
@@ -178,7 +178,7 @@ def change_table(rows, head: str) -> list[str]:
     return [f"| input | sensors | {head} | largest change |",
             "|---|---|" + "---|" * (len(real.SAGITTAL) + 1),
             *(f"| {path} | {label} | " + " | ".join(cells) + f" | {moved:.1f} |"
-              for path, label, cells, moved in rows)]  # fmt: skip
+              for path, label, cells, moved in rows)]
 
 
 def report(s02, ximu3, sim) -> str:
@@ -194,7 +194,7 @@ def report(s02, ximu3, sim) -> str:
              "Raw signals through VQF (the vendor's orientations left out) with its "
              "magnetometers (`vqf9`, where trusted: the default) and without (`vqf6`), `--sex m "
              "--height-m 1.8`: each sagittal angle's RMS change from the run as recorded, over "
-             "the whole recording (deg).", "", *change_table(ximu3, head)]  # fmt: skip
+             "the whole recording (deg).", "", *change_table(ximu3, head)]
     lines += ["", "## The simulated walk (known truth)", "",
               "Raw signals through VQF with (9-D) and without (6-D) magnetometers: the median RMSE "
               "(deg) over the sagittal angles and over the other joint angles against the truth, "
@@ -203,7 +203,7 @@ def report(s02, ximu3, sim) -> str:
               "thighs' flexion axes; `pelvis line`: the pelvis's medio-lateral line; `own heading "
               "(flagged)`: none could).", "",
               "| seed | input | sensors | sagittal | other axes | hips aligned by |",
-              "|---|---|---|---|---|---|"]  # fmt: skip
+              "|---|---|---|---|---|---|"]
     for seed, path, label, sag, other, hips in sim:
         lines.append(f"| {seed} | {path} | {label} | {sag:.1f} | {other:.1f} | {hips} |")
     lines += ["", summary(s02, ximu3), sim_summary(sim)]
@@ -229,7 +229,7 @@ def sim_summary(sim) -> str:
     def spread(path: str, col: int) -> float:
         return max(max(r[col] for r in rows) - min(r[col] for r in rows)
                    for seed in SIM_SEEDS
-                   if (rows := [r for r in sim if r[0] == seed and r[1] == path]))  # fmt: skip
+                   if (rows := [r for r in sim if r[0] == seed and r[1] == path]))
 
     methods = sorted({r[5] for r in sim if r[1] == "vqf6"})
     return (f"On the simulated walk the mounting changes the 9-D runs' median errors by at most "

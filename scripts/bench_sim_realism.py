@@ -51,7 +51,7 @@ def _sensor(segment: str, side: str) -> str:
 
 def _strides(rec: Recording) -> list[tuple[str, int, int]]:
     return [(s.side, int(round(s.start_s * rec.rate_hz)), int(round(s.end_s * rec.rate_hz)))
-            for s in gait_of(rec, []).strides if abs(s.turn_deg) < MAX_TURN_DEG]  # fmt: skip
+            for s in gait_of(rec, []).strides if abs(s.turn_deg) < MAX_TURN_DEG]
 
 
 def swing_and_speed(rec: Recording, strides) -> dict[str, tuple[float, float]]:
@@ -107,10 +107,10 @@ def simulated(artefacts: bool) -> dict[str, float]:
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(Measures("m", 1.75))[0], knee="free",
-                        root="freeflyer", ankle="free")  # fmt: skip
+                        root="freeflyer", ankle="free")
     rows = [measure(simulate_trial(sk, "walk", duration_s=20.0, seed=seed, standing_s=3.0,
                                    artefacts=Artefacts() if artefacts else None).raw_recording())
-            for seed in SEEDS]  # fmt: skip
+            for seed in SEEDS]
     return {k: float(np.median([r[k] for r in rows])) for k in rows[0]}
 
 
@@ -130,12 +130,12 @@ def report(columns: dict[str, dict[str, float]]) -> str:
              f"{', '.join(map(str, SEEDS))}. Last column: the simulated walk (with its artefacts) "
              "within the two real walks' range, or its ratio to the nearer of them.", "",
              "| quantity | " + " | ".join(names) + " | simulated against the real walks |",
-             "|---" * (len(names) + 2) + "|"]  # fmt: skip
+             "|---" * (len(names) + 2) + "|"]
     sim = columns["simulated walk"]
     outside = []
     for key in columns[names[0]]:
         cells = [f"{columns[n][key]:.2f}" if key != "strides" else f"{columns[n][key]:.0f}"
-                 for n in names]  # fmt: skip
+                 for n in names]
         shown = "-"  # the recordings' lengths differ
         if key != "strides":
             shown = against_real(sim[key], [columns[r][key] for r in real])

@@ -53,7 +53,7 @@ def _one(pace: Pace, rate: float, seed: int):
     times = np.array([s.stride_time_s for s in strides]) - pace.stride_time_s
     lengths = np.array([s.stride_length_m for s in strides]) / pace.length_m - 1
     return (len(strides), len(w.ic) - 2, 1000 * np.abs(ic).max(), 1000 * np.abs(times).max(),
-            100 * np.abs(lengths).max(), _stillest(w, rate))  # fmt: skip
+            100 * np.abs(lengths).max(), _stillest(w, rate))
 
 
 def speeds(seeds=(0, 1, 2)) -> list[str]:
@@ -61,7 +61,7 @@ def speeds(seeds=(0, 1, 2)) -> list[str]:
              "three seeds)", "",
              "| pace | rate (Hz) | strides found / walked | IC error (ms, largest) | stride "
              "time error (ms) | stride length error (%) | stillest 50 ms in stance (rad/s) |",
-             "|---|---|---|---|---|---|---|"]  # fmt: skip
+             "|---|---|---|---|---|---|---|"]
     worst = np.zeros(3)
     missed = 0
     paces = [(f"walk {v:g} m/s", Pace.at(v)) for v in SPEEDS] + [("run 3 m/s", Pace.running())]
@@ -73,12 +73,12 @@ def speeds(seeds=(0, 1, 2)) -> list[str]:
             worst = np.maximum(worst, rows[:, 2:5].max(axis=0))
             lines.append(f"| {label} | {rate:.0f} | {found} / {walked} | "
                          f"{rows[:, 2].max():.1f} | {rows[:, 3].max():.1f} | "
-                         f"{rows[:, 4].max():.2f} | {rows[:, 5].max():.2f} |")  # fmt: skip
+                         f"{rows[:, 4].max():.2f} | {rows[:, 5].max():.2f} |")
     ok = missed == 0 and np.all(worst <= TARGETS)
     lines += ["", f"Targets (every stride found; contacts and stride time within "
               f"{TARGETS[0]:g} ms, length within {TARGETS[2]:g} %): "
               + ("met" if ok else "**not met**") + f" (missed {missed}; largest errors "
-              f"{worst[0]:.1f} ms, {worst[1]:.1f} ms, {worst[2]:.2f} %)."]  # fmt: skip
+              f"{worst[0]:.1f} ms, {worst[1]:.1f} ms, {worst[2]:.2f} %)."]
     return lines
 
 
@@ -103,7 +103,7 @@ def _shuffled(rec: Recording, seconds: float = 10.0) -> Recording:
         noise = np.random.default_rng(len(sensors)).normal(0, [0.005] * 3 + [0.03] * 3, (n, 6))
         sensors[name] = s.replace(gyr=np.vstack([gyr + noise[:, :3], s.gyr]),
                                   acc=np.vstack([acc + noise[:, 3:], s.acc]),
-                                  quat=None, mag=None)  # fmt: skip
+                                  quat=None, mag=None)
     time = np.concatenate([t, rec.time + seconds])
     return Recording(time, rate, sensors, source=rec.source)
 

@@ -34,7 +34,7 @@ def cut(rec: Recording, start: int) -> Recording:
     sensors = {n: dataclasses.replace(s, **{k: None if getattr(s, k) is None else
                                             getattr(s, k)[rows]
                                             for k in ("quat", "gyr", "acc", "mag")})
-               for n, s in rec.sensors.items()}  # fmt: skip
+               for n, s in rec.sensors.items()}
     return dataclasses.replace(rec, time=rec.time[rows] - rec.time[start], sensors=sensors)
 
 
@@ -57,7 +57,7 @@ def _as_input(rec: Recording, path: str) -> tuple[Recording, dict]:
         return rec, {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)}
     keep_mag = path == "vqf9"
     sensors = {n: s.replace(quat=None, mag=s.mag if keep_mag else None)
-               for n, s in rec.sensors.items()}  # fmt: skip
+               for n, s in rec.sensors.items()}
     return rec.with_sensors(sensors), {"filter": "pi" if path == "pi6" else "vqf"}
 
 
@@ -87,17 +87,17 @@ def section(data: Path, sensor_map: dict[str, str], subject, inputs, sagittal, r
              "sensors: the calibration each run chose, the sagittal RMSE against Vicon (deg), "
              "their median, the median against the markers, and the run's flags.", "",
              f"| input | recording | calibration | {names} | median | markers | flags |",
-             "|---|---|---|" + "---|" * (len(sagittal) + 3)]  # fmt: skip
+             "|---|---|---|" + "---|" * (len(sagittal) + 3)]
     for path in inputs:
         for label, (rec, start) in recordings.items():
             recording, options = _as_input(rec, path)
             run = process_recording(recording, subject, **options)
             cols = mot_columns(run)
             rmse = {ref: [_rmse(cols[c], table.columns[c], start) for c in sagittal]
-                    for ref, table in refs.items()}  # fmt: skip
+                    for ref, table in refs.items()}
             lines.append(f"| {path} | {label} | {_calibration(run.calibration)} | "
                          + " | ".join(f"{v:.1f}" for v in rmse["vicon"])
                          + f" | **{np.median(rmse['vicon']):.1f}** | "
-                         f"{np.median(rmse['markers']):.1f} | {len(run.flags)} |")  # fmt: skip
+                         f"{np.median(rmse['markers']):.1f} | {len(run.flags)} |")
             print(f"{path:7s} {label:12s} median {np.median(rmse['vicon']):.1f}", flush=True)
     return "\n".join(lines) + "\n"

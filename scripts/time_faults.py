@@ -34,7 +34,7 @@ __all__ = ["FAULTS", "section"]
 #: S02's sensors (bench_gait.S02_MAP).
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 SHANK, THIGH = "tibia_r_imu", "femur_r_imu"
 #: The joints of each faulty sensor's leg: its own, and those its leg's calibration measures with
 #: it (the standing lean from the knee's and ankle's centres, the knee's heading); the others (the
@@ -78,7 +78,7 @@ FAULTS: dict[str, tuple[str, Edit, tuple[int, int | None]]] = {
     "starting 5 s late": (SHANK, lambda rows: rows[500:], (0, 500)),
     "ending 10 s early": (SHANK, lambda rows: rows[:-1000], (-1000, None)),
     "quaternions written x, y, z, w": (THIGH, _xyzw, (0, 0)),
-}  # fmt: skip
+}
 
 
 def _faulty_copy(src: Path, sensor: str, edit: Edit) -> Path:
@@ -98,14 +98,14 @@ def _paths(rec):
     """Input path -> (recording, options): the vendor's orientations, the raw signals (VQF)."""
     raw = rec.with_sensors({n: s.replace(quat=None) for n, s in rec.sensors.items()})
     return {"vendor": (rec, {"sensor_to_model": (-np.pi / 2, 0.0, 0.0)}),
-            "VQF": (raw, {"filter": "vqf"})}  # fmt: skip
+            "VQF": (raw, {"filter": "vqf"})}
 
 
 def _named(run, sensor: str) -> str:
     """The sensor's findings of time and of its orientations, each cut to its first clause."""
     return "; ".join(f"{f.check} ({f.action}): {f.evidence.split(';')[0][:110]}"
                      for f in run.sensor_findings if f.sensor == sensor
-                     and f.check in ("read", "dropout", "orientations"))  # fmt: skip
+                     and f.check in ("read", "dropout", "orientations"))
 
 
 def _scores(run, base, sensor: str, span: tuple[int, int | None]) -> tuple[int, float, float]:
@@ -129,7 +129,7 @@ def _two_runs(src: Path) -> str:
     sensors = ["--sensor-map", *(f"{k}={v}" for k, v in S02_MAP.items())]
     args = [sys.executable, "-m", "pipeline", "ik", "--orientations", str(src), *sensors,
             "--sex", "m", "--height-m", "1.72", "--sensor-to-model", "-1.5708", "0", "0",
-            "--no-rerun", "--out", str(out)]  # fmt: skip
+            "--no-rerun", "--out", str(out)]
     first = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     for _ in range(600):
         if (out / ".pipeline.lock").exists() or first.poll() is not None:
@@ -139,7 +139,7 @@ def _two_runs(src: Path) -> str:
     first.wait()
     said = (second.stderr.strip().splitlines() or [""])[0]
     said = re.sub(r"\(pid \d+ on [^,]*, started [^:]*:[^:]*:[^)]*\)",
-                  "(pid, host, start, recording)", said.replace(str(out), "OUT"))  # fmt: skip
+                  "(pid, host, start, recording)", said.replace(str(out), "OUT"))
     return f"exit {second.returncode} (the first: {first.returncode}): {said}"
 
 
@@ -150,7 +150,7 @@ def section(data: Path) -> list[str]:
              "| fault | input | detected | what the run said | blank (samples) | untouched "
              "joints (deg RMS) | its leg's joints (deg RMS) |", "|---|---|---|---|---|---|---|"]
     bases = {k: process_recording(r, SUBJECT, **o)
-             for k, (r, o) in _paths(read_recording(src, S02_MAP)).items()}  # fmt: skip
+             for k, (r, o) in _paths(read_recording(src, S02_MAP)).items()}
     for name, (sensor, edit, span) in FAULTS.items():
         folder = _faulty_copy(src, sensor, edit)
         for path, (rec, opts) in _paths(read_recording(folder, S02_MAP)).items():

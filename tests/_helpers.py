@@ -17,7 +17,7 @@ DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 S02 = DATA / "gaittoolbox_s02"
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 
 
 def s02_cut(start: int, stop: int | None = None, path: str = "vendor"):
@@ -35,7 +35,7 @@ def s02_cut(start: int, stop: int | None = None, path: str = "vendor"):
     sensors = {n: dataclasses.replace(s, **{k: None if getattr(s, k) is None else
                                             getattr(s, k)[rows]
                                             for k in ("quat", "gyr", "acc", "mag")})
-               for n, s in rec.sensors.items()}  # fmt: skip
+               for n, s in rec.sensors.items()}
     if path == "vqf6":
         sensors = {n: s.replace(quat=None, mag=None) for n, s in sensors.items()}
     return dataclasses.replace(rec, time=rec.time[rows] - rec.time[start], sensors=sensors)
@@ -130,7 +130,7 @@ def qmt_recording(data: Path):
     names = {"hip": "pelvis_imu", "upper_leg_left": "femur_l_imu",
              "upper_leg_right": "femur_r_imu", "lower_leg_left": "tibia_l_imu",
              "lower_leg_right": "tibia_r_imu", "foot_left": "calcn_l_imu",
-             "foot_right": "calcn_r_imu"}  # fmt: skip
+             "foot_right": "calcn_r_imu"}
     return Recording(d["t"] - d["t"][0], 100.0, {n: SensorSignals(
         gyr=np.asarray(d[k].gyr, float), acc=np.asarray(d[k].acc, float))
-        for k, n in names.items()})  # fmt: skip
+        for k, n in names.items()})

@@ -67,7 +67,7 @@ def test_the_csv_has_101_rows_per_stride_in_degrees():
     rows = list(csv.DictReader(io.StringIO(cycles_csv(cycle_angles(time, angles, strides)))))
     assert len(rows) == 3 * CYCLE_POINTS
     assert list(rows[0])[:6] == ["stride", "side", "straight", "steady", "in_means",
-                                 "cycle_percent"]  # fmt: skip
+                                 "cycle_percent"]
     assert [r["stride"] for r in rows[::CYCLE_POINTS]] == ["1", "2", "3"]
     assert [r["in_means"] for r in rows[::CYCLE_POINTS]] == ["false", "true", "false"]
     quarter = rows[CYCLE_POINTS + 25]

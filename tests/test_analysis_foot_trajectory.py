@@ -30,5 +30,5 @@ def test_the_path_between_rests_is_the_simulated_one(seed):
 def test_no_rest_no_path():
     rng = np.random.default_rng(0)
     p = foot_trajectory(rng.normal(size=(50, 3)), rng.normal(size=(50, 3)), 100.0,
-                        np.zeros((0, 2), int))  # fmt: skip
+                        np.zeros((0, 2), int))
     assert np.all(np.isnan(p.position)) and np.all(np.isnan(p.rotation))

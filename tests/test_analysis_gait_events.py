@@ -82,7 +82,7 @@ def test_turns_on_the_spot_do_not_take_the_sagittal_axis(seed):
 
 @pytest.mark.parametrize("length_m, steps", [(0.4, 6), (0.05, 0)])
 def test_a_step_that_barely_pitches_the_foot_counts_when_the_foot_moved(monkeypatch, length_m,
-                                                                        steps):  # fmt: skip
+                                                                        steps):
     """Feet pitched a quarter as much as in walking (swing peak 1.9 rad/s, below MIN_SWING_RATE,
     as in a pivot turn): steps of 0.4 m are found, IC within 10 ms; shuffles of 5 cm are not."""
     import pipeline.simulate.foot_walk as fw
@@ -174,7 +174,7 @@ def test_s02_initial_contacts_against_the_heel_markers():
     truth = vicon_events(S02)
     for side, sensor, segment in (("right", "calcn_r_imu", "foot"), ("left", "calcn_l_imu", "foot"),
                                   ("right", "tibia_r_imu", "shank"),
-                                  ("left", "tibia_l_imu", "shank")):  # fmt: skip
+                                  ("left", "tibia_l_imu", "shank")):
         s = rec.sensors[sensor]
         ev = gait_events(s.gyr, s.acc, rec.rate_hz, segment)
         ic = truth[side]["ic"]

@@ -155,11 +155,11 @@ def test_jcs_angle_signs_by_hand():
     # ankle: the foot turning about +z (toes up) is dorsiflexion; about +x (lateral edge down,
     # sole facing medially) inversion, on both legs
     np.testing.assert_allclose(jcs_angles(I, rot_z(0.2), "ankle", "right"), [0.2, 0, 0],
-                               atol=1e-15)  # fmt: skip
+                               atol=1e-15)
     np.testing.assert_allclose(jcs_angles(I, rot_x(0.1), "ankle", "right"), [0, 0.1, 0],
-                               atol=1e-15)  # fmt: skip
+                               atol=1e-15)
     np.testing.assert_allclose(jcs_angles(I, rot_x(-0.1), "ankle", "left"), [0, 0.1, 0],
-                               atol=1e-15)  # fmt: skip
+                               atol=1e-15)
     with pytest.raises(InputError):
         jcs_angles(I, I, "elbow", "right")
 

@@ -83,7 +83,7 @@ def _reordered(tmp_path: Path) -> Path:
 def test_wrong_quaternion_order_is_flagged_first_and_strict_refuses(tmp_path, capsys):
     sto = _reordered(tmp_path)
     base = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.8",
-            "--sensor-to-model", "-1.5708", "0", "0"]  # fmt: skip
+            "--sensor-to-model", "-1.5708", "0", "0"]
     assert main([*base, "--out", str(tmp_path / "flagged")]) == 0
     captured = capsys.readouterr()
     assert "warning: median orientation residual" in captured.err
@@ -95,5 +95,5 @@ def test_wrong_quaternion_order_is_flagged_first_and_strict_refuses(tmp_path, ca
     # the file as written passes without a flag
     assert main(["ik", "--orientations", str(WALK), "--sex", "m", "--height-m", "1.8",
                  "--sensor-to-model", "-1.5708", "0", "0", "--strict",
-                 "--out", str(tmp_path / "ok")]) == 0  # fmt: skip
+                 "--out", str(tmp_path / "ok")]) == 0
     assert "warning" not in capsys.readouterr().err

@@ -22,12 +22,12 @@ def _strides(**kw):
     w = foot_walk(**kw)
     ev = gait_events(w.gyr, w.acc, w.rate_hz)
     return w, foot_strides("left", w.time, ev, foot_trajectory(w.gyr, w.acc, w.rate_hz,
-                                                                ev.rests))  # fmt: skip
+                                                                ev.rests))
 
 
 def test_the_simulated_strides():
     w, strides = _strides(strides=7, pace=Pace(1.2, 1.4), clearance_m=0.1,
-                          turns_deg=(0, 0, 70), seed=4)  # fmt: skip
+                          turns_deg=(0, 0, 70), seed=4)
     assert len(strides) == 6  # 7 swings: 7 detected ICs, 6 strides between them
     for s in strides:
         assert abs(s.stride_time_s - 1.2) < 0.005 and abs(s.cadence_steps_min - 100.0) < 0.5
@@ -42,7 +42,7 @@ def test_a_pause_is_no_stride_and_a_shank_has_no_length():
     t = np.arange(1000) / 100.0
     ev = GaitEvents(np.zeros((0, 2), int), np.array([150, 260, 800]),
                     np.array([200.0, 310.0, 900.0]), np.array([140.0, 250.0, 790.0]),
-                    np.array([0.0, 1.0, 0.0]))  # fmt: skip
+                    np.array([0.0, 1.0, 0.0]))
     (s,) = foot_strides("right", t, ev, None)  # 3.1 -> 9.0 s is a pause, not a stride
     assert (s.start_s, s.end_s) == (2.0, 3.1) and abs(s.stance_share - 0.5 / 1.1) < 1e-9
     assert np.isnan(s.stride_length_m) and np.isnan(s.turn_deg) and s.straight is False
@@ -55,7 +55,7 @@ def test_the_csv_has_exactly_the_issues_columns():
     assert STRIDE_COLUMNS == (
         "side", "start_s", "end_s", "stride_time_s", "stance_share", "stride_length_m",
         "speed_m_s", "cadence_steps_min", "clearance_m", "turn_deg", "straight",
-        "steady")  # fmt: skip
+        "steady")
     assert len(rows) == 1 + len(strides) and {r[1] for r in rows[1:]} == {"left"}
     assert [r[0] for r in rows[1:]] == ["1", "2", "3"]
     assert {r[-3] for r in rows[1:]} == {"true"}

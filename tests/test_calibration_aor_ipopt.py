@@ -271,7 +271,7 @@ def test_parameter_layout_is_named_and_partitions_the_vectors():
         return idx == list(range(n))
 
     assert covered([a.X_CORRECTION_FEMUR, a.X_CORRECTION_TIBIA, a.X_AXIS_FEMUR, a.X_AXIS_TIBIA],
-                   a.NX)  # fmt: skip
+                   a.NX)
     assert list(range(a.NX)[a.X_AXES]) == [*range(a.NX)[a.X_AXIS_FEMUR],
-                                           *range(a.NX)[a.X_AXIS_TIBIA]]  # fmt: skip
+                                           *range(a.NX)[a.X_AXIS_TIBIA]]
     assert covered([a.P_R0F, a.P_R0T, a.P_AF, a.P_AT, a.P_TF, a.P_TT], a.NP_GEOMETRY)

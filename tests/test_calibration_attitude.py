@@ -105,7 +105,7 @@ def test_filters_on_broad_against_optical_truth():
         assert vqf < 1.5, (path.name, vqf)
         if "undisturbed" in path.name:
             pi = inclination_rmse(filter_orientations(t, tr["imu_gyr"], tr["imu_acc"],
-                                                      method="pi"), tr)  # fmt: skip
+                                                      method="pi"), tr)
             assert pi < 2 * vqf, (path.name, pi, vqf)
 
 

@@ -48,7 +48,7 @@ def test_a_signs_flip_is_undone_and_the_pitch_rule_picks_the_pair(trial):
     # the simulator's sinusoidal swing has no skew: a shank alone may point either way, the knee
     # (thigh and shank together) decides
     pair = leg_flexion_axes(100.0, {"femur": _segment(trial, "right_femur_imu"),
-                                    "tibia": (gyr, up)})["tibia"].axis  # fmt: skip
+                                    "tibia": (gyr, up)})["tibia"].axis
     assert abs(abs(single @ pair) - 1.0) < 1e-9
     assert pair @ _axis_in_sensor(trial, "right_tibia_imu", "tibia") > 0.9
 
@@ -75,7 +75,7 @@ def _walking_pelvis(f: float, mounting: np.ndarray, seconds: float = 30.0, rate:
     t = np.arange(int(seconds * rate)) / rate
     w = 2 * np.pi * f
     rates = np.stack([np.radians(5) * w * np.cos(w * t), np.radians(4) * w * np.cos(w * t + 1),
-                      np.radians(2.5) * 2 * w * np.cos(2 * w * t + 0.3)], axis=1)  # fmt: skip
+                      np.radians(2.5) * 2 * w * np.cos(2 * w * t + 0.3)], axis=1)
     up = np.tile([0.0, 1.0, 0.0], (len(t), 1))
     return rates @ mounting, up @ mounting, rate
 

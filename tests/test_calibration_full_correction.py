@@ -50,7 +50,7 @@ def exact_priors(**kw) -> CorrectionPriors:
     base = dict(femur_axis=B_F, tibia_axis=B_T, sd_femur_axis=np.radians(5.0),
                 sd_tibia_axis=np.radians(5.0), rest_knee=knee_rotation(REST_FLEXION),
                 rest_knee_cov=np.radians(5.0) ** 2 * np.eye(3), hinge_sd=np.radians(2.0),
-                plane_sd=0.02, n_subjects=10)  # fmt: skip
+                plane_sd=0.02, n_subjects=10)
     return CorrectionPriors(**{**base, **kw})
 
 

@@ -22,7 +22,7 @@ def test_turn_about_vertical_is_a_rotation_about_up():
     out = turn_about_vertical(R, psi, UP)
     np.testing.assert_allclose(out, rot_y(psi) @ R, atol=1e-12)
     np.testing.assert_allclose(turn_about_vertical(R, psi, np.array([0, 0, 2.0])), rot_z(psi) @ R,
-                               atol=1e-12)  # fmt: skip
+                               atol=1e-12)
 
 
 def test_a_constant_heading_is_recovered_exactly_from_a_horizontal_axis():

@@ -16,7 +16,7 @@ def trial():
 def _fit(trial, a, b, **kw):
     s1, s2 = trial.imus[a].recording.sensor, trial.imus[b].recording.sensor
     return joint_centre(trial.time, s1.gyr, s1.acc, trial.imus[a].rotation, s2.gyr, s2.acc,
-                        trial.imus[b].rotation, **kw)  # fmt: skip
+                        trial.imus[b].rotation, **kw)
 
 
 @pytest.mark.parametrize("joint, a, b", [("right_ankle", "right_tibia_imu", "right_foot_imu"),
@@ -65,7 +65,7 @@ def test_the_vertical_part_alone_holds_whatever_the_two_headings():
 
     def error(**kw):
         f = joint_centre(t.time, s1.gyr, s1.acc, t.imus[a].rotation, s2.gyr, s2.acc, R2,
-                         cutoff_hz=1000.0, **kw)  # fmt: skip
+                         cutoff_hz=1000.0, **kw)
         return max(np.linalg.norm(f.o_1 - truth[a]), np.linalg.norm(f.o_2 - truth[b]))
 
     assert error() > 0.02

@@ -26,6 +26,6 @@ def test_a_dead_magnetometer_is_not_trusted_and_a_short_disturbance_is_tolerated
     brief = field.copy()
     brief[:50] *= 2.0  # 5 % of the samples
     out = field_trust({"a": (field, UP), "b": (field, UP), "dead": (np.zeros((N, 3)), UP),
-                       "brief": (brief, UP)})  # fmt: skip
+                       "brief": (brief, UP)})
     assert not out["dead"].trusted and "no field" in out["dead"].evidence
     assert out["brief"].trusted and 0.04 < out["brief"].disturbed < 0.06

@@ -19,7 +19,7 @@ def test_observability_by_hand():
     assert d.undetermined == ("c",) and "undetermined" in d.message
     # a residual of RMS 0.1 predicts SDs rms / (sqrt(N) s) = 0.1 / (2 * (2, 1)) = (0.025, 0.05)
     d2 = observability(J[:, :2], {"a": slice(0, 1), "b": slice(1, 2)}, residual=np.full(4, 0.1),
-                       abs_tol=0.04)  # fmt: skip
+                       abs_tol=0.04)
     np.testing.assert_allclose(d2.sd, [0.025, 0.05])
     assert d2.undetermined == ("b",) and d2.condition == 2.0
 

@@ -193,7 +193,7 @@ def test_ipopt_reuses_one_solver_per_shape_and_its_data_is_a_parameter():
     ipopt._solver.cache_clear()
     a, b = hinge_trial("rich", duration=6.0, seed=1), hinge_trial("rich", duration=6.0, seed=2)
     ra, rb = (calibrate_ipopt(_data(t), "hinge", quat_1=t.imu_1.quat, quat_2=t.imu_2.quat,
-                              reference_1=t.axis_1) for t in (a, b))  # fmt: skip
+                              reference_1=t.axis_1) for t in (a, b))
     info = ipopt._solver.cache_info()
     assert info.misses == 1 and info.hits == 1
     for tr, r in ((a, ra), (b, rb)):

@@ -16,7 +16,7 @@ def test_every_command_has_help_with_an_example(capsys):
     sub = next(a for a in parser._actions if a.dest == "command")
     assert set(sub.choices) == set(EXAMPLES) == {
         "scale", "ik", "orientations", "calibrate", "simulate", "reproduce", "demo",
-        "view", "batch", "live"}  # fmt: skip
+        "view", "batch", "live"}
     for name in EXAMPLES:
         with pytest.raises(SystemExit) as exc:
             main([name, "--help"])
@@ -69,7 +69,7 @@ def test_bad_sto_refused_with_one_line(tmp_path, capsys, case):
     path.write_text(text)
     out = tmp_path / "out"
     code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
-                 "--out", str(out)])  # fmt: skip
+                 "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert code == 2, err
     assert len(err.splitlines()) == 1 and "Traceback" not in err
@@ -85,7 +85,7 @@ def test_a_still_recording_runs_and_says_what_it_could_not_observe(tmp_path, cap
     path = tmp_path / "still.sto"
     path.write_text(_sto(rows, columns))
     code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
-                 "--out", str(tmp_path / "out")])  # fmt: skip
+                 "--out", str(tmp_path / "out")])
     assert code == 0
     summary = (tmp_path / "out" / "still_summary.md").read_text()
     assert "the subject's heading is not observed" in summary
@@ -95,14 +95,14 @@ def test_a_still_recording_runs_and_says_what_it_could_not_observe(tmp_path, cap
 
 def test_units_hint_for_height_in_cm(tmp_path, capsys):
     code = main(["ik", "--orientations", str(tmp_path / "x.sto"), "--sex", "m",
-                 "--height-m", "175", "--out", str(tmp_path)])  # fmt: skip
+                 "--height-m", "175", "--out", str(tmp_path)])
     assert code == 2
     assert "centimetres" in capsys.readouterr().err
 
 
 def test_missing_file(tmp_path, capsys):
     code = main(["ik", "--orientations", str(tmp_path / "nope.sto"), "--sex", "m",
-                 "--height-m", "1.75", "--out", str(tmp_path / "o")])  # fmt: skip
+                 "--height-m", "1.75", "--out", str(tmp_path / "o")])
     assert code == 2
     assert "nope.sto" in capsys.readouterr().err
 
@@ -112,7 +112,7 @@ def test_debug_shows_the_traceback(tmp_path):
 
     with pytest.raises(InputError):
         main(["--debug", "ik", "--orientations", str(tmp_path / "nope.sto"), "--sex", "m",
-              "--height-m", "1.75", "--out", str(tmp_path / "o")])  # fmt: skip
+              "--height-m", "1.75", "--out", str(tmp_path / "o")])
 
 
 def test_cli_defaults_are_the_librarys():
@@ -131,7 +131,7 @@ def test_cli_defaults_are_the_librarys():
     parser = build_parser()
     scale = parser.parse_args(["scale", "--sex", "f", "--height-m", "1.6", "--out", "a.urdf"])
     ik = parser.parse_args(["ik", "--orientations", "x.sto", "--sex", "f", "--height-m", "1.6",
-                            "--out", "o"])  # fmt: skip
+                            "--out", "o"])
     cal = parser.parse_args(["calibrate", "hinge", "--imu1", "a.csv", "--imu2", "b.csv"])
     assert ik.knee is None  # not given: the configuration file's or IKOptions' value applies
     assert scale.knee == IKOptions().knee == DEFAULT_KNEE
@@ -216,7 +216,7 @@ def test_every_option_states_its_default_or_that_it_is_required():
         for a in sp._actions
         if a.option_strings and a.dest != "help" and a.help != argparse.SUPPRESS
         and not any(w in (a.help or "") for w in ("default", "required"))
-    ]  # fmt: skip
+    ]
     assert missing == []
 
 
@@ -274,7 +274,7 @@ def test_every_ik_flag_reaches_the_options(monkeypatch, tmp_path):
     with pytest.raises(SystemExit):
         main(["ik", "--orientations", str(tmp_path / "x.sto"), "--sex", "f", "--height-m", "1.6",
               "--out", str(tmp_path / "o"), "--calibration-method", "gn", "--drift", "none",
-              "--filter", "pi", "--correction", "none", "--no-rerun"])  # fmt: skip
+              "--filter", "pi", "--correction", "none", "--no-rerun"])
     o = seen["settings"].options
     assert (o.calibration_method, o.drift, o.filter, o.correction) == ("gn", "none", "pi", "none")
     assert seen["settings"].outputs.rerun is False
@@ -294,7 +294,7 @@ def test_view_refuses_what_is_not_a_whole_recording(tmp_path, capsys):
     (["calibrate", "hinge", "--imu1", "a", "--imu2", "b", "--iterations", "-1"],
      "--iterations: expected 1 or more, got -1"),
     (["batch", "m.csv", "--out", "o", "--workers", "x"], "--workers: expected an integer"),
-])  # fmt: skip
+])
 def test_counts_and_ports_out_of_range_are_one_line_errors(argv, message, capsys):
     with pytest.raises(SystemExit) as exc:
         main(argv)
@@ -330,7 +330,7 @@ def full_disk(tmp_path):
     mnt = tmp_path / "full"
     mnt.mkdir()
     done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)],
-                          capture_output=True)  # fmt: skip
+                          capture_output=True)
     if done.returncode != 0:
         pytest.skip("cannot mount a tmpfs here")
     yield mnt
@@ -349,7 +349,7 @@ def test_a_full_disk_is_one_line_and_exit_2_never_a_hang(full_disk):
         done = subprocess.run([sys.executable, "-m", "pipeline", "ik", "--orientations",
                                "example:ximu3_lower_body", "--sex", "m", "--height-m", "1.8",
                                "--out", str(full_disk / "out")], capture_output=True, text=True,
-                              timeout=60)  # fmt: skip
+                              timeout=60)
         assert done.returncode == 2, done.stderr
         assert done.stderr.strip().splitlines()[-1] == (
             "error: cannot write the outputs: No space left on device")
@@ -359,7 +359,7 @@ def test_a_full_disk_is_one_line_and_exit_2_never_a_hang(full_disk):
 def test_debug_after_the_command_shows_the_traceback(tmp_path):
     """``--debug`` works after the command as before it (refused there before)."""
     args = ["scale", "--sex", "m", "--height-m", "1.75", "--knee-axis-femur", "0", "0", "0",
-            "--out", str(tmp_path / "m.urdf")]  # fmt: skip
+            "--out", str(tmp_path / "m.urdf")]
     assert main(args) == 2
     for where in (["--debug", *args], [*args, "--debug"]):
         with pytest.raises(Exception, match="knee"):
@@ -377,11 +377,11 @@ def test_a_report_that_cannot_be_printed_after_the_outputs_is_not_an_error(tmp_p
     args = [sys.executable, "-m", "pipeline", "scale", "--sex", "m", "--height-m", "1.7"]
     with open("/dev/full", "w") as full:
         r = subprocess.run([*args, "--out", str(tmp_path / "a.urdf")], stdout=full,
-                           stderr=subprocess.PIPE, text=True)  # fmt: skip
+                           stderr=subprocess.PIPE, text=True)
     assert r.returncode == 0 and (tmp_path / "a.urdf").exists()
     assert r.stderr.strip() == ("warning: could not print to standard output (No space left on "
                                 "device); the outputs are written")
     p = subprocess.Popen([*args, "--out", str(tmp_path / "b.urdf")], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)  # fmt: skip
+                         stderr=subprocess.PIPE, text=True)
     p.stdout.close()  # the reader gone before the report
     assert p.wait() == 0 and p.stderr.read() == "" and (tmp_path / "b.urdf").exists()

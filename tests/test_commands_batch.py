@@ -43,7 +43,7 @@ def _summary(out):
 
 def test_rows_run_fail_alone_and_a_rerun_skips_what_is_complete(trials, tmp_path):
     m = _manifest(trials, ["s1,m,1.75,walk0.sto,free,none", "s2,f,1.62,missing.sto,,",
-                           "s1,m,1.75,walk1.sto,hinge,aor"])  # fmt: skip
+                           "s1,m,1.75,walk1.sto,hinge,aor"])
     out = tmp_path / "out"
     text, failed = run_batch(m, out, workers=1, progress=False)
     assert "2 ok, 1 failed, 0 skipped" in text and "missing.sto" in text and failed == 1
@@ -70,9 +70,9 @@ def test_local_dask_workers_and_a_running_cluster(trials, tmp_path):
     local, _ = run_batch(m, tmp_path / "local", workers=2, progress=False)
     assert "on 2 local worker processes" in local and "3 ok" in local
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster:  # fmt: skip
+                      dashboard_address=None) as cluster:
         text, _ = run_batch(m, tmp_path / "cluster", scheduler=cluster.scheduler_address,
-                            progress=False)  # fmt: skip
+                            progress=False)
     assert f"on the Dask cluster at {cluster.scheduler_address}" in text and "3 ok" in text
     a = (tmp_path / "local" / "s2" / "walk2" / "walk2_ik.mot").read_bytes()
     b = (tmp_path / "cluster" / "s2" / "walk2" / "walk2_ik.mot").read_bytes()
@@ -107,7 +107,7 @@ def test_cli_batch_and_its_sigterm_stops_every_worker(trials, tmp_path):
     assert main(["batch", str(bad), "--out", str(tmp_path / "bad"), "--workers", "1"]) == 1
     proc = subprocess.Popen([sys.executable, "-m", "pipeline", "batch", str(m), "--out",
                              str(out), "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+                            stderr=subprocess.PIPE, text=True)
     children = []
     deadline = time.time() + 60
     while time.time() < deadline and not (out.exists() and any(out.rglob("*_ik.mot"))):
@@ -136,7 +136,7 @@ def test_sigterm_stops_a_one_process_batch_too(trials, tmp_path):
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "pipeline", "batch", str(m), "--out",
                              str(out), "--workers", "1"], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+                            stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 60
     while time.time() < deadline and not (out.exists() and any(out.rglob("*_ik.mot"))):
         time.sleep(0.1)
@@ -168,7 +168,7 @@ def test_two_rows_writing_one_folder_are_refused_before_anything_runs(trials, tm
     ("subject,sex,height_m,orientations\ns,m,1.8,a.sto,extra\n", "5 cells, the header has 4"),
     ("subject,sex,height_m,orientations\nJos\xe9,m,1.8,a.sto\n".encode("latin-1"), "not UTF-8"),
     ("subject,sex,height_m,orientations\n".encode("utf-16"), "not UTF-8"),
-])  # fmt: skip
+])
 def test_malformed_manifests_are_one_line_errors(tmp_path, content, match):
     m = tmp_path / "m.csv"
     m.write_bytes(content if isinstance(content, bytes) else content.encode())
@@ -192,7 +192,7 @@ def test_a_row_is_skipped_only_when_its_configuration_and_outputs_are_the_same(t
 
 
 @pytest.mark.parametrize("address", ["not-a-url", "http://localhost:8786", "tcp://host:99999",
-                                     "tcp://:8786", "tcp://host"])  # fmt: skip
+                                     "tcp://:8786", "tcp://host"])
 def test_a_scheduler_address_is_checked(tmp_path, address):
     m = _manifest(tmp_path, ["s,m,1.8,a.sto"], header="subject,sex,height_m,orientations")
     with pytest.raises(InputError, match="field scheduler"):
@@ -217,7 +217,7 @@ def test_a_service_that_is_not_a_dask_scheduler_is_refused_within_the_timeout(tr
     try:
         with pytest.raises(InputError, match=r"within 2 s \(it said nothing\)"):
             run_batch(m, tmp_path / "out", scheduler=f"tcp://127.0.0.1:{server.getsockname()[1]}",
-                      progress=False)  # fmt: skip
+                      progress=False)
     finally:
         server.close()
     assert time.time() - t0 < 20
@@ -230,7 +230,7 @@ def test_a_row_whose_recording_comes_from_its_config(trials, tmp_path):
     cfg = tmp_path / "s1.toml"
     cfg.write_text(f'[ik]\norientations = "{trials / "walk0.sto"}"\nknee = "free"\n')
     m = _manifest(tmp_path, [f"s1,m,1.75,,{cfg}"], header="subject,sex,height_m,orientations,"
-                                                          "config")  # fmt: skip
+                                                          "config")
     out = tmp_path / "out"
     text, failed = run_batch(m, out, workers=1, progress=False)
     assert failed == 0 and (out / "s1" / "walk0" / "walk0_ik.mot").is_file()

@@ -31,7 +31,7 @@ def test_the_summary_and_the_group_report(tmp_path):
     rows = [{c: "" for c in SUMMARY_COLUMNS} | {"row": 1, "subject": "s1", "status": "ok",
              "orientations": "walk.sto", "out_dir": str(trial)},
             {c: "" for c in SUMMARY_COLUMNS} | {"row": 2, "subject": "s2", "status": "failed",
-             "orientations": "run.sto", "out_dir": str(tmp_path / "s2" / "run")}]  # fmt: skip
+             "orientations": "run.sto", "out_dir": str(tmp_path / "s2" / "run")}]
     write_summary(tmp_path, rows, report=True)
     listed = list(csv.DictReader((tmp_path / "batch_summary.csv").open()))
     assert [r["status"] for r in listed] == ["ok", "failed"]

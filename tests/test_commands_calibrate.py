@@ -134,7 +134,7 @@ def test_degenerate_inputs_are_refused_not_returned(capsys, sim, tmp_path):
     still = tmp_path / "still"
     run_simulation(still, "static", 2.0, 0)
     argv = ["calibrate", "hinge", "--imu1", str(still / "imu" / "right_femur_imu.csv"),
-            "--imu2", str(still / "imu" / "right_tibia_imu.csv")]  # fmt: skip
+            "--imu2", str(still / "imu" / "right_tibia_imu.csv")]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "barely move" in err and "Traceback" not in err

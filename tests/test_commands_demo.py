@@ -18,7 +18,7 @@ def test_writes_every_output(result):
 
     names = {p.name: p for p in result.files}
     assert set(names) == {"demo_report.md", "demo_ik.mot", "demo_landmarks.csv", "subject.urdf",
-                          "demo_ik_model.urdf", "demo.rrd"}  # fmt: skip
+                          "demo_ik_model.urdf", "demo.rrd"}
     # the .mot holds the IK's angles (degrees in the file, radians read back), 2 s + 15 s
     mot = read_mot(names["demo_ik.mot"])
     assert mot.time.size == 1700
@@ -47,7 +47,7 @@ def test_ik_recovers_the_simulated_kinematics(result):
     """From the raw signals (VQF 9-D): flexion within 1 deg RMS (measured 0.5-0.8), hip
     adduction within 1 deg (measured 0.2: the standing posture is measured)."""
     for key in ("right_hip_flexion", "right_knee_flexion", "left_hip_flexion",
-                "left_knee_flexion", "right_ankle_flexion"):  # fmt: skip
+                "left_knee_flexion", "right_ankle_flexion"):
         assert result.angle_rms_deg[key] < 1.0, key
     assert result.angle_rms_deg["right_hip_adduction"] < 1.0
     # the simulated hinge's neutral pose is not the JCS zero (adduction 2.3, rotation -9.6 deg): a

@@ -20,7 +20,7 @@ def test_the_written_configuration_reproduces_the_mot_byte_for_byte(tmp_path):
     assert main(["ik", "--orientations", str(WALK), "--sex", "f", "--height-m", "1.68",
                  "--knee-width-m", "0.1", "--sensor-to-model", "-1.5708", "0", "0",
                  "--correction", "aor", "--knee", "hinge", "--no-rerun",
-                 "--out", str(first)]) == 0  # fmt: skip
+                 "--out", str(first)]) == 0
     config = first / "xsens_walking_orientations_config.toml"
     doc = tomllib.loads(config.read_text())
     assert doc["subject"] == {"sex": "f", "height_m": 1.68, "knee_width_m": 0.1}
@@ -42,7 +42,7 @@ def test_the_written_configuration_reproduces_the_mot_byte_for_byte(tmp_path):
 def test_flags_override_the_file_and_required_values_are_named(tmp_path):
     cfg = tmp_path / "s.toml"
     cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
-                   'knee = "hinge"\nout = "res"\n[sensors]\npelvis_imu = "P"\n')  # fmt: skip
+                   'knee = "hinge"\nout = "res"\n[sensors]\npelvis_imu = "P"\n')
     s = resolve_settings(cfg, {"knee": "free", "height_m": 1.7, "sensor_map": {"femur_r_imu": "T"}})
     assert Path(s.inputs.orientations) == tmp_path / "w.sto"
     assert Path(s.outputs.out) == tmp_path / "res"
@@ -58,12 +58,12 @@ def test_flags_override_the_file_and_required_values_are_named(tmp_path):
 def test_bad_configuration_exits_2_naming_the_file_and_key(tmp_path, capsys):
     cfg = tmp_path / "s.toml"
     cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
-                   'correction = "wang"\n')  # fmt: skip
+                   'correction = "wang"\n')
     assert main(["ik", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert str(cfg) in err and "field correction" in err and "'aor'" in err
     cfg.write_text('[subject]\nsex = "m"\nheight_m = 1.8\n[ik]\norientations = "w.sto"\n'
-                   'heading_axis = "x"\n')  # fmt: skip
+                   'heading_axis = "x"\n')
     assert main(["ik", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
     assert "field ik.heading_axis: unknown key" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
@@ -75,7 +75,7 @@ def test_an_unmatched_sensor_name_is_refused_before_anything_is_written(tmp_path
         pytest.skip("../shared/data/opensim not present")
     out = tmp_path / "o"
     code = main(["ik", "--orientations", str(WALK), "--sex", "m", "--height-m", "1.8",
-                 "--sensor-map", "pelvis_imu=hip_sensor", "--out", str(out)])  # fmt: skip
+                 "--sensor-map", "pelvis_imu=hip_sensor", "--out", str(out)])
     assert code == 2
     err = capsys.readouterr().err
     assert "field sensors.pelvis_imu" in err and "hip_sensor" in err and WALK.name in err
@@ -135,7 +135,7 @@ def test_the_recording_written_by_the_child_is_the_one_written_in_process(tmp_pa
     if not hasattr(os, "fork") or sys.platform == "darwin":
         pytest.skip("forks only where fork is safe")
     out = subprocess.run([sys.executable, "-c", CHILD_RUN, str(sto), str(tmp_path / "child")],
-                         check=True, capture_output=True, text=True).stdout  # fmt: skip
+                         check=True, capture_output=True, text=True).stdout
     assert out.split() == ["1", "reaped"]
     monkeypatch.setattr(ik, "BACKGROUND_FRAMES", 0)
     ik.run_ik(sto, Measures("m", 1.8), tmp_path / "process")
@@ -185,10 +185,10 @@ def test_the_program_writes_its_recording_through_the_early_child(tmp_path, proc
     out = tmp_path / "out"
     subprocess.run([sys.executable, "-m", "pipeline", "ik", "--orientations", str(sto), "--sex",
                     "m", "--height-m", "1.8", "--out", str(out)], check=True,
-                   capture_output=True)  # fmt: skip
+                   capture_output=True)
     entities = read_entities(out / "quaternions_4_ik.rrd")
     assert {"/world/model/pelvis", "/world/model/right_tibia/mesh", "/world/landmarks/right_MM",
-            "/plots/right_knee/flexion"} <= entities  # fmt: skip
+            "/plots/right_knee/flexion"} <= entities
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
     assert processes_with(str(out)) == []
 
@@ -196,10 +196,10 @@ def test_the_program_writes_its_recording_through_the_early_child(tmp_path, proc
 def test_a_second_run_into_the_same_folder_is_refused_or_replaces_the_first(tmp_path, capsys):
     """Refused naming the files; with --overwrite the first run's extra files (its .osim) go."""
     assert main(["simulate", "--out", str(tmp_path / "sim"), "--duration-s", "6",
-                 "--standing-s", "2"]) == 0  # fmt: skip
+                 "--standing-s", "2"]) == 0
     imu, out = tmp_path / "sim" / "imu", tmp_path / "out"
     args = ["ik", "--orientations", str(imu), "--sex", "m", "--height-m", "1.75", "--no-rerun",
-            "--out", str(out)]  # fmt: skip
+            "--out", str(out)]
     assert main([*args, "--osim"]) == 0
     before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
     assert "sim.osim" in before
@@ -236,7 +236,7 @@ def test_a_dropout_is_blank_named_and_the_rest_kept(tmp_path, capsys):
     holed = tmp_path / "holed.sto"
     holed.write_text("\n".join(lines) + "\n")
     args = ["--sex", "f", "--height-m", "1.68", "--sensor-to-model", "-1.5708", "0", "0",
-            "--no-rerun"]  # fmt: skip
+            "--no-rerun"]
     assert main(["ik", "--orientations", str(WALK), *args, "--out", str(tmp_path / "a")]) == 0
     capsys.readouterr()
     assert main(["ik", "--orientations", str(holed), *args, "--out", str(tmp_path / "b")]) == 0

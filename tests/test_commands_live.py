@@ -20,13 +20,13 @@ ARGS = ["--sex", "m", "--height-m", "1.8", "--viewer", "none"]
 def test_the_shipped_walk_replayed_writes_the_capture_and_pipeline_iks_outputs(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["live", "--replay", "example:ximu3_lower_body", "--speed", "max", *ARGS,
-                 "--no-rerun", "--out", str(out)]) == 0  # fmt: skip
+                 "--no-rerun", "--out", str(out)]) == 0
     err = capsys.readouterr().err
     assert "live: stand still" in err and "live: calibrated" in err
     name = "ximu3_lower_body"
     names = {p.name for p in out.iterdir()}
     assert {f"{name}_capture", f"{name}_ik.mot", f"{name}_live.mot", f"{name}_summary.md",
-            f"{name}_config.toml", f"{name}.urdf"} <= names  # fmt: skip
+            f"{name}_config.toml", f"{name}.urdf"} <= names
     capture = read_recording(out / f"{name}_capture")  # pipeline ik reads it back
     assert capture.n_samples == 929 and len(capture.sensor_names) == 7
     live, offline = read_mot(out / f"{name}_live.mot"), read_mot(out / f"{name}_ik.mot")
@@ -42,7 +42,7 @@ def test_sigterm_ends_the_capture_and_writes_it(tmp_path):
     out = tmp_path / "out"
     p = subprocess.Popen([sys.executable, "-m", "pipeline", "live", "--replay",
                           "example:ximu3_lower_body", *ARGS, "--no-rerun", "--out", str(out)],
-                         stderr=subprocess.PIPE, text=True)  # fmt: skip
+                         stderr=subprocess.PIPE, text=True)
     time.sleep(4.0)  # the imports, then about 3 s of capture
     p.send_signal(signal.SIGTERM)
     assert p.wait(timeout=60) == 0, p.stderr.read()
@@ -72,7 +72,7 @@ def test_a_slow_or_closed_viewer_never_holds_the_capture(tmp_path, monkeypatch):
     t0 = time.perf_counter()
     for k in range(200):
         viewer.log(np.array([k / 10.0]), {"pelvis": (np.eye(3)[None], np.zeros((1, 3)))},
-                   {"right_knee_flexion": np.array([0.3])}, None)  # fmt: skip
+                   {"right_knee_flexion": np.array([0.3])}, None)
     assert time.perf_counter() - t0 < 0.5 and viewer.dropped > 150
     monkeypatch.setattr(viewer, "_show", lambda item: 1 / 0)  # a viewer gone: errors swallowed
     viewer.log(np.array([100.0]), {}, {}, None)

@@ -284,7 +284,7 @@ FIGURES = [
     (_RESULTS, rf"the hip\s+[\d.]+ against {NUM} and", *_realism("hip residual (m/s^2)", 1)),
     (_RESULTS, rf"the hip\s+[\d.]+ against [\d.]+ and {NUM}\.",
      *_realism("hip residual (m/s^2)", 2)),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize("doc, doc_re, result, result_re", FIGURES)

@@ -69,7 +69,7 @@ def test_the_api_page_documents_every_public_name():
 
     api = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
     documented = {ln.split(":::", 1)[1].strip() for ln in api.splitlines()
-                  if ln.startswith(":::")}  # fmt: skip
+                  if ln.startswith(":::")}
     for name in pipeline.__all__:
         if name == "__version__":
             continue
@@ -82,7 +82,7 @@ def test_the_site_builds_with_a_heading_and_signature_per_object(tmp_path):
     pytest.importorskip("mkdocs")
     done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--quiet",
                            "--site-dir", str(tmp_path)], cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)  # fmt: skip
+                          text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     page = (tmp_path / "api" / "index.html").read_text(encoding="utf-8")
     api = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")

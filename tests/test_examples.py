@@ -29,7 +29,7 @@ def test_pipeline_ik_on_an_example_names_its_outputs_after_it(tmp_path):
     from pipeline.cli import main
 
     args = ["ik", "--orientations", "example:opensense_imu_ik_test", "--sex", "m",
-            "--height-m", "1.8", "--no-rerun", "--out", str(tmp_path)]  # fmt: skip
+            "--height-m", "1.8", "--no-rerun", "--out", str(tmp_path)]
     assert main(args) == 0
     config = tomllib.loads((tmp_path / "opensense_imu_ik_test_config.toml").read_text())
     assert config["ik"]["orientations"] == "example:opensense_imu_ik_test"

@@ -30,7 +30,7 @@ def test_fast_turns_and_splices_get_closer_anchors_and_the_sequential_optima():
     assert np.diff(anchors).max() <= 64 and 199 in anchors and 200 in anchors
     turn = [np.arccos(np.clip((np.trace(targets["pelvis"][a].T @ targets["pelvis"][b]) - 1) / 2,
                               -1, 1)) for a, b in zip(anchors[:-1], anchors[1:], strict=True)
-            if b - a > 1]  # fmt: skip
+            if b - a > 1]
     assert max(turn) <= ANCHOR_TURN_RAD + 0.2  # no frame is interpolated across a large turn
     seq, res = solve_ik(m, targets, stride=1), solve_ik(m, targets)
     assert res.converged.all() and np.abs(res.q - seq.q).max() < 2e-4
@@ -61,7 +61,7 @@ def test_anchors_follow_the_rotations_at_the_joints():
     yaw = np.linspace(0.0, 4 * np.pi, n)  # the body turning twice, joints still
     turning = np.c_[np.zeros(n), np.sin(yaw / 2), np.zeros(n), np.cos(yaw / 2)]
     turned = _noisy_targets(m, np.c_[turning, np.tile(legs[:1], (n, 1))], 0.0, seed=1,
-                            pelvis=True)  # fmt: skip
+                            pelvis=True)
     assert abs(len(anchor_frames(setup_ik(m, turned), 1000)) - 4 * np.pi / ANCHOR_TURN_RAD) <= 3
     noisy = _noisy_targets(m, np.c_[still, legs], 0.02, seed=4, pelvis=True)
     seq, res = solve_ik(m, noisy, stride=1), solve_ik(m, noisy)
@@ -77,7 +77,7 @@ def test_interpolation_is_exact_for_cubic_motion_and_linear_at_jumps():
     known = np.zeros((13, 1))
     known[ref, 0] = f(ref.astype(float))
     np.testing.assert_allclose(interpolate(ref, known, np.array([5, 6]))[:, 0],
-                               f(np.array([5.0, 6.0])), rtol=1e-12)  # fmt: skip
+                               f(np.array([5.0, 6.0])), rtol=1e-12)
     known[12, 0] += 2.0  # a jump after node 8
     start = interpolate(ref, known, np.array([6]))[0, 0]
     assert start == (known[4, 0] + known[8, 0]) / 2

@@ -22,7 +22,7 @@ def _noisy_targets(m, q, sd, seed, pelvis=False):
 
 
 @pytest.mark.parametrize(("knee", "root"), [("free", "fixed"), ("hinge", "fixed"),
-                                            ("hinge", "spherical")])  # fmt: skip
+                                            ("hinge", "spherical")])
 def test_strided_reaches_the_sequential_optima(knee, root):
     m = leg_model(knee, root=root, knee_limits=[(0.0, 0.9)] if knee == "hinge" else None)
     q = gait(700, seed=2)  # knee flexion 0.05..1.15 rad: the 0.9 limit is active
@@ -72,7 +72,7 @@ def test_models_the_block_cannot_vectorise_use_the_sequential_solver():
     res = solve_ik(m, {"link": R})
     np.testing.assert_allclose(res.q, solve_ik(m, {"link": R}, stride=1).q, atol=0)
     np.testing.assert_allclose(np.arctan2(res.q[:, 1], res.q[:, 0]),
-                               np.arctan2(np.sin(a), np.cos(a)), atol=1e-6)  # fmt: skip
+                               np.arctan2(np.sin(a), np.cos(a)), atol=1e-6)
 
 
 def test_stride_must_be_a_positive_integer():

@@ -11,7 +11,7 @@ from pipeline.io.recording import Recording
 def _rec(t, w=1.0, header=None):
     gyr = np.stack([w * np.sin(t), np.cos(t), 0 * t], axis=1)
     return Recording.single("s", t, gyr=gyr, acc=np.tile([0, 0, 9.81], (t.size, 1)),
-                            header=header)  # fmt: skip
+                            header=header)
 
 
 def test_devices_a_few_ms_apart_are_aligned_by_time_stamp():
@@ -23,7 +23,7 @@ def test_devices_a_few_ms_apart_are_aligned_by_time_stamp():
     np.testing.assert_allclose(rec.sensors["femur_r_imu"].gyr[:-1, 0],
                                np.sin(rec.time[:-1] + 0.004), atol=2e-4)  # its last: held
     np.testing.assert_allclose(rec.sensors["tibia_r_imu"].gyr[:, 0], np.sin(rec.time + 0.004),
-                               atol=1e-9)  # fmt: skip
+                               atol=1e-9)
     assert np.isfinite(rec.sensors["tibia_r_imu"].gyr).all()
     assert any("clocks aligned by time stamp" in n for n in rec.notes)
     assert not any("missing there" in n for n in rec.notes)
@@ -54,7 +54,7 @@ def test_a_sensors_own_clock_jump_is_missing_not_interpolated():
     tibia = rec.sensors["tibia_r_imu"].gyr[:, 0]
     assert np.isnan(tibia[200:250]).all() and np.isfinite(np.delete(tibia, range(200, 250))).all()
     assert any(n.startswith("tibia_r_imu has no samples between t = 1.99 and 2.50 s")
-               for n in rec.notes)  # fmt: skip
+               for n in rec.notes)
 
 
 def test_different_rates_and_no_overlap_are_refused():
@@ -70,5 +70,5 @@ def test_each_sensor_keeps_its_own_files_notes():
     noted = _rec(t).with_notes("d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)")
     rec = align_clocks({"femur_r_imu": _rec(t), "tibia_r_imu": noted})
     assert rec.sensor_notes == {"tibia_r_imu": (
-        "d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)",)}  # fmt: skip
+        "d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)",)}
     assert "d/tibia.txt: 3 dropped packet(s) (PacketCounter jumps)" in rec.notes

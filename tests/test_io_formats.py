@@ -17,7 +17,7 @@ XIMU3 = DATA / "ximu3_lower_body"
 S02 = DATA / "gaittoolbox_s02" / "imu"
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 
 
 def _imu(folder: Path, name: str, t: np.ndarray, w: float = 1.0) -> Path:
@@ -83,7 +83,7 @@ def test_a_sensor_map_entry_that_matches_nothing_is_refused_everywhere(tmp_path)
     assert exc.value.field == "sensors.pelvis_imu" and "00B421AF" in exc.value.message
     q = np.tile([1.0, 0, 0, 0], (300, 1))
     sto = write_orientations_sto(tmp_path / "w.sto", Recording.from_orientations(
-        t, 100.0, {"femur_r_imu": q, "tibia_r_imu": q}))  # fmt: skip
+        t, 100.0, {"femur_r_imu": q, "tibia_r_imu": q}))
     with pytest.raises(InputError, match="matches '00B421AF'"):
         read_recording(sto, {"pelvis_imu": "00B421AF"})
     with pytest.raises(InputError, match="mapped twice"):
@@ -98,7 +98,7 @@ def test_the_map_renames_and_aliases_become_our_names():
     assert set(out.sensor_names) == {"femur_r_imu", "calcn_r_imu"}
     with pytest.raises(InputError, match="two sensors for calcn_r_imu"):
         apply_sensor_map(Recording.from_orientations(
-            t, 100.0, {"foot_r_imu": q, "calcn_r_imu": q}), {})  # fmt: skip
+            t, 100.0, {"foot_r_imu": q, "calcn_r_imu": q}), {})
 
 
 @pytest.mark.dataset
@@ -106,7 +106,7 @@ def test_the_map_renames_and_aliases_become_our_names():
 def test_the_real_ximu3_folder_is_seven_sensors_on_one_clock():
     rec = read_recording(XIMU3)
     assert set(rec.sensor_names) == {"pelvis_imu", "femur_r_imu", "tibia_r_imu", "calcn_r_imu",
-                                     "femur_l_imu", "tibia_l_imu", "calcn_l_imu"}  # fmt: skip
+                                     "femur_l_imu", "tibia_l_imu", "calcn_l_imu"}
     assert 18.0 < rec.time[-1] < 18.7 and np.allclose(np.diff(rec.time), 1 / rec.rate_hz)
     for s in rec.sensors.values():
         assert s.gyr.shape == s.acc.shape == s.mag.shape == (rec.time.size, 3)
@@ -132,7 +132,7 @@ def _rec(*names):
 def test_map_by_name_or_unique_part_and_aliases():
     rec = _rec("MT_012005D6_00B421AF", "thigh_R", "shank_R", "foot_r_imu")
     out = apply_sensor_map(rec, {"pelvis_imu": "00B421AF", "femur_r_imu": "thigh_R",
-                                 "tibia_r_imu": "shank"})  # fmt: skip
+                                 "tibia_r_imu": "shank"})
     assert set(out.sensor_names) == {"pelvis_imu", "femur_r_imu", "tibia_r_imu", "calcn_r_imu"}
     assert apply_sensor_map(_rec("pelvis_imu"), {}) .sensor_names == ("pelvis_imu",)
 
@@ -166,14 +166,14 @@ def test_an_ximu3_folder_mapped_by_device_id():
         pytest.skip("../shared/data/ximu3_lower_body not present")
     ids = {"pelvis_imu": "64F0EDBF", "tibia_r_imu": "64F61B2A", "femur_r_imu": "64F61C2E",
            "calcn_r_imu": "64F619FB", "femur_l_imu": "64F61CC4", "tibia_l_imu": "64F61CB3",
-           "calcn_l_imu": "64F0EBCE"}  # fmt: skip
+           "calcn_l_imu": "64F0EBCE"}
     by_id, by_label = read_recording(folder, ids), read_recording(folder)
     assert set(by_id.sensor_names) == set(ids)
     for name in ids:
         np.testing.assert_array_equal(by_id.sensors[name].gyr, by_label.sensors[name].gyr)
     swapped = dict(ids, tibia_r_imu="64F61CB3", tibia_l_imu="64F61B2A")  # a map decides
     np.testing.assert_array_equal(read_recording(folder, swapped).sensors["tibia_r_imu"].gyr,
-                                  by_label.sensors["tibia_l_imu"].gyr)  # fmt: skip
+                                  by_label.sensors["tibia_l_imu"].gyr)
 
 
 def test_a_generic_folder_name_gives_its_parents(tmp_path):

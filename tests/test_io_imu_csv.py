@@ -143,7 +143,7 @@ def test_short_gap_interpolated_and_reported_long_left_missing(tmp_path):
     long = read_imu_csv(p)  # a dropout: never bridged, noted, the rest read
     assert np.isnan(long.acc[10:40]).all() and np.isfinite(long.acc[40:]).all()
     assert any("field acc: missing 30 sample(s) (0.3 s)" in n and "not bridged" in n
-               for n in long.notes)  # fmt: skip
+               for n in long.notes)
     back2 = read_imu_csv(p, max_gap_s=0.5)
     assert np.isfinite(back2.acc).all()
 

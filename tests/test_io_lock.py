@@ -48,7 +48,7 @@ def test_pipeline_ik_refuses_a_folder_in_use_and_the_recording_folder(tmp_path, 
     from pipeline.cli import main
 
     args = ["ik", "--orientations", "example:opensense_imu_ik_test", "--sex", "m", "--height-m",
-            "1.75", "--no-rerun"]  # fmt: skip
+            "1.75", "--no-rerun"]
     out = tmp_path / "out"
     with output_lock(out, "pipeline ik of another recording"):
         assert main([*args, "--out", str(out)]) == 2
@@ -59,5 +59,5 @@ def test_pipeline_ik_refuses_a_folder_in_use_and_the_recording_folder(tmp_path, 
     folder.mkdir()
     (folder / "pelvis_imu.csv").write_text("time,gyr_x\n")
     code = main(["ik", "--orientations", str(folder), "--sex", "m", "--height-m", "1.75",
-                 "--out", str(folder / "out")])  # fmt: skip
+                 "--out", str(folder / "out")])
     assert code == 2 and "--out is in the recording's own folder" in capsys.readouterr().err

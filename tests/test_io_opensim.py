@@ -315,7 +315,7 @@ print(json.dumps(dict(
 """
     # OpenSim writes opensim.log into the working directory
     run = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,
-                         text=True, check=True)  # fmt: skip
+                         text=True, check=True)
     out = json.loads(run.stdout.strip().splitlines()[-1])
     assert out["rows"] == 30 and out["labels"] == ["knee_angle_r", "pelvis_tx"]
     assert out["knee10"] == pytest.approx(np.degrees(-0.05))

@@ -45,7 +45,7 @@ def test_ascii_stl_and_merging_by_hand(tmp_path):
 
 def test_binary_round_trip_through_trimesh_export(tmp_path):
     tri = trimesh.Trimesh([[0, 0, 0], [2, 0, 0], [0, 3, 0], [0, 0, 1]], [[0, 2, 1], [0, 1, 3]],
-                          process=False)  # fmt: skip
+                          process=False)
     tri.export(tmp_path / "t.stl")
     v, f = read_stl(tmp_path / "t.stl")
     np.testing.assert_allclose(v[f], tri.vertices[tri.faces])

@@ -22,11 +22,11 @@ def _dot_file(path, n=240, rate=120.0, start_us=4_294_000_000, metadata=True):
     ticks = (start_us + np.round(t * 1e6)).astype(np.int64) % 2**32
     lines = ["DOT Serial,D422CD0045A1", "Firmware,2.6.0", ""] if metadata else []
     lines.append("PacketCounter,SampleTimeFine,Quat_W,Quat_X,Quat_Y,Quat_Z,Acc_X,Acc_Y,Acc_Z,"
-                 "Gyr_X,Gyr_Y,Gyr_Z,Mag_X,Mag_Y,Mag_Z,Status")  # fmt: skip
+                 "Gyr_X,Gyr_Y,Gyr_Z,Mag_X,Mag_Y,Mag_Z,Status")
     for k in range(n):
         cells = [*quats[k], *acc[k], *np.degrees(gyr[k])]
         lines.append(",".join([str(k), str(ticks[k]), *(repr(float(c)) for c in cells),
-                               "0.31", "-0.12", "0.94", "0"]))  # fmt: skip
+                               "0.31", "-0.12", "0.94", "0"]))
     path.write_text("\n".join(lines) + "\n")
     return t, gyr, acc, quats
 
@@ -68,17 +68,17 @@ def test_movella_dot_sdk_export_with_euler_angles_and_extra_columns(tmp_path):
     t = np.arange(n) / rate
     eul = np.stack([0.3 * np.sin(t), 0.2 * t, 0.5 + 0 * t], axis=1)  # roll, pitch, yaw (rad)
     lines = ["PacketCounter,SampleTimeFine,UTC_Nano,Euler_X,Euler_Y,Euler_Z,FreeAcc_X,FreeAcc_Y,"
-             "FreeAcc_Z,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z,Status"]  # fmt: skip
+             "FreeAcc_Z,Acc_X,Acc_Y,Acc_Z,Gyr_X,Gyr_Y,Gyr_Z,Status"]
     for k in range(n):
         cells = [k, int(1000 + t[k] * 1e6), 5, *np.degrees(eul[k]), 0, 0, 0, 0.1, 0.2, 9.8, 1.0,
-                 2.0, 3.0, 0]  # fmt: skip
+                 2.0, 3.0, 0]
         lines.append(",".join(str(c) for c in cells))
     path = tmp_path / "sdk.csv"
     path.write_text("\n".join(lines) + "\n")
     rec = read_movella_dot_csv(path)
     R = matrix_from_euler_zyx(eul[:, ::-1])
     np.testing.assert_allclose(np.abs(np.sum(rec.sensor.quat * quat_from_matrix(R), axis=1)), 1.0,
-                               atol=1e-9)  # fmt: skip
+                               atol=1e-9)
     assert any("not used" in n and "FreeAcc_X" in n and "UTC_Nano" in n for n in rec.notes)
 
 

@@ -142,7 +142,7 @@ def test_long_packet_loss_left_missing_and_noted(tmp_path):
     assert np.isnan(rec.quat[30:60]).all() and np.isnan(rec.gyr[30:60]).all()
     assert np.isfinite(rec.quat[:30]).all() and np.isfinite(rec.quat[60:]).all()
     assert any("missing 30 sample(s) (0.3 s) from t=0.3 s to t=0.59 s" in n and "not bridged" in n
-               for n in rec.notes)  # fmt: skip
+               for n in rec.notes)
 
 
 def test_repeated_packet_counter_refused(tmp_path):
@@ -194,7 +194,7 @@ def test_a_raw_export_without_orientation_columns_is_read_as_raw_signals(tmp_pat
     header = lines[4].split("\t")
     keep = [k for k, h in enumerate(header) if not h.startswith(("Acc", "Gyr"))]
     (tmp_path / "n.txt").write_text("\n".join(lines[:4] + ["\t".join(
-        [ln.split("\t")[k] for k in keep]) for ln in lines[4:]]) + "\n")  # fmt: skip
+        [ln.split("\t")[k] for k in keep]) for ln in lines[4:]]) + "\n")
     with pytest.raises(InputError, match=r"no orientation columns .* no raw Acc_X.*found Packet"):
         xsens.read_xsens_txt(tmp_path / "n.txt")
 
@@ -215,14 +215,14 @@ def test_a_folder_of_raw_xsens_exports_runs_through_the_filter_and_ik(tmp_path):
     ours = {"pelvis_imu": "pelvis_imu", "right_femur_imu": "femur_r_imu",
             "right_tibia_imu": "tibia_r_imu", "right_foot_imu": "calcn_r_imu",
             "left_femur_imu": "femur_l_imu", "left_tibia_imu": "tibia_l_imu",
-            "left_foot_imu": "calcn_l_imu"}  # fmt: skip
+            "left_foot_imu": "calcn_l_imu"}
     sensor_map = {}
     for k, (frame, name) in enumerate(ours.items()):
         sid = f"00B4{k:04X}"
         sensor_map[name] = sid
         s = trial.imus[frame].recording.sensor
         head = ["PacketCounter", "SampleTimeFine", "Acc_X", "Acc_Y", "Acc_Z", "Gyr_X", "Gyr_Y",
-                "Gyr_Z", "Mag_X", "Mag_Y", "Mag_Z"]  # fmt: skip
+                "Gyr_Z", "Mag_X", "Mag_Y", "Mag_Z"]
         rows = ["// Update Rate: 100.0Hz", "\t".join(head)]
         for i in range(len(trial.time)):
             cells = [f"{i:05d}", f"{1000 + 100 * i}"]
@@ -231,12 +231,12 @@ def test_a_folder_of_raw_xsens_exports_runs_through_the_filter_and_ik(tmp_path):
         (tmp_path / f"MT_012005D6_009-001_{sid}.txt").write_text("\n".join(rows) + "\n")
     rec = load_orientations(tmp_path, sensor_map)
     assert all(rec.sensors[n].quat is None and rec.sensors[n].mag is not None
-               for n in ours.values())  # fmt: skip
+               for n in ours.values())
     run = process_recording(rec, Measures("m", 1.75))
     assert any("by VQF, 9-D" in n for n in run.notes)
     truth = joint_angles(trial.skeleton, trial.q)
     for key, bound in (("right_knee_flexion", 2.0), ("left_knee_flexion", 2.0),
-                       ("right_hip_flexion", 3.0), ("left_hip_flexion", 3.0)):  # fmt: skip
+                       ("right_hip_flexion", 3.0), ("left_hip_flexion", 3.0)):
         e = np.degrees(run.joint_angles[key][200:] - truth[key][200:])
         assert np.sqrt(np.mean(e**2)) < bound, (key, np.sqrt(np.mean(e**2)))
 

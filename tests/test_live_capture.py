@@ -16,7 +16,7 @@ from pipeline.process.options import IKOptions
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 
 
 def _capture(rec, opts, subject):
@@ -48,7 +48,7 @@ def test_the_shipped_walk_replayed_is_calibrated_as_it_goes_and_equals_offline()
     subject = Measures("m", 1.8)
     result, said = _capture(read_recording("example:ximu3_lower_body"), IKOptions(), subject)
     assert said == ["live: stand still", "live: calibrated: walk a few steps to finish",
-                    "live: calibrated"]  # fmt: skip
+                    "live: calibrated"]
     times = [at for at, _, _ in result.calibrations]
     assert times[0] == pytest.approx(1.0, abs=0.05) and np.allclose(np.diff(times), 2.0, atol=0.05)
     assert [final for *_, final in result.calibrations][-1] and result.recording.n_samples == 929
@@ -67,7 +67,7 @@ def test_a_stream_dropping_out_is_missing_and_back():
     s = rec.sensors["tibia_r_imu"]
     rows = slice(600, 650)  # 12.0-13.0 s
     cut = {k: getattr(s, k).copy() for k in ("quat", "gyr", "acc", "mag") if getattr(s, k) is
-           not None}  # fmt: skip
+           not None}
     for v in cut.values():
         v[rows] = np.nan
     rec = rec.with_sensors({**rec.sensors, "tibia_r_imu": s.replace(**cut)})

@@ -27,7 +27,7 @@ def test_the_online_filter_finds_the_vertical_and_keeps_its_state_across_blocks(
     for k in range(0, n, 10):  # blocks of 10 samples: one filter fed on
         kinds = live.update({"s": SensorSignals(gyr=signals.gyr[k:k + 10],
                                                  acc=signals.acc[k:k + 10],
-                                                 mag=signals.mag[k:k + 10])})  # fmt: skip
+                                                 mag=signals.mag[k:k + 10])})
     assert set(kinds) == {"6-D", "9-D"}
     R = live.chosen(kinds)["s"][-1]  # in the model's y-up world
     up_in_sensor = R.T @ [0.0, 1.0, 0.0]

@@ -16,7 +16,7 @@ def _rec(n=300, rate=100.0):
     t = np.arange(n) / rate
     gyr = np.stack([np.sin(t), np.cos(t), t], axis=1)
     sensors = {name: SensorSignals(gyr=gyr + k, acc=np.tile([0.0, 0.0, 9.81], (n, 1)))
-               for k, name in enumerate(("pelvis_imu", "femur_r_imu"))}  # fmt: skip
+               for k, name in enumerate(("pelvis_imu", "femur_r_imu"))}
     return Recording(t, rate, sensors)
 
 
@@ -25,7 +25,7 @@ def test_a_replay_as_fast_as_read_gives_every_sample_once_without_the_missing_on
     gyr = rec.sensors["femur_r_imu"].gyr.copy()
     gyr[100:110] = np.nan  # a gap in the recording: those samples are not sent
     rec = rec.with_sensors({**rec.sensors, "femur_r_imu": rec.sensors["femur_r_imu"].replace(
-        gyr=gyr)})  # fmt: skip
+        gyr=gyr)})
     source, got = ReplaySource(rec, np.inf), {"pelvis_imu": [], "femur_r_imu": []}
     while (chunks := source.read()) is not None:
         for c in chunks:
@@ -38,7 +38,7 @@ def test_a_replay_as_fast_as_read_gives_every_sample_once_without_the_missing_on
 def test_a_replay_in_real_time_paces_by_the_clock():
     now = [0.0]
     source = ReplaySource(_rec(), 2.0, clock=lambda: now[0],
-                          sleep=lambda s: now.__setitem__(0, now[0] + s))  # fmt: skip
+                          sleep=lambda s: now.__setitem__(0, now[0] + s))
     assert source.read()[0].time.tolist() == [0.0]  # the first sample at once
     now[0] = 0.5  # half a second later, at twice real time: one second of recording
     assert source.read()[0].time[-1] == pytest.approx(1.0)
@@ -49,7 +49,7 @@ def test_stream_names_are_mapped_like_a_recordings_sensors():
     names = ["Right Upper Leg 64F61C2E", "pelvis", "DOT-3"]
     out = stream_name_map(names, {"calcn_l_imu": "DOT-3", "femur_r_imu": "64F61C2E"})
     assert out == {"DOT-3": "calcn_l_imu", "Right Upper Leg 64F61C2E": "femur_r_imu",
-                   "pelvis": "pelvis_imu"}  # fmt: skip
+                   "pelvis": "pelvis_imu"}
     with pytest.raises(InputError, match="no LSL streams match 'X9'"):
         stream_name_map(names, {"tibia_r_imu": "X9"})
 

@@ -11,7 +11,7 @@ from pipeline.live.store import CaptureStore, ColumnSpool
 def _block(t, with_mag=True):
     m = len(t)
     a = SensorSignals(gyr=np.tile(t[:, None], (1, 3)), acc=np.ones((m, 3)),
-                      mag=np.full((m, 3), 2.0) if with_mag else None)  # fmt: skip
+                      mag=np.full((m, 3), 2.0) if with_mag else None)
     b = SensorSignals(quat=np.tile([1.0, 0.0, 0.0, 0.0], (m, 1)))
     return Block(t, {"femur_r_imu": a, "pelvis_imu": b})
 

@@ -22,9 +22,9 @@ def test_a_simulated_walk_live_equals_its_truth_once_calibrated():
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=1, standing_s=3.0)
     names = {f"{seg}_imu": n for n, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: i.recording.sensor
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     result = LiveCapture(ReplaySource(rec, np.inf), subject, IKOptions(), in_line=True,
-                         say=lambda s: None).run()  # fmt: skip
+                         say=lambda s: None).run()
     at = next(t for t, _, final in result.calibrations if final)
     assert at < 12.0  # the walk starts at 3 s: three strides a leg
     k = int(np.searchsorted(result.recording.time, at))

@@ -14,11 +14,11 @@ from pipeline.model.skeleton import Skeleton
 
 def _random_q(model, n, rng):
     return np.array([pin.integrate(model, pin.neutral(model), rng.uniform(-2, 2, model.nv))
-                     for _ in range(n)])  # fmt: skip
+                     for _ in range(n)])
 
 
 @pytest.mark.parametrize(("knee", "root"), [("free", "fixed"), ("hinge", "spherical"),
-                                            ("hinge", "freeflyer")])  # fmt: skip
+                                            ("hinge", "freeflyer")])
 def test_joint_rotations_and_integrate_match_pinocchio(knee, root):
     m = leg_model(knee, root=root)
     rng = np.random.default_rng(0)

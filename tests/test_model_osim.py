@@ -25,7 +25,7 @@ def walk(tmp_path_factory):
     out = tmp_path_factory.mktemp("osim")
     assert main(["ik", "--orientations", str(WALK), "--sex", "m", "--height-m", "1.80",
                  "--sensor-to-model", "-1.5708", "0", "0", "--knee", "hinge", "--osim",
-                 "--no-rerun", "--out", str(out)]) == 0  # fmt: skip
+                 "--no-rerun", "--out", str(out)]) == 0
     return out
 
 
@@ -44,7 +44,7 @@ def test_coordinates_are_the_mot_columns_and_markers_the_landmarks(walk):
     for joint in tree.iter("CustomJoint"):
         axes = joint.findall("SpatialTransform/TransformAxis")
         assert [a.get("name") for a in axes] == [f"rotation{k}" for k in (1, 2, 3)] + [
-            f"translation{k}" for k in (1, 2, 3)]  # fmt: skip
+            f"translation{k}" for k in (1, 2, 3)]
         moved = [a.findtext("coordinates") for a in axes[3:]]
         free = joint.get("name") == "ground_pelvis"
         assert moved == (["pelvis_tx", "pelvis_ty", "pelvis_tz"] if free else [""] * 3)
@@ -65,7 +65,7 @@ def test_knee_only_model_has_only_the_knee_coordinates(tmp_path):
     sto = tmp_path / "knee.sto"
     write_orientations_sto(sto, _subset(trial, ("femur_r_imu", "tibia_r_imu")))
     assert main(["ik", "--orientations", str(sto), "--sex", "f", "--height-m", "1.6", "--osim",
-                 "--no-rerun", "--out", str(tmp_path / "o")]) == 0  # fmt: skip
+                 "--no-rerun", "--out", str(tmp_path / "o")]) == 0
     names, tree = _coordinates(tmp_path / "o" / "knee.osim")
     assert names == list(read_mot(tmp_path / "o" / "knee_ik.mot").columns)
     assert names == ["knee_angle_r", "knee_adduction_r", "knee_rotation_r"]
@@ -113,11 +113,11 @@ def test_opensim_places_the_markers_where_our_landmarks_are(walk):
     stem = walk / "xsens_walking_orientations"
     done = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(_CHILD), f"{stem}.osim", f"{stem}_ik.mot",
-         json.dumps(frames)], capture_output=True, text=True, timeout=300)  # fmt: skip
+         json.dumps(frames)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     osim = json.loads(done.stdout.strip().splitlines()[-1])
     rows = np.loadtxt(walk / "xsens_walking_orientations_landmarks.csv", delimiter=",",
-                      skiprows=1)  # fmt: skip
+                      skiprows=1)
     header = (walk / "xsens_walking_orientations_landmarks.csv").read_text().split("\n")[0]
     col = {h: i for i, h in enumerate(header.split(","))}
     summary = (walk / "xsens_walking_orientations_summary.md").read_text()
@@ -150,14 +150,14 @@ def test_opensim_replays_a_walk_through_the_room(tmp_path):
     pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
     assert main(["ik", "--orientations", str(s02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
                  "--height-m", "1.72", "--osim", "--no-rerun", "--landmarks", "world", "--out",
-                 str(tmp_path)]) == 0  # fmt: skip
+                 str(tmp_path)]) == 0
     mot = read_mot(tmp_path / "gaittoolbox_s02_ik.mot")
     assert {"pelvis_tx", "pelvis_ty", "pelvis_tz"} <= set(mot.columns)
     frames = [100, 1300, 1700, 2100]
     done = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(_CHILD), str(tmp_path / "gaittoolbox_s02.osim"),
          str(tmp_path / "gaittoolbox_s02_ik.mot"), json.dumps(frames)], capture_output=True,
-        text=True, timeout=300)  # fmt: skip
+        text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     osim = json.loads(done.stdout.strip().splitlines()[-1])
     header = (tmp_path / "gaittoolbox_s02_landmarks.csv").read_text().split("\n")[0].split(",")

@@ -54,7 +54,7 @@ def test_scale_cli_refuses_implausible_height_without_writing(tmp_path, capsys):
     assert "height_m" in err and "centimetres" in err and "Traceback" not in err
     assert not out.exists()
     assert main(["scale", "--sex", "f", "--height-m", "1.62", "--knee-width-m", "-0.1",
-                 "--out", str(out)]) == 2  # fmt: skip
+                 "--out", str(out)]) == 2
     assert not out.exists()
 
 

@@ -22,7 +22,7 @@ def test_rpy_by_hand_and_round_trip():
     # pitch at +-pi/2: roll and yaw are not separable; the rotation is still rebuilt
     R = matrix_from_euler_xyz_fixed(np.array([0.4, np.pi / 2, -0.2]))
     np.testing.assert_allclose(matrix_from_euler_xyz_fixed(np.array(rpy_from_matrix(R))), R,
-                               atol=1e-12)  # fmt: skip
+                               atol=1e-12)
 
 
 def _yourdfpy_text(name, links, joints, materials) -> str:
@@ -34,21 +34,21 @@ def _yourdfpy_text(name, links, joints, materials) -> str:
     def visual(v):
         mesh = ud.Geometry(mesh=ud.Mesh(filename=v.filename, scale=v.scale))
         return ud.Visual(name=v.name, origin=v.origin, geometry=mesh,
-                         material=ud.Material(name=v.material.name))  # fmt: skip
+                         material=ud.Material(name=v.material.name))
 
     def joint(j):
         lim = None if j.limit is None else ud.Limit(*j.limit)
         return ud.Joint(name=j.name, type=j.type, parent=j.parent, child=j.child,
-                        origin=j.origin, axis=j.axis, limit=lim)  # fmt: skip
+                        origin=j.origin, axis=j.axis, limit=lim)
 
     robot = ud.Robot(
         name=name,
         links=[ud.Link(name=k.name, inertial=inertial(k.inertial),
                        visuals=[visual(v) for v in k.visuals]) for k in links],
         joints=[joint(j) for j in joints],
-    )  # fmt: skip
+    )
     robot.materials = [ud.Material(name=m.name, color=ud.Color(rgba=np.array(m.rgba)))
-                       for m in materials]  # fmt: skip
+                       for m in materials]
     urdf = ud.URDF(robot=robot, build_scene_graph=False, load_meshes=False, filename_handler=str)
     return etree.tostring(urdf.write_xml(), xml_declaration=True, pretty_print=True).decode("ascii")
 
@@ -66,7 +66,7 @@ def test_text_is_yourdfpys_byte_for_byte(monkeypatch, knee, legs):
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = exp3(np.array([0.3, -1.2, 0.5])), [0.01, -0.2, 0.05]
     text = urdf_text(SubjectGeometry.default(), knee=knee, legs=legs,
-                     imu_placements={f"{legs[0]}_tibia_imu": T})  # fmt: skip
+                     imu_placements={f"{legs[0]}_tibia_imu": T})
     assert text == _yourdfpy_text(*seen["args"])
 
 
@@ -84,5 +84,5 @@ def test_yourdfpy_reads_back_every_element():
     links = {k.name: k for k in u.robot.links}
     assert links["right_tibia"].inertial.mass > 0
     assert [v.geometry.mesh.filename.rsplit("/", 1)[1] for v in links["right_tibia"].visuals] == [
-        "lowerleg_mesh.STL", "knee_mesh.STL"]  # fmt: skip
+        "lowerleg_mesh.STL", "knee_mesh.STL"]
     assert {m.name for m in u.robot.materials} == {"body_color", "body_color_R", "body_color_L"}

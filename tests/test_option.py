@@ -30,7 +30,7 @@ def test_specs_and_flags_follow_the_declaration():
     a = p.parse_args(["--no-fast", "--loud", "--axis", "1", "2", "3", "--names", "x=1", "y=2"])
     got = {x.name: from_flag(x, getattr(a, x.name)) for x in specs(_Demo)}
     assert got == {"mode": None, "fast": False, "loud": True, "axis": (1.0, 2.0, 3.0),
-                   "names": {"x": "1", "y": "2"}, "where": None}  # fmt: skip
+                   "names": {"x": "1", "y": "2"}, "where": None}
 
 
 def test_a_list_flag_given_twice_adds_to_the_first():

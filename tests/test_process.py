@@ -22,7 +22,7 @@ from pipeline.rotations import exp3, quat_from_matrix, rot_y
 
 OPENSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "opensim"
 SENSORS = {"pelvis": "pelvis_imu", "right_femur": "femur_r_imu", "right_tibia": "tibia_r_imu",
-           "left_femur": "femur_l_imu", "left_tibia": "tibia_l_imu"}  # fmt: skip
+           "left_femur": "femur_l_imu", "left_tibia": "tibia_l_imu"}
 
 
 #: A knee that flexes about the femur's and tibia's z (the walks here, the default
@@ -57,7 +57,7 @@ def _walk(tmp_path, heading_deg=130.0, n=600, seed=0, knee="free"):
         R = frames[seg][0] @ mount
         sensors[name] = quat_from_matrix(R)
         mountings[seg] = mount
-    trial = Recording.from_orientations(t, 100.0, sensors)  # fmt: skip
+    trial = Recording.from_orientations(t, 100.0, sensors)
     return sk, Q, trial, H
 
 
@@ -104,12 +104,12 @@ def test_free_knee_correction_carries_the_foot_with_the_tibia():
     sk = Skeleton.build(geometry, knee="hinge", root="freeflyer")
     # upright: orientations alone cannot show a standing lean (pipeline.process.posture)
     trial = simulate_trial(sk, "gait", duration_s=8.0, seed=1, standing_s=2.0,
-                           standing_lean_deg=(0.0, 0.0))  # fmt: skip
+                           standing_lean_deg=(0.0, 0.0))
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
-                                        for f, imu in trial.imus.items()})  # fmt: skip
+                                        for f, imu in trial.imus.items()})
     run = process_recording(rec, Measures("m", 1.75), sensor_to_model=(-np.pi / 2, 0.0, 0.0),
-                            correction="aor")  # fmt: skip
+                            correction="aor")
     assert all(c.applied for c in run.corrections.values())
     truth = joint_angles(trial.skeleton, trial.q)
     n0 = 200
@@ -156,7 +156,7 @@ def test_any_sensor_set_solves_and_reports_only_the_joints_it_observes(tmp_path,
     # cue takes out (with the population AoR, tilted ~9 deg seen from above, a knee-only set
     # would be turned by that much)
     run = process_recording(_subset(trial, names), Measures("m", 1.75), correction="none",
-                            **Z_KNEE)  # fmt: skip
+                            **Z_KNEE)
     assert run.sensors.joints == tuple(joints)
     expected = {f"{j}_{a}" for j in joints for a in ("flexion", "adduction", "rotation")}
     if "pelvis_imu" in names:
@@ -187,7 +187,7 @@ def test_a_set_that_observes_no_joint_is_refused_naming_what_is_needed(tmp_path,
     path = tmp_path / "thighs.sto"
     write_orientations_sto(path, _subset(trial, ("femur_r_imu", "femur_l_imu")))
     code = main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
-                 "--out", str(tmp_path / "o")])  # fmt: skip
+                 "--out", str(tmp_path / "o")])
     assert code == 2
     err = capsys.readouterr().err
     assert "observe no joint" in err and "femur_r_imu + tibia_r_imu" in err and "thighs.sto" in err
@@ -200,7 +200,7 @@ def test_knee_only_cli_writes_the_knee_columns_and_that_legs_landmarks(tmp_path)
     write_orientations_sto(path, _subset(trial, ("femur_r_imu", "tibia_r_imu")))
     out = tmp_path / "o"
     assert main(["ik", "--orientations", str(path), "--sex", "m", "--height-m", "1.75",
-                 "--no-rerun", "--out", str(out)]) == 0  # fmt: skip
+                 "--no-rerun", "--out", str(out)]) == 0
     mot = read_mot(out / "knee_ik.mot")
     assert set(mot.columns) == {"knee_angle_r", "knee_adduction_r", "knee_rotation_r"}
     header = (out / "knee_landmarks.csv").read_text().splitlines()[0].split(",")
@@ -220,7 +220,7 @@ def test_real_opensim_files(tmp_path, name, rotation):
     if not sto.exists():
         pytest.skip("../shared/data/opensim not present")
     args = ["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.80",
-            "--out", str(tmp_path)]  # fmt: skip
+            "--out", str(tmp_path)]
     if rotation:
         args += ["--sensor-to-model", *rotation, "--foot-length-m", "0.28"]
     assert main(args) == 0
@@ -238,7 +238,7 @@ def test_real_opensim_files(tmp_path, name, rotation):
     # the foot sensors drive the ankle: OpenSim's columns, dorsiflexion positive; in gait the
     # ankle goes from ~20 deg plantarflexion (push-off) to ~15 deg dorsiflexion (late stance)
     assert {"ankle_angle_r", "subtalar_angle_r", "ankle_angle_l", "subtalar_angle_l"} <= set(
-        mot.columns)  # fmt: skip
+        mot.columns)
     if name.startswith("xsens"):
         for side in "rl":
             a = np.degrees(mot.columns[f"ankle_angle_{side}"])
@@ -246,7 +246,7 @@ def test_real_opensim_files(tmp_path, name, rotation):
             assert -25 < lo < -10 and 8 < hi < 20, (side, lo, hi)
     header = (tmp_path / f"{stem}_landmarks.csv").read_text().splitlines()[0].split(",")
     assert {f"{s}_{lm}_{a}" for s in ("right", "left") for lm in ("HEE", "MT1", "MT5", "TOE")
-            for a in "xyz"} <= set(header)  # fmt: skip
+            for a in "xyz"} <= set(header)
     if rotation:  # --foot-length-m: heel to toe tip
         rows = np.loadtxt(tmp_path / f"{stem}_landmarks.csv", delimiter=",", skiprows=1)
         col = {h: i for i, h in enumerate(header)}
@@ -297,11 +297,11 @@ def test_xsens_txt_folder_gives_the_same_ik_as_the_sto(tmp_path):
     # the same information as the .sto: the exports' raw columns (gravity and the body rates
     # alone, a constant field) carry no joint accelerations to align headings or measure a lean by
     common = ["--sex", "m", "--height-m", "1.75", "--knee", "free", "--posture", "neutral",
-              "--drift", "none"]  # fmt: skip
+              "--drift", "none"]
     assert main(["ik", "--orientations", str(sto), "--out", str(tmp_path / "a"), *common]) == 0
     pairs = [f"{n}={i}" for n, i in ids.items()]
     args = ["ik", "--orientations", str(folder), "--xsens-map", *pairs, "--out",
-            str(tmp_path / "b"), *common]  # fmt: skip
+            str(tmp_path / "b"), *common]
     assert main(args) == 0
     a = read_mot(tmp_path / "a" / "walk_ik.mot").columns
     b = read_mot(tmp_path / "b" / "xsens_ik.mot").columns
@@ -337,7 +337,7 @@ def test_subject_on_its_side_never_passes_silently(tmp_path, capsys):
         pytest.skip("needs ../shared/data/opensim")
     out = tmp_path / "walk"
     assert main(["ik", "--orientations", str(sto), "--sex", "m", "--height-m", "1.8",
-                 "--out", str(out)]) == 2  # fmt: skip
+                 "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "lie on its side" in err and "--sensor-to-model -1.5708 0.0000 0.0000" in err
     assert not out.exists()  # a refused run leaves no folder it created
@@ -376,9 +376,9 @@ def test_calibration_pose_places_a_lying_or_seated_subject(motion, pose, ok):
     rest = pose_configuration(sk, "seated" if motion == "still_thigh" else "supine")
     rest[:7] = trial.q[0][:7]  # the free-flyer root as at the first sample
     segs = {"pelvis_imu": "pelvis", "right_femur_imu": "right_femur",
-            "right_tibia_imu": "right_tibia"}  # fmt: skip
+            "right_tibia_imu": "right_tibia"}
     names = {"pelvis_imu": "pelvis_imu", "right_femur_imu": "femur_r_imu",
-             "right_tibia_imu": "tibia_r_imu"}  # fmt: skip
+             "right_tibia_imu": "tibia_r_imu"}
     at0 = frame_trajectories(sk, trial.q[:1], list(segs.values()))
     at_rest = frame_trajectories(sk, rest[None], list(segs.values()))
     quats = {}
@@ -386,11 +386,11 @@ def test_calibration_pose_places_a_lying_or_seated_subject(motion, pose, ok):
         R = matrix_from_quat(trial.imus[frame].recording.quat)
         R_rest = at_rest[seg][0][0] @ at0[seg][0][0].T @ R[0]
         quats[names[frame]] = np.concatenate([np.tile(quat_from_matrix(R_rest), (n0, 1)),
-                                              trial.imus[frame].recording.quat])  # fmt: skip
+                                              trial.imus[frame].recording.quat])
     time = np.arange(n0 + trial.time.size) / 100.0
     rec = Recording.from_orientations(time, 100.0, quats)
     run = process_recording(rec, Measures("m", 1.75), correction="none", calibration_pose=pose,
-                            sensor_to_model=z_up, **Z_KNEE)  # fmt: skip (the simulated AoR)
+                            sensor_to_model=z_up, **Z_KNEE)  # the simulated AoR
     W = sensor_to_opensim_matrix(z_up)
 
     def thigh(lm):
@@ -422,7 +422,7 @@ def test_static_trial_gives_the_calibration_pose_of_a_trial_that_starts_mid_moti
     still = {k: np.repeat(q[:1], 80, axis=0) for k, q in quats.items()}
     static = Recording.from_orientations(np.arange(80) / 100.0, 100.0, still)
     moving = Recording.from_orientations(trial.time[150:], 100.0,
-                                         {k: q[150:] for k, q in quats.items()})  # fmt: skip
+                                         {k: q[150:] for k, q in quats.items()})
     m = Measures("m", 1.75)
     with_static = process_recording(moving, m, correction="none", static=static)
     first_sample = process_recording(moving, m, correction="none")
@@ -431,7 +431,7 @@ def test_static_trial_gives_the_calibration_pose_of_a_trial_that_starts_mid_moti
         assert err.max() < 3.0, (key, err.max())
     # mid-stride is no standing pose: taken as one, the angles are off by the pose's angles
     err = np.degrees(np.abs(first_sample.joint_angles["right_knee_flexion"] - truth[
-        "right_knee_flexion"]))  # fmt: skip
+        "right_knee_flexion"]))
     assert err.max() > 10.0
     assert any("static trial" in n for n in with_static.notes)
 
@@ -467,9 +467,9 @@ def test_a_still_knee_of_a_seated_subject_is_corrected_from_the_seated_pose():
     trial = simulate_trial(sk, "still_thigh", duration_s=8.0, seed=2)
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(quat=imu.recording.sensor.quat)
-                                        for f, imu in trial.imus.items()})  # fmt: skip
+                                        for f, imu in trial.imus.items()})
     run = process_recording(rec, m, calibration_pose="seated", sensor_to_model=(-np.pi / 2, 0, 0),
-                            correction="aor")  # fmt: skip
+                            correction="aor")
     c = run.corrections["left"]
     assert c.method == "population"
     pose = pose_rotations(run.skeleton, "seated", np.eye(3))
@@ -496,7 +496,7 @@ def test_how_the_sensors_are_strapped_on_does_not_change_the_joint_angles():
     rec = rec.with_sensors({n: s.replace(quat=None) for n, s in rec.sensors.items()})
     rng = np.random.default_rng(0)
     turned = {name: rec.sensors[name].turned(Rotation.random(random_state=rng).as_matrix())
-              for name in sorted(rec.sensors)}  # fmt: skip
+              for name in sorted(rec.sensors)}
     m = Measures("m", 1.8)
     runs = [process_recording(r, m) for r in (rec, rec.with_sensors(turned))]
     for key, a in runs[0].joint_angles.items():

@@ -11,7 +11,7 @@ def test_actions_are_applied_in_one_place_and_only_some_are_flags():
     rec = Recording(np.arange(3.0), 100.0, {"a": s, "b": s, "c": s})
     found = [Finding("a", "dead", Action.EXCLUDED, "x"),
              Finding("b", "dead", Action.MAGNETOMETER_NOT_USED, "y"),
-             Finding("c", "read", Action.LISTED, "z")]  # fmt: skip
+             Finding("c", "read", Action.LISTED, "z")]
     out = apply_findings(rec, found)
     assert set(out.sensors) == {"b", "c"} and out.sensors["b"].mag is None
     assert out.sensors["c"] is s

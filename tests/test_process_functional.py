@@ -21,7 +21,7 @@ def test_a_simulated_hinge_is_calibrated_trusted_and_matches_the_truth():
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                acc=i.recording.acc,
                                                                mag=i.recording.mag)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     run = process_recording(raw, Measures("m", 1.75), filter="vqf")
     cal = {c.side: c for c in run.knee_calibrations}
     assert set(cal) == {"right", "left"}
@@ -36,9 +36,9 @@ def test_calibration_method_none_skips_it():
     trial = simulate_trial(motion="gait", duration_s=6.0, seed=4, standing_s=2.0)
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                acc=i.recording.acc)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     assert process_recording(raw, Measures("m", 1.75), calibration_method="none",
-                             filter="pi").knee_calibrations == []  # fmt: skip
+                             filter="pi").knee_calibrations == []
 
 
 @pytest.mark.dataset
@@ -74,11 +74,11 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
     trial = simulate_trial(motion="gait", duration_s=12.0, seed=5, standing_s=2.0)
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                acc=i.recording.acc)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     measures = Measures("m", 1.75)
     run = process_recording(raw, measures, filter="vqf", correction="functional")
     fallback = process_recording(raw, measures, filter="vqf", correction="functional",
-                                 calibration_method="none", drift="none")  # fmt: skip
+                                 calibration_method="none", drift="none")
     aligned = process_recording(raw, measures, filter="vqf", correction="aor")
     assert "right knee: no functional calibration" in " ".join(fallback.notes)
     for side in ("right", "left"):
@@ -86,7 +86,7 @@ def test_a_trusted_knee_is_corrected_to_its_functional_axis_and_the_summary_says
         assert fallback.corrections[side].method == "aor"
         assert aligned.corrections[side].method == "aor"
         ours, theirs, eq_1_8 = (_femur_axis_error_deg(r, trial, side)
-                                for r in (run, fallback, aligned))  # fmt: skip
+                                for r in (run, fallback, aligned))
         assert ours < 1.0 and theirs > 5.0 and eq_1_8 < 1.0, (side, ours, theirs, eq_1_8)
     text = summary_text(run)
     assert "(functional calibration)" in text and text.count("| yes | yes |") == 2
@@ -104,7 +104,7 @@ def test_a_long_recording_is_calibrated_on_evenly_spaced_samples(monkeypatch):
     trial = simulate_trial(motion="gait", duration_s=12.0, seed=4, standing_s=2.0)
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                acc=i.recording.acc)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     run = process_recording(raw, Measures("m", 1.75), filter="vqf")
     for c in run.knee_calibrations:
         true = trial.knee_axis[f"{c.side}_femur_imu"]
@@ -122,5 +122,5 @@ def test_joint_residual_is_small_across_a_joint_and_not_across_two():
     for joint in ("hinge", "spherical"):
         knee, across = (joint_residual(trial.time, 100.0, s["right_femur_imu"], s[other],
                                        joint=joint, cutoff_hz=6.0, step=4)
-                        for other in ("right_tibia_imu", "right_foot_imu"))  # fmt: skip
+                        for other in ("right_tibia_imu", "right_foot_imu"))
         assert knee < 0.2 * across, (joint, knee, across)

@@ -39,10 +39,10 @@ def test_without_a_foot_sensor_the_shank_gives_times_only():
 def test_no_walking_and_no_raw_signals_are_said():
     rng = np.random.default_rng(0)
     still = SensorSignals(gyr=rng.normal(0, 0.01, (800, 3)),
-                          acc=[0, 0, 9.81] + rng.normal(0, 0.05, (800, 3)))  # fmt: skip
+                          acc=[0, 0, 9.81] + rng.normal(0, 0.05, (800, 3)))
     notes = []
     assert gait_of(Recording(np.arange(800) / 100.0, 100.0, {"calcn_r_imu": still}),
-                   notes).strides == []  # fmt: skip
+                   notes).strides == []
     assert notes == ["no strides: no walking found (no swing of a foot or shank)"]
     notes = []
     quats = SensorSignals(quat=np.tile([1.0, 0, 0, 0], (800, 1)))
@@ -65,7 +65,7 @@ def test_pipeline_ik_writes_the_s02_strides(tmp_path):
 
     pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
     assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
-                 "--height-m", "1.72", "--no-rerun", "--out", str(tmp_path)]) == 0  # fmt: skip
+                 "--height-m", "1.72", "--no-rerun", "--out", str(tmp_path)]) == 0
     rows = list(csv.DictReader((tmp_path / "gaittoolbox_s02_strides.csv").open()))
     straight = [float(r["stride_length_m"]) for r in rows if r["straight"] == "true"]
     assert len(rows) >= 8 and 1.3 < np.median(straight) < 1.6  # Vicon: 1.17-1.56 m
@@ -102,7 +102,7 @@ def test_a_foot_outside_the_ik_model_writes_no_path():
     sk = Skeleton.build(geometry_from_measures(m)[0], knee="hinge", root="freeflyer")
     rec = simulate_trial(sk, "walk", duration_s=12.0, seed=0, standing_s=2.0).raw_recording()
     rec = rec.with_sensors({n: s for n, s in rec.sensors.items()
-                            if n not in ("pelvis_imu", "tibia_r_imu")})  # fmt: skip
+                            if n not in ("pelvis_imu", "tibia_r_imu")})
     run = process_recording(rec, m, filter="vqf")
     assert run.gait.pelvis_path is None and len(run.gait.strides) > 4
     assert "the pelvis's path needs both feet's orientations from the IK, and the model has no "\
@@ -128,12 +128,12 @@ def test_s02_the_body_walks_the_room(tmp_path):
     pairs = [f"{k}={v}" for k, v in S02_MAP.items()]
     assert main(["ik", "--orientations", str(S02 / "imu"), "--sensor-map", *pairs, "--sex", "m",
                  "--height-m", "1.72", "--no-rerun", "--landmarks", "world", "--out",
-                 str(tmp_path)]) == 0  # fmt: skip
+                 str(tmp_path)]) == 0
     mot = read_mot(tmp_path / "gaittoolbox_s02_ik.mot").columns
     path = np.column_stack([mot[f"pelvis_t{a}"] for a in "xyz"])
     assert 0.8 < np.median(path[:, 1]) < 1.05  # the pelvis's height above the floor (m)
     m = sio.loadmat(S02 / "vicon" / "S02-Trial-Walk-1.mat", squeeze_me=True,
-                    struct_as_record=False)  # fmt: skip
+                    struct_as_record=False)
     err, walked = path_error(path[1000:2200], m["Root"][1000:2200, 3:] / 1000.0)
     assert walked > 7.0 and err.mean() < 0.025 * walked
     import csv
@@ -169,7 +169,7 @@ def test_s02_without_its_feet_the_shanks_find_every_stride():
         pytest.skip("no S02 data")
     feet = gait_of(rec, [])
     shanks = gait_of(rec.with_sensors({n: s for n, s in rec.sensors.items()
-                                       if not n.startswith("calcn")}), [])  # fmt: skip
+                                       if not n.startswith("calcn")}), [])
     for side in ("right", "left"):
         by_foot = [s for s in feet.strides if s.side == side]
         by_shank = [s for s in shanks.strides if s.side == side]

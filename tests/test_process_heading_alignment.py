@@ -33,7 +33,7 @@ def _raw(trial, mag: bool) -> Recording:
     return Recording(trial.time, 100.0, {
         NAMES[f]: SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc,
                                 mag=i.recording.mag if mag else None)
-        for f, i in trial.imus.items()})  # fmt: skip
+        for f, i in trial.imus.items()})
 
 
 def _knee_rms_deg(trial, run) -> tuple[float, float]:
@@ -56,13 +56,13 @@ def runs(trial):
 def test_every_joint_is_aligned_and_each_heading_matches_the_filters_true_error(trial, runs):
     run = runs["auto"]
     assert set(run.heading_drifts) == {f"{s}_{j}" for s in ("right", "left")
-                                       for j in ("hip", "knee", "ankle")}  # fmt: skip
+                                       for j in ("hip", "knee", "ankle")}
 
     def heading_error(frame):  # the 6-D filter's world turn of this sensor (about z up)
         imu = trial.imus[frame]
         s = imu.recording.sensor
         E = matrix_from_quat(filter_orientations(trial.time, s.gyr, s.acc)) @ np.swapaxes(
-            imu.rotation, 1, 2)  # fmt: skip
+            imu.rotation, 1, 2)
         return np.unwrap(np.arctan2(E[:, 1, 0], E[:, 0, 0]))
 
     pelvis = heading_error("pelvis_imu")
@@ -80,7 +80,7 @@ def test_the_aligned_knee_angles_are_as_good_as_a_magnetometers(trial, runs):
     flex, other = _knee_rms_deg(trial, runs["auto"])
     flex_none, other_none = _knee_rms_deg(trial, runs["none"])
     flex_9d, other_9d = _knee_rms_deg(trial, process_recording(_raw(trial, mag=True), SUBJECT,
-                                                               filter="vqf"))  # fmt: skip
+                                                               filter="vqf"))
     # flexion 1.2 deg: the simulated hinge's neutral offset seen through the ISB axes (0.6 with
     # --correction aor, which finds it); without alignment 5.2
     assert flex < 1.5 and 3 * flex < flex_none, (flex, flex_none)
@@ -102,7 +102,7 @@ def test_which_sensors_the_joints_align():
 
 def test_vendor_orientations_are_not_aligned_unless_asked(trial):
     rec = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(quat=i.recording.quat)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     run = process_recording(rec, SUBJECT, sensor_to_model=(-np.pi / 2, 0.0, 0.0))
     assert run.heading_drifts == {}
     run = process_recording(rec, SUBJECT, sensor_to_model=(-np.pi / 2, 0.0, 0.0), drift="joints")
@@ -184,7 +184,7 @@ def test_a_still_leg_lying_supine_without_magnetometers():
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: SensorSignals(gyr=i.recording.gyr,
                                                                 acc=i.recording.acc)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     run = process_recording(rec, m, calibration_pose="supine", filter="vqf", correction="aor")
     assert run.corrections["left"].method == "population"
     assert run.corrections["right"].method == "aor"
@@ -193,9 +193,9 @@ def test_a_still_leg_lying_supine_without_magnetometers():
     # segments, so the hips still come out close)
     for side, why in (("right", "does not swing once per stride"), ("left", "no flexion axes")):
         assert any(f.startswith(f"{side} hip: the {side} leg keeps its thigh sensor's heading")
-                   and why in f for f in run.flags), (side, run.flags)  # fmt: skip
+                   and why in f for f in run.flags), (side, run.flags)
     assert any("left knee: its AoR is not seen" in n and "headings were not aligned" in n
-               for n in run.notes)  # fmt: skip
+               for n in run.notes)
     truth = joint_angles(trial.skeleton, trial.q)
     for side in ("right", "left"):
         for axis in ("flexion", "adduction", "rotation"):
@@ -222,7 +222,7 @@ def walk():
     sk = Skeleton.build(geometry, knee="free", root="freeflyer")
     no_soft_tissue = Artefacts(soft_tissue_deg=0.0, soft_tissue_m=0.0, wobble_deg=0.0)
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=0, standing_s=3.0,
-                           artefacts=no_soft_tissue)  # fmt: skip
+                           artefacts=no_soft_tissue)
     raw = trial.raw_recording()
     raw = raw.with_sensors({n: s.replace(mag=None) for n, s in raw.sensors.items()})
     return trial, raw, process_recording(raw, SUBJECT, filter="vqf")
@@ -264,7 +264,7 @@ def test_a_hip_that_does_not_align_takes_the_other_thighs_heading(walk, monkeypa
         return np.sqrt(np.mean(np.degrees(r.joint_angles[key][300:] - truth[key][300:]) ** 2))
 
     for key in ("right_hip_flexion", "right_hip_adduction", "right_knee_flexion",
-                "right_ankle_flexion"):  # fmt: skip
+                "right_ankle_flexion"):
         assert rms(run, key) < min(rms(normal, key) + 1.0, rms(own, key)), key
     assert rms(run, "right_knee_adduction") < rms(own, "right_knee_adduction")
 
@@ -296,11 +296,11 @@ def test_both_hips_refused_the_pelvis_line_puts_the_thighs_in_its_heading(monkey
     geometry, _ = geometry_from_measures(SUBJECT)
     sk = Skeleton.build(geometry, knee="free", root="freeflyer")
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=0, standing_s=3.0,
-                           artefacts=Artefacts())  # fmt: skip
+                           artefacts=Artefacts())
     raw = trial.raw_recording(magnetometers=False)
     rng = np.random.default_rng(1)
     turned = {name: raw.sensors[name].turned(Rotation.random(random_state=rng).as_matrix())
-              for name in sorted(raw.sensors)}  # fmt: skip
+              for name in sorted(raw.sensors)}
     truth = joint_angles(trial.skeleton, trial.q)
     medians = []
     for rec in (raw, raw.with_sensors(turned)):
@@ -311,7 +311,7 @@ def test_both_hips_refused_the_pelvis_line_puts_the_thighs_in_its_heading(monkey
             "medio-lateral line" in notes
         assert not run.flags, run.flags
         rms = {k: np.sqrt(np.mean(np.degrees(run.joint_angles[k] - truth[k])[300:] ** 2))
-               for k in truth if k in run.joint_angles and not k.startswith("pelvis")}  # fmt: skip
+               for k in truth if k in run.joint_angles and not k.startswith("pelvis")}
         sagittal = np.median([v for k, v in rms.items() if k.endswith("flexion")])
         other = np.median([v for k, v in rms.items() if not k.endswith("flexion")])
         assert sagittal < 3.0 and other < 3.5, (sagittal, other)

@@ -14,7 +14,7 @@ def _rec(missing: Missing) -> Recording:
     n = 100
     names = ("pelvis_imu", "femur_r_imu", "tibia_r_imu", "calcn_r_imu", "tibia_l_imu")
     rec = Recording(np.arange(n) / 100.0, 100.0,
-                    {k: SensorSignals(gyr=np.zeros((n, 3))) for k in names})  # fmt: skip
+                    {k: SensorSignals(gyr=np.zeros((n, 3))) for k in names})
     return dataclasses.replace(rec, missing=missing)
 
 

@@ -28,7 +28,7 @@ def _knee(n=600, tibia_turn=(0.0, 0.0, 0.0), **kw) -> KneeInputs:
     T = np.stack([exp3(-a * A_F) for a in flex]) @ rotation_aligning(A_T, A_F)
     T = T @ exp3(np.asarray(tibia_turn))
     return KneeInputs("right", F, T, A_F, A_T, rotation_aligning(A_T, A_F), np.eye(3), np.eye(3),
-                      100.0, **kw)  # fmt: skip
+                      100.0, **kw)
 
 
 def test_the_registry_names_the_options_methods():
@@ -51,7 +51,7 @@ def test_unaligned_headings_and_a_still_knee_fall_back_to_the_population():
                        np.tile(still.tibia_R[0], (300, 1, 1)),
                        *[getattr(still, f) for f in ("axis_femur", "axis_tibia",
                                                      "pose_tibia_in_femur", "placement_thigh",
-                                                     "placement_shank", "rate_hz")])  # fmt: skip
+                                                     "placement_shank", "rate_hz")])
     c = choose_correction(still, "aor", notes)
     assert c.method == "population" and any("corrected as the reference" in n for n in notes)
 
@@ -84,7 +84,7 @@ def _half_turned(turn_deg: float) -> KneeInputs:
     T[len(T) // 2:] = T[len(T) // 2:] @ exp3(np.array([0.0, np.radians(turn_deg), 0.0]))
     return KneeInputs(k.side, k.femur_R, T, *[getattr(k, f) for f in (
         "axis_femur", "axis_tibia", "pose_tibia_in_femur", "placement_thigh", "placement_shank",
-        "rate_hz")])  # fmt: skip
+        "rate_hz")])
 
 
 def test_a_correction_the_two_halves_agree_on_is_applied():

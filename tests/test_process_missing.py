@@ -27,7 +27,7 @@ from pipeline.process.missing import (
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 S02_MAP = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
 
 
 def _rec(n=200):
@@ -37,7 +37,7 @@ def _rec(n=200):
     return Recording(t, 100.0, {"tibia_r_imu": SensorSignals(quat=quat, gyr=gyr.copy(),
                                                              acc=gyr.copy() + 9.81),
                                 "pelvis_imu": SensorSignals(quat=quat.copy(), gyr=gyr.copy(),
-                                                            acc=gyr.copy())})  # fmt: skip
+                                                            acc=gyr.copy())})
 
 
 def test_missing_spans_are_found_bridged_and_carried():
@@ -63,7 +63,7 @@ def test_what_needs_a_missing_sensor_is_blank_and_nothing_else():
     missing = Missing({"tibia_r_imu": ((10, 20),), "pelvis_imu": ((50, 55),)})
     angles = {k: np.zeros(n) for k in ("right_hip_flexion", "right_knee_flexion",
                                        "right_ankle_flexion", "left_knee_flexion",
-                                       "left_hip_flexion", "pelvis_tilt")}  # fmt: skip
+                                       "left_hip_flexion", "pelvis_tilt")}
     out = blank_angles(angles, missing)
     blank = {k for k, v in out.items() if np.isnan(v[10:20]).all()}
     assert blank == {"right_knee_flexion", "right_ankle_flexion"}
@@ -99,7 +99,7 @@ def test_strides_over_their_sensors_gap_are_left_out_and_said():
     sources = {"right": "foot sensor calcn_r_imu", "left": "foot sensor calcn_l_imu"}
     notes = []
     kept = without_strides_over(strides, sources, time, Missing({"calcn_r_imu": ((250, 260),)}),
-                                notes)  # fmt: skip
+                                notes)
     assert kept == [strides[0], strides[2]]
     assert notes == ["1 stride(s) over a sensor's missing samples left out"]
 
@@ -108,7 +108,7 @@ def test_a_6d_pelvis_restarted_blanks_its_angles_from_its_gap_on():
     angles = {"pelvis_tilt": np.zeros(10), "right_knee_flexion": np.zeros(10)}
     notes = []
     out = blank_after_restart(angles, ("pelvis_tilt",), "pelvis_imu",
-                              Missing({"pelvis_imu": ((4, 6),)}), notes)  # fmt: skip
+                              Missing({"pelvis_imu": ((4, 6),)}), notes)
     assert np.isnan(out["pelvis_tilt"][4:]).all() and np.isfinite(out["pelvis_tilt"][:4]).all()
     assert np.isfinite(out["right_knee_flexion"]).all() and len(notes) == 1
 
@@ -152,7 +152,7 @@ def test_a_simulated_dropout_blanks_the_shanks_joints_and_keeps_the_rest():
     trial = simulate_trial(sk, "gait", duration_s=12.0, seed=2, standing_s=2.0)
     names = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items() if seg != "torso"}
     rec = Recording(trial.time, 100.0, {names[f]: i.recording.sensor
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     base = process_recording(rec, subject)
     rows = slice(600, 800)
     run = process_recording(_with_dropout(rec, "tibia_r_imu", rows), subject)

@@ -132,7 +132,7 @@ def test_every_option_is_accepted_by_flag_config_and_manifest_alike(tmp_path):
         argv += [s.flag, *_value(s)]
     args = build_parser().parse_args(argv)
     flagged = resolve_settings(None, {s.name: from_flag(s, getattr(args, s.name))
-                                      for s in all_specs()})  # fmt: skip
+                                      for s in all_specs()})
     # configuration file (relative paths against the file's folder)
     tables: dict[str, list[str]] = {"subject": [], "sensors": [], "ik": []}
     for s in options:
@@ -171,7 +171,7 @@ def test_settings_written_read_back_to_the_same_settings(tmp_path):
               "height_m": 1.8, "knee_width_m": 0.1, "correction": "aor-ipopt", "knee": "hinge",
               "sensor_to_model": (-1.5708, 0, 0), "knee_axis_femur": (0.0, 0.0, 1.0),
               "knee_axis_tibia": (0.1, 0.0, 1.0), "sensor_map": {"pelvis_imu": "P1"},
-              "joint_limits": False}  # fmt: skip
+              "joint_limits": False}
     settings = resolve_settings(None, values)
     text = settings_text(settings, "made by a test")
     assert text.startswith("# made by a test\n")

@@ -21,7 +21,7 @@ def test_a_windows_pose_error_is_each_long_axis_from_where_the_pose_puts_it():
     n = 100
     window = StillWindow(0, n, 0.0, 0.99)
     frames = WalkingFrames({"pelvis": np.eye(3), "right_femur": np.eye(3),
-                            "right_tibia": np.eye(3)}, {})  # fmt: skip
+                            "right_tibia": np.eye(3)}, {})
     upright = {seg: np.tile(np.eye(3), (n, 1, 1)) for seg in frames.frames}
     lying = {seg: np.tile(rot_z(np.pi / 2), (n, 1, 1)) for seg in frames.frames}
     seated = {**upright, "right_femur": lying["right_femur"]}
@@ -87,7 +87,7 @@ def test_no_window_and_no_walk_take_the_first_sample_and_say_so():
         {"pelvis_imu": "pelvis_imu", "right_femur_imu": "femur_r_imu",
          "right_tibia_imu": "tibia_r_imu"}[f]: i.recording.quat
         for f, i in trial.imus.items() if f in ("pelvis_imu", "right_femur_imu",
-                                                "right_tibia_imu")})  # fmt: skip
+                                                "right_tibia_imu")})
     run = process_recording(rec, Measures("m", 1.75), **Z_UP)
     assert run.calibration == "standing pose assumed at the first sample (no still window, no walk)"
     assert run.flags[0].startswith("no still window (every sensor at rest for half a second) and "

@@ -30,7 +30,7 @@ def trial():
 def test_each_legs_lean_is_measured_and_the_standing_angles_follow(trial):
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                 acc=i.recording.acc)
-                                        for f, i in trial.imus.items()})  # fmt: skip
+                                        for f, i in trial.imus.items()})
     truth = joint_angles(trial.skeleton, trial.q)
     measured = process_recording(raw, M, filter="vqf")
     upright = process_recording(raw, M, filter="vqf", posture="neutral")
@@ -42,7 +42,7 @@ def test_each_legs_lean_is_measured_and_the_standing_angles_follow(trial):
         for joint in ("hip", "ankle"):  # the lean's angles: 3-5 deg off upright, ~0.5 measured
             key = f"{side}_{joint}_flexion"
             rms = {r: np.sqrt(np.mean(np.degrees(run.joint_angles[key] - truth[key])[200:] ** 2))
-                   for r, run in (("measured", measured), ("upright", upright))}  # fmt: skip
+                   for r, run in (("measured", measured), ("upright", upright))}
             assert rms["measured"] < 1.0 and rms["measured"] < 0.5 * rms["upright"], (key, rms)
     assert any("standing posture from the knee and ankle centres" in n and "hinge-like centre "
                "fits" in n for n in measured.notes)  # the simulator's hinge knee
@@ -57,12 +57,12 @@ def test_the_lean_turns_femur_and_tibia_about_their_medio_lateral_axis():
     np.testing.assert_allclose(out["right_foot"], np.eye(3))  # the foot stays flat
     assert out["right_tibia"][:, 1] @ np.array([1.0, 0, 0]) > 0  # its top turned forward
     assert p.joint_angles("right") == {"hip_flexion": -0.1, "knee_flexion": 0.0,
-                                       "ankle_flexion": 0.1}  # fmt: skip
+                                       "ankle_flexion": 0.1}
 
 
 def test_a_leg_without_foot_or_raw_signals_stands_upright(trial):
     quats = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(quat=i.recording.quat)
-                                          for f, i in trial.imus.items()})  # fmt: skip
+                                          for f, i in trial.imus.items()})
     run = process_recording(quats, M, sensor_to_model=(-np.pi / 2, 0, 0))
     assert run.posture.lean == {}
     assert any("standing lean not measured" in n for n in run.notes)
@@ -72,7 +72,7 @@ def test_a_leg_without_its_shank_sensor_takes_the_other_legs_lean(trial):
     raw = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(gyr=i.recording.gyr,
                                                                 acc=i.recording.acc)
                                         for f, i in trial.imus.items()
-                                        if f != "right_tibia_imu"})  # fmt: skip
+                                        if f != "right_tibia_imu"})
     truth = joint_angles(trial.skeleton, trial.q)
     run = process_recording(raw, M, filter="vqf")
     upright = process_recording(raw, M, filter="vqf", posture="neutral")
@@ -83,7 +83,7 @@ def test_a_leg_without_its_shank_sensor_takes_the_other_legs_lean(trial):
                "left leg's" in n for n in run.notes)
     key = "right_hip_flexion"
     err = {r: np.degrees(np.mean(x.joint_angles[key][200:] - truth[key][200:]))
-           for r, x in (("borrowed", run), ("upright", upright))}  # fmt: skip
+           for r, x in (("borrowed", run), ("upright", upright))}
     legs_differ = np.degrees(truth["right_ankle_flexion"][100] - truth["left_ankle_flexion"][100])
     # off by the legs' difference and the other leg's own error (within 1 deg, the test above)
     assert abs(err["borrowed"]) < abs(legs_differ) + 1.0 < abs(err["upright"]), err
@@ -93,7 +93,7 @@ def _centre(o_1, o_2, d_1, d_2):
     from pipeline.calibration.joint_centres import JointCentre
 
     return JointCentre(np.asarray(o_1, float), np.asarray(o_2, float), 0.5, 0.05,
-                       (np.asarray(d_1, float), np.asarray(d_2, float)))  # fmt: skip
+                       (np.asarray(d_1, float), np.asarray(d_2, float)))
 
 
 def test_a_hinge_like_fit_leaves_its_axis_out_of_the_tibias_line():
@@ -109,11 +109,11 @@ def test_a_hinge_like_fit_leaves_its_axis_out_of_the_tibias_line():
     assert hinged
     raw = knee.o_2 - ankle.o_1
     lean = {k: np.degrees(np.arctan2(x[0], x[1])) for k, x in (("true", true), ("raw", raw),
-                                                               ("line", v))}  # fmt: skip
+                                                               ("line", v))}
     assert abs(lean["raw"] - lean["true"]) > 1.5  # the slide leaks into the lean
     assert abs(lean["line"] - lean["true"]) < 0.1, lean
     far = np.array([np.sin(np.radians(HINGE_LIKE_DEG + 20)), 0.0,
-                    np.cos(np.radians(HINGE_LIKE_DEG + 20))])  # fmt: skip
+                    np.cos(np.radians(HINGE_LIKE_DEG + 20))])
     real = _centre([0, 0, 0], true, [0, 0, 0], far)  # a determined fit (a real knee's)
     v, hinged = _tibia_line(real, _centre([0, 0, 0], [0, 0, 0], far, [0, 0, 0]), ml)
     np.testing.assert_allclose(v, true)

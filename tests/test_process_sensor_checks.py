@@ -29,10 +29,10 @@ def walk() -> Recording:
     geometry, _ = geometry_from_measures(SUBJECT)
     sk = Skeleton.build(geometry, knee="free", root="freeflyer")
     trial = simulate_trial(sk, "gait", duration_s=12.0, seed=3, standing_s=2.0,
-                           artefacts=Artefacts())  # fmt: skip
+                           artefacts=Artefacts())
     return Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(
         gyr=i.recording.gyr, acc=i.recording.acc, mag=i.recording.mag)
-        for f, i in trial.imus.items()})  # fmt: skip
+        for f, i in trial.imus.items()})
 
 
 def _with(rec: Recording, name: str, **signals) -> Recording:
@@ -54,7 +54,7 @@ def test_a_dead_gyroscope_axis_excludes_the_sensor(walk):
 
 def test_a_dead_magnetometer_is_not_used_and_the_sensor_stays(walk):
     out, (f,) = check_sensors(_with(walk, "femur_l_imu", mag=np.zeros_like(
-        walk.sensors["femur_l_imu"].mag)))  # fmt: skip
+        walk.sensors["femur_l_imu"].mag)))
     assert (f.check, f.action) == ("dead", "magnetometer not used")
     assert out.sensors["femur_l_imu"].mag is None and out.sensors["femur_l_imu"].gyr is not None
 
@@ -101,7 +101,7 @@ def test_a_gyroscope_in_degrees_is_refused_even_on_a_slow_trial(walk):
         check_sensors(rec)
     with pytest.raises(InputError, match=r"look like rad/s read as deg/s"):
         check_units(walk.with_sensors({n: s.replace(gyr=np.radians(s.gyr))
-                                       for n, s in walk.sensors.items()}))  # fmt: skip
+                                       for n, s in walk.sensors.items()}))
 
 
 def test_a_sensor_that_fell_off_is_excluded(walk):
@@ -109,7 +109,7 @@ def test_a_sensor_that_fell_off_is_excluded(walk):
     rng = np.random.default_rng(1)
     lying = SensorSignals(gyr=rng.normal(0, 0.005, (n, 3)),
                           acc=np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0, 0.02, (n, 3)),
-                          mag=walk.sensors["tibia_l_imu"].mag)  # fmt: skip
+                          mag=walk.sensors["tibia_l_imu"].mag)
     out, (f,) = check_sensors(walk.with_sensors({**walk.sensors, "tibia_l_imu": lying}))
     assert (f.sensor, f.check, f.action) == ("tibia_l_imu", "moves with its segment", "excluded")
 
@@ -125,7 +125,7 @@ def test_a_still_thigh_or_a_foot_on_the_floor_is_not_a_fallen_sensor(walk):
     sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer")
     seated = simulate_trial(sk, "still_thigh", duration_s=12.0, seed=3)
     rec = Recording(seated.time, 100.0, {NAMES[f]: SensorSignals(
-        gyr=i.recording.gyr, acc=i.recording.acc) for f, i in seated.imus.items()})  # fmt: skip
+        gyr=i.recording.gyr, acc=i.recording.acc) for f, i in seated.imus.items()})
     assert [f for f in check_sensors(rec)[1] if f.check == "moves with its segment"] == []
     n = walk.time.size
     rng = np.random.default_rng(2)
@@ -177,10 +177,10 @@ def test_quaternions_in_x_y_z_w_order_are_refused(walk):
     trial = simulate_trial(sk, "gait", duration_s=8.0, seed=2, standing_s=2.0)
     right = Recording(trial.time, 100.0, {NAMES[f]: SensorSignals(
         gyr=i.recording.gyr, acc=i.recording.acc, quat=i.recording.quat)
-        for f, i in trial.imus.items()})  # fmt: skip
+        for f, i in trial.imus.items()})
     check_quaternion_order(right)
     wrong = right.with_sensors({n: s.replace(quat=s.quat[:, [1, 2, 3, 0]])
-                                for n, s in right.sensors.items()})  # fmt: skip
+                                for n, s in right.sensors.items()})
     with pytest.raises(InputError, match=r"field quat: .*read as x, y, z, w"):
         check_sensors(wrong)
 
@@ -212,9 +212,9 @@ def test_a_repair_of_one_sensors_file_is_named_on_that_sensor(tmp_path):
     rows = [f"{k}\t0\t0\t9.81\t0.1\t0.2\t0.3" for k in range(200) if k not in (50, 51)]
     for name in ("femur_r_imu", "tibia_r_imu"):
         lines = ["// Update Rate: 100.0Hz", "PacketCounter\tAcc_X\tAcc_Y\tAcc_Z\tGyr_X\tGyr_Y"
-                 "\tGyr_Z"]  # fmt: skip
+                 "\tGyr_Z"]
         body = rows if name == "tibia_r_imu" else [r for k, r in enumerate(
-            f"{k}\t0\t0\t9.81\t0.1\t0.2\t0.3" for k in range(200))]  # fmt: skip
+            f"{k}\t0\t0\t9.81\t0.1\t0.2\t0.3" for k in range(200))]
         (folder / f"{name}.txt").write_text("\n".join(lines + body) + "\n")
     rec = read_recording(folder)
     assert set(rec.sensor_notes) == {"tibia_r_imu"}
@@ -260,7 +260,7 @@ def test_the_real_recordings():
         pytest.skip("../shared/data/gaittoolbox_s02 or ximu3_lower_body not present")
     ids = {"pelvis_imu": "00B40B91", "femur_l_imu": "00B40C45", "femur_r_imu": "00B40C3C",
            "tibia_l_imu": "00B40C44", "tibia_r_imu": "00B40C47", "calcn_l_imu": "00B40C55",
-           "calcn_r_imu": "00B40C48"}  # fmt: skip
+           "calcn_r_imu": "00B40C48"}
     _, findings = check_sensors(read_recording(s02, ids))
     assert findings == []
     found = check_sensors(read_recording(ximu3))[1]
@@ -273,7 +273,7 @@ def test_the_real_recordings():
     listed = [f for f in found if f.check == "slipped"]
     assert {f.sensor for f in listed} >= set(read_recording(ximu3).sensors) - {"tibia_r_imu"}
     assert all("the movement itself changed" in f.evidence or "across a pause" in f.evidence
-               for f in listed)  # fmt: skip
+               for f in listed)
 
 
 @pytest.mark.dataset
@@ -297,8 +297,8 @@ def test_one_sensors_quaternion_order_is_named_and_its_orientation_filtered():
     assert (f.sensor, f.check, f.action) == ("femur_r_imu", "orientations",
                                              "orientation from its raw signals")
     assert any("orientations of ['femur_r_imu'] estimated from their raw signals" in n
-               for n in run.notes)  # fmt: skip
+               for n in run.notes)
     a, b = mot_columns(base), mot_columns(run)
     moved = {k: np.degrees(np.sqrt(np.nanmean((a[k] - b[k]) ** 2))) for k in a
-             if not k.startswith("pelvis_t")}  # fmt: skip
+             if not k.startswith("pelvis_t")}
     assert max(moved.values()) < 2.0, moved

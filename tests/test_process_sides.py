@@ -25,9 +25,9 @@ def walk() -> Recording:
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     return simulate_trial(sk, "walk", duration_s=12.0, seed=0, standing_s=3.0,
-                          artefacts=Artefacts()).raw_recording()  # fmt: skip
+                          artefacts=Artefacts()).raw_recording()
 
 
 def _margin(rec: Recording, **options) -> float:
@@ -89,7 +89,7 @@ def test_thighs_named_for_the_other_leg_alone_are_read_back_alone(walk):
     """The hips find the thighs mirrored; the stride's rhythm (swap eq 4) puts each thigh with
     the other leg's shank and foot: the thighs alone are exchanged back."""
     crossed = walk.with_sensors({**walk.sensors, "femur_r_imu": walk.sensors["femur_l_imu"],
-                                 "femur_l_imu": walk.sensors["femur_r_imu"]})  # fmt: skip
+                                 "femur_l_imu": walk.sensors["femur_r_imu"]})
     run, back = process_recording(walk, SUBJECT), process_recording(crossed, SUBJECT)
     (f,) = [f for f in back.sensor_findings if f.check == "sides"]
     assert "the thighs' sensors are named left for right" in f.evidence
@@ -112,12 +112,12 @@ def test_where_the_rhythm_does_not_tell_the_run_is_refused(monkeypatch):
 
 def test_without_the_thighs_signals_there_is_no_evidence(walk):
     orientations_only = walk.with_sensors({n: s.replace(gyr=None, acc=None, mag=None)
-                                           for n, s in walk.sensors.items()})  # fmt: skip
+                                           for n, s in walk.sensors.items()})
     rotations = {s: np.tile(np.eye(3), (len(walk.time), 1, 1))
-                 for s in ("pelvis", "right_femur", "left_femur")}  # fmt: skip
+                 for s in ("pelvis", "right_femur", "left_femur")}
     geometry = geometry_from_measures(SUBJECT)[0]
     assert side_evidence(orientations_only, rotations, np.array([0, 0, 1.0]), "ipopt", geometry,
-                         []) is None  # fmt: skip
+                         []) is None
 
 
 def test_one_heading_down_each_leg():

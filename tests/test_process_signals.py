@@ -29,7 +29,7 @@ def walk():
     model = Skeleton.build(geometry, knee="hinge", root="freeflyer")
     trial = simulate_trial(model, "gait", duration_s=12.0, seed=3, standing_s=2.0)
     raw = {NAMES[f]: SensorSignals(gyr=i.recording.gyr, acc=i.recording.acc)
-           for f, i in trial.imus.items()}  # fmt: skip
+           for f, i in trial.imus.items()}
     quats = {NAMES[f]: i.recording.quat for f, i in trial.imus.items()}
     return trial, Recording(trial.time, 100.0, raw), quats
 
@@ -46,7 +46,7 @@ def test_raw_signals_give_the_simulated_joint_angles(walk, method):
     assert any(f"by {method.upper()}, 6-D" in n for n in run.notes)
     truth = joint_angles(trial.skeleton, trial.q)
     for key, bound in (("right_hip_flexion", 2.0), ("left_hip_flexion", 2.0),
-                       ("right_knee_flexion", 2.0), ("left_knee_flexion", 2.0)):  # fmt: skip
+                       ("right_knee_flexion", 2.0), ("left_knee_flexion", 2.0)):
         e = np.degrees(run.joint_angles[key][200:] - truth[key][200:])
         assert np.sqrt(np.mean(e**2)) < bound, (key, np.sqrt(np.mean(e**2)))
     assert not run.flags
@@ -116,7 +116,7 @@ def test_a_disturbed_magnetometer_is_not_used_and_its_heading_is_not_shared(walk
     assert out.filtered == "9-D and 6-D" and out.untrusted_fields == ["tibia_l_imu"]
     assert out.shared == frozenset(NAMES.values()) - {"tibia_l_imu"}
     assert any(n.startswith("tibia_l_imu: magnetometer not trusted") and "disturbed" in n
-               for n in notes)  # fmt: skip
+               for n in notes)
     vendor = rec.with_sensors({n: s.replace(quat=quats[n]) for n, s in sensors.items()})
     own = orientations_from_signals(vendor, None, [])
     assert own.filtered is None and "tibia_l_imu" not in own.shared
@@ -135,7 +135,7 @@ def test_the_world_of_a_recordings_own_orientations(walk):
 
     trial, raw, quats = walk
     rec = Recording(trial.time, 100.0, {n: raw.sensors[n].replace(quat=q)
-                                        for n, q in quats.items()})  # fmt: skip
+                                        for n, q in quats.items()})
     np.testing.assert_allclose(measured_up(rec), [0, 0, 1], atol=0.05)
     to_model, note = world_to_model(rec)
     assert to_model == Z_UP_TO_Y_UP and "z up, measured by the accelerometers" in note

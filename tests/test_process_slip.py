@@ -34,7 +34,7 @@ def walk() -> Recording:
 
     sk = Skeleton.build(geometry_from_measures(M)[0], knee="free", root="freeflyer")
     trial = simulate_trial(sk, "walk", duration_s=20.0, seed=1, standing_s=3.0,
-                           artefacts=Artefacts())  # fmt: skip
+                           artefacts=Artefacts())
     return trial.raw_recording()
 
 
@@ -58,7 +58,7 @@ def _slipped(rec: Recording, name: str, axis, at: int, deg: float = 30.0) -> Rec
         return x
 
     return rec.with_sensors({**rec.sensors, name: s.replace(gyr=turned(s.gyr), acc=turned(s.acc),
-                                                              mag=turned(s.mag))})  # fmt: skip
+                                                              mag=turned(s.mag))})
 
 
 def test_sensors_that_stay_put_do_not_step(walk):
@@ -119,13 +119,13 @@ def test_a_step_both_legs_take_is_not_a_slip(walk):
     each steps as much as a slip, none alone on its leg or its side of the body."""
     at, rec = _mid_walk(walk), walk
     legs = ("femur_r_imu", "tibia_r_imu", "calcn_r_imu", "femur_l_imu", "tibia_l_imu",
-            "calcn_l_imu")  # fmt: skip
+            "calcn_l_imu")
     for name in legs:
         rec = _slipped(rec, name, 0, at)
     ctx = CheckContext(rec)
     steps = [slip_step(n, ctx) for n in legs]
     assert all(s.deg > SLIP_DEG and s.others_deg > 20.0 and s.mirror_deg > 20.0
-               and not s.slipped for s in steps), steps  # fmt: skip
+               and not s.slipped for s in steps), steps
     alone = slip_step("tibia_r_imu", CheckContext(_slipped(walk, "tibia_r_imu", 0, at)))
     assert alone.slipped and alone.others_deg < ALONE_DEG, alone
 
@@ -180,7 +180,7 @@ def test_a_small_slip_or_a_short_walk_is_not_a_slip(walk):
     assert not slip_step("tibia_r_imu", small).slipped
     n = int(round(gait_of(walk, []).events["right"].ic[2]))  # two strides: nothing to compare
     short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
-        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
+        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})
     assert slip_step("tibia_r_imu", CheckContext(short)) is None
     listed = {f.sensor: f for f in check_sensors(short)[1] if f.check == "slipped"}
     assert {"femur_r_imu", "tibia_r_imu", "calcn_r_imu"} <= set(listed), listed
@@ -195,10 +195,10 @@ def test_a_short_walk_names_each_legs_own_stride_count(walk):
 
     n = int(round(gait_of(walk, []).events["right"].ic[3])) + 30
     short = Recording(walk.time[:n], walk.rate_hz, {k: s.replace(
-        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})  # fmt: skip
+        gyr=s.gyr[:n], acc=s.acc[:n], mag=None) for k, s in walk.sensors.items()})
     said = {f.sensor: re.search(r"(\d+) stride\(s\) found on its leg \(the other leg: (\d+)\)",
                                 f.evidence) for f in check_sensors(short)[1]
-            if f.check == "slipped" and f.sensor != "pelvis_imu"}  # fmt: skip
+            if f.check == "slipped" and f.sensor != "pelvis_imu"}
     right, left = said["tibia_r_imu"].groups(), said["tibia_l_imu"].groups()
     assert right[0] != left[0]
     assert (right[1], left[1]) == (left[0], right[0])
@@ -271,7 +271,7 @@ def test_a_change_of_gait_on_a_real_recording_is_not_a_slip():
     assert {f.action for f in found} == {"listed"}
     assert {f.sensor for f in found} >= {"femur_l_imu", "femur_r_imu"}
     assert all("the movement itself changed" in f.evidence or "across a pause" in f.evidence
-               for f in found)  # fmt: skip
+               for f in found)
 
 
 @pytest.mark.dataset

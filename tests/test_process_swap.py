@@ -32,16 +32,16 @@ def _trial(motion: str, standing_s: float, knee: str = "free"):
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee=knee, root="freeflyer",
-                        ankle="free" if motion == "walk" else "universal")  # fmt: skip
+                        ankle="free" if motion == "walk" else "universal")
     artefacts = Artefacts() if motion in ("walk", "gait") else None
     return simulate_trial(sk, motion, duration_s=12.0, seed=0, standing_s=standing_s,
-                          artefacts=artefacts).raw_recording()  # fmt: skip
+                          artefacts=artefacts).raw_recording()
 
 
 def _swapped(rec: Recording, side: str) -> Recording:
     thigh, shank = f"femur_{side}_imu", f"tibia_{side}_imu"
     return rec.with_sensors({**rec.sensors, thigh: rec.sensors[shank],
-                             shank: rec.sensors[thigh]})  # fmt: skip
+                             shank: rec.sensors[thigh]})
 
 
 def _crossed(rec: Recording, segment: str) -> Recording:

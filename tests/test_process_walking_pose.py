@@ -25,9 +25,9 @@ def walk():
     from pipeline.simulate.model import simulate_trial
 
     sk = Skeleton.build(geometry_from_measures(SUBJECT)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     return simulate_trial(sk, "walk", duration_s=12.0, seed=0, standing_s=0.0,
-                          artefacts=Artefacts())  # fmt: skip
+                          artefacts=Artefacts())
 
 
 def _placement_errors(run, trial) -> dict[str, float]:
@@ -105,6 +105,6 @@ def test_the_real_walk_from_mid_walk(path):
     vicon = read_mot(DATA / "vicon" / "S02-Trial-Walk-1_vicon_ik.mot").columns
     cols = mot_columns(run)
     rmse = {c: float(np.degrees(np.sqrt(np.mean((cols[c] - vicon[c][1300:2075]) ** 2))))
-            for c in SAGITTAL}  # fmt: skip
+            for c in SAGITTAL}
     assert np.median(list(rmse.values())) < 5.5, rmse
     assert rmse["knee_angle_r"] < 4.0 and rmse["knee_angle_l"] < 8.0, rmse

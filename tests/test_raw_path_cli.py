@@ -64,13 +64,13 @@ def _kabsch_residual(A, B):
 def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
     sim, raw, out = tmp_path / "sim", tmp_path / "raw", tmp_path / "out"
     assert main(["simulate", "--out", str(sim), "--duration-s", "17", "--standing-s",
-                 str(STANDING_S), "--seed", "1"]) == 0  # fmt: skip
+                 str(STANDING_S), "--seed", "1"]) == 0
     _strip_quaternions(sim / "imu", raw)
     # the simulated knee is a hinge about the population AoR: the case Wang eq 9-13 corrects
     # exactly (without it the standing knee's ISB offset stays, see tests/test_commands_demo.py)
     assert main(["ik", "--orientations", str(raw), "--sex", "m", "--height-m", "1.75",
                  "--no-rerun", "--correction", "aor", "--name", "raw",
-                 "--out", str(out)]) == 0  # fmt: skip
+                 "--out", str(out)]) == 0
     summary = (out / "raw_summary.md").read_text()  # --name: "raw" alone names no recording
     assert "input: raw signals, orientations by VQF (9-D)" in summary
     assert "Functional knee calibration" in summary
@@ -88,7 +88,7 @@ def test_a_simulated_raw_folder_through_one_ik_command(tmp_path):
         for ours, theirs in (("hip_flexion", "hip_flexion"), ("hip_adduction", "hip_adduction"),
                              ("hip_rotation", "hip_rotation"), ("knee_flexion", "knee_angle"),
                              ("knee_adduction", "knee_adduction"),
-                             ("knee_rotation", "knee_rotation")):  # fmt: skip
+                             ("knee_rotation", "knee_rotation")):
             e = np.degrees(mot.columns[f"{theirs}_{s}"][n0:] - truth[f"{side}_{ours}"][n0:])
             rms[f"{side}_{ours}"] = float(np.sqrt(np.mean(e**2)))
     for key, value in rms.items():

@@ -50,7 +50,7 @@ def test_a_real_browser_renders_the_figures(page, tmp_path):
     shot = tmp_path / "shot.png"
     subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
                     f"--screenshot={shot}", "--window-size=1100,1400", path.as_uri()],
-                   capture_output=True, timeout=120, check=True)  # fmt: skip
+                   capture_output=True, timeout=120, check=True)
     img = np.asarray(Image.open(shot).convert("RGB")).astype(int)
     green = np.all(np.abs(img - [0x1A, 0x96, 0x41]) < 40, axis=2)
     assert green.sum() > 500  # the right side's curves drawn on the page, not a broken image

@@ -15,7 +15,7 @@ def _stage(errors: dict[str, list[tuple[float, float]]]) -> ImcStage:
                 for tibia_input in ("uncorrected", "stored"):
                     rows.append(dict(subject_id=sid, sex="m", tibia_input=tibia_input,
                                      positions="regression", correction=correction,
-                                     landmark=name, rms_mm=v))  # fmt: skip
+                                     landmark=name, rms_mm=v))
     return ImcStage(rows, [], [], tuple(errors), 0.0)
 
 
@@ -33,6 +33,6 @@ def test_rows_and_the_test_by_hand():
     from scipy.stats import wilcoxon
 
     assert wilcoxon(np.array([r["minus_closed_form_mm"] for r in new])).pvalue == pytest.approx(
-        2 / 2**6)  # fmt: skip
+        2 / 2**6)
     assert "| uncorrected | none | 6 |" in text and "n/a | 0/6 |" in text  # identical: no test
     assert "the 42 mm goal" in text and "not reached" in text

@@ -230,7 +230,7 @@ def dataset_samples():
                 f["EFL"],
                 t["MM"],
                 t["LM"],
-            )  # fmt: skip
+            )
         )
     return out
 

@@ -18,14 +18,14 @@ def _rows(offset_mm: float, landmark: str) -> list[dict]:
             for sid, d in ((1, -1.0), (2, 1.0)):
                 rows.append(dict(subject_id=sid if sex == "m" else sid + 10, sex=sex,
                                  tibia_input="stored", positions=positions, correction=correction,
-                                 landmark=name, rms_mm=mean + d))  # fmt: skip
+                                 landmark=name, rms_mm=mean + d))
     return rows
 
 
 def test_cells_counted_against_the_papers_means():
     stage = SimpleNamespace(corrections=("none", "average", "individual"),
                             trajectory_rows=_rows(8.0, "LM"), orientation_rows=[],
-                            factors=[])  # fmt: skip
+                            factors=[])
     cells = table4_agreement(stage)
     assert len(cells) == 4 * len(PAPER_TABLE_IV)
     far = [c for c in cells if abs(c[4] - c[5]) > 5.0]
@@ -43,7 +43,7 @@ def test_verdict_names_the_factor_closest_to_the_papers_male_lm():
                for i in (1, 2) for f, lm in (("ours", 61.7), ("a", 64.0), ("b", 58.5))]
     stage = SimpleNamespace(corrections=("none", "average", "individual"),
                             trajectory_rows=_rows(8.0, "LM"), orientation_rows=[],
-                            factors=factors)  # fmt: skip
+                            factors=factors)
     text = verdict_section(SimpleNamespace(results=[0] * 38, fits=[0] * 60), stage)
     assert "our male LM is 61.7 mm against 55.1 mm" in text
     assert "the closest is 'b' at 58.5 mm" in text

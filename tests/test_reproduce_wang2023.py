@@ -33,7 +33,7 @@ def test_stage1_files_and_columns(out):
     assert len(subjects) == 38
     assert list(subjects[0]) == ["subject_id", "sex", "height_mm", "shank_lateral_mm",
                                  "shank_medial_mm", "knee_width_mm", "ankle_width_mm",
-                                 "hip_fit_rms_mm", "n_frames"]  # fmt: skip
+                                 "hip_fit_rms_mm", "n_frames"]
     assert sum(r["sex"] == "m" for r in subjects) == 20
     assert all(0.5 < float(r["hip_fit_rms_mm"]) < 10 for r in subjects)
     assert len(read(out / "landmarks_in_segments.csv")) == 38 * 4
@@ -76,7 +76,7 @@ def test_trajectory_errors_match_the_paper_where_the_method_is_the_same(out):
     paper = {("m", "EFM"): 21.8, ("m", "EFL"): 21.4, ("f", "EFM"): 31.0, ("f", "EFL"): 30.2}
     for (sex, lm), value in paper.items():
         ours = _group(rows, sex=sex, landmark=lm, positions="omc", correction="none",
-                      tibia_input="stored")  # fmt: skip
+                      tibia_input="stored")
         assert abs(ours - value) < 5.0, (sex, lm, ours, value)
 
 
@@ -104,7 +104,7 @@ def test_rerun_recordings_show_the_moving_model_and_optical_landmarks(out):
     counts = entity_row_counts(files[0])
     names = {e.lstrip("/") for e in counts}
     for entity in ("world/model/right_tibia/mesh", "world/landmarks/right_MM",
-                   "world/reference/right_MM", "world/errors/right_MM"):  # fmt: skip
+                   "world/reference/right_MM", "world/errors/right_MM"):
         assert entity in names, (entity, sorted(names))
     assert any(n.startswith("plots/right_knee") for n in names)
     assert counts["/world/model/right_tibia"] > 2000
@@ -217,12 +217,12 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
             repr(m.shank_medial_m), "--knee-width-m", repr(m.knee_width_m), "--ankle-width-m",
             repr(m.ankle_width_m), "--segment-orientations", "--calibration-pose", "supine",
             "--sensor-to-model", *map(repr, IMC_SENSOR_TO_MODEL), "--correction", "aor",
-            "--no-joint-limits", "--no-rerun", "--out", str(tmp_path / "o")]  # fmt: skip
+            "--no-joint-limits", "--no-rerun", "--out", str(tmp_path / "o")]
     assert main(args) == 0
     rows = read(tmp_path / "o" / "knee_landmarks.csv")
     W = sensor_to_opensim_matrix(IMC_SENSOR_TO_MODEL)
     ours = {n: np.array([[float(row[f"right_{n}_{a}"]) for a in "xyz"] for row in rows]) @ W
-            for n in ("EFM", "EFL", "KJC", "MM", "LM")}  # back to the IMC world  # fmt: skip
+            for n in ("EFM", "EFL", "KJC", "MM", "LM")}  # back to the IMC world
     # the paper's equations, written out: eq 1-8 AoR, eq 9-13 correction towards the shipped
     # population AoR of the subject's sex, eq 15-17 trajectories from the regression positions
     pop = population_knee_axis(m.sex)
@@ -241,7 +241,7 @@ def test_user_path_on_a_users_sto_gives_the_reproductions_trajectories_and_error
     eF_p = align(r.femur_R, apply_correction(F, C_F), lag)[1]
     R = unify_frames(frame_from_femur(omc_p["KJC"], omc_F), frame_from_femur(imc_p["KJC"], eF_p))
     comp = compare_trajectories({n: imc_p[n] for n in ("EFM", "EFL", "MM", "LM")}, omc_p,
-                                R_imc_to_omc=R)  # fmt: skip
+                                R_imc_to_omc=R)
     table = read(out / "trajectory_errors.csv")
     want = dict(subject_id=str(sid), tibia_input="uncorrected", positions="regression",
                 correction="average")
@@ -259,17 +259,17 @@ def test_table4_factors_start_from_our_own_numbers_and_switch_one_choice(out):
     ours = {(r["subject_id"], r["landmark"]): float(r["rms_mm"])
             for r in read(out / "trajectory_errors.csv")
             if (r["tibia_input"], r["positions"], r["correction"]) == ("stored", "regression",
-                                                                        "reference")}  # fmt: skip
+                                                                        "reference")}
     subjects = {s for s, _ in ours}
     assert {(r["subject_id"], r["factor"]) for r in rows} == {(s, f) for s in subjects
-                                                              for f in FACTORS}  # fmt: skip
+                                                              for f in FACTORS}
     for r in rows:
         if r["factor"] == "ours":  # the factor study's baseline IS the Table IV cell
             assert abs(float(r["MM_mm"]) - ours[(r["subject_id"], "MM")]) < 1e-6
             assert abs(float(r["LM_mm"]) - ours[(r["subject_id"], "LM")]) < 1e-6
         if r["factor"] == "malleolus-Y quirk":  # only LM's y changes: MM is untouched
             base = next(b for b in rows if b["subject_id"] == r["subject_id"]
-                        and b["factor"] == "ours")  # fmt: skip
+                        and b["factor"] == "ours")
             assert float(r["MM_mm"]) == float(base["MM_mm"])
     report = (out / "report.md").read_text()
     assert "## Table IV male LM: the reference's choices one at a time" in report
@@ -282,7 +282,7 @@ def test_full_ipopt_beats_every_other_imu_only_correction_on_uncorrected_malleol
 
     def malleoli(correction):
         return np.mean([_group(rows, correction=correction, landmark=lm, **kw)
-                        for lm in ("MM", "LM")])  # fmt: skip
+                        for lm in ("MM", "LM")])
 
     for other in ("average", "ipopt", "hinge_ik"):
         assert malleoli("full_ipopt") < malleoli(other) - 3.0, other
@@ -290,7 +290,7 @@ def test_full_ipopt_beats_every_other_imu_only_correction_on_uncorrected_malleol
     # nothing, so the stored and uncorrected inputs give the same trajectories
     for lm in ("MM", "LM"):
         a = _group(rows, correction="full_ipopt", landmark=lm, positions="regression",
-                   tibia_input="stored")  # fmt: skip
+                   tibia_input="stored")
         assert a == pytest.approx(_group(rows, correction="full_ipopt", landmark=lm, **kw), abs=0.5)
     diag = read(out / "full_correction.csv")
     assert len(diag) == 32 and all(r["status"] == "Solve_Succeeded" for r in diag)
@@ -303,7 +303,7 @@ def test_limits_bound_the_imu_only_calibration(out):
     rows = read(out / "limits.csv")
     mean = {m: np.mean([float(r["malleoli_mm"]) for r in rows if r["method"] == m])
             for m in ("full_ipopt", "full_ipopt, own priors", "best constant",
-                      "optical orientations")}  # fmt: skip
+                      "optical orientations")}
     assert len(rows) == 4 * 16
     # each bound uses more of the subject's optical data than the one before, and does better
     assert mean["optical orientations"] < mean["best constant"] < mean["full_ipopt, own priors"]

@@ -66,12 +66,12 @@ def test_mvn_hip_offset_recovers_the_hip_of_a_synthetic_leg():
     n, width = 200, 0.24
     hip_local = np.array([0.0, 0.0, 0.34 * width])
     pelvis_local = {"pRightASI": [0.1, 0.05, width / 2], "pLeftASI": [0.1, 0.05, -width / 2],
-                    "pSacrum": [-0.04, 0.05, 0.0], "pHipOrigin": [0.0, 0.0, 0.0]}  # fmt: skip
+                    "pSacrum": [-0.04, 0.05, 0.0], "pHipOrigin": [0.0, 0.0, 0.0]}
     knee_local = {"EFM": np.array([0.0, -0.4, -0.045]), "EFL": np.array([0.0, -0.4, 0.045])}
     angles = np.linspace(0, 1.4, n)
     # the pelvis rotates (up to ~10 deg) and translates during the motion, as MVN's does
     R_pelvis = [exp3(np.array([0.05, 0.3, -0.02]) + 0.15 * np.sin(a) * np.array([1, 0, 1]))
-                for a in angles]  # fmt: skip
+                for a in angles]
     origin = np.array([0.5, 0.9, 0.2]) + 0.02 * np.sin(3 * angles)[:, None]
     axis_tilt = exp3(rng.normal(scale=0.2, size=3))
     points = {
@@ -87,7 +87,7 @@ def test_mvn_hip_offset_recovers_the_hip_of_a_synthetic_leg():
         )
     labels = tuple(points)
     m = C3dMarkers(labels, np.stack([points[k] for k in labels], axis=1), 100.0,
-                   np.arange(n) / 100.0, "m")  # fmt: skip
+                   np.arange(n) / 100.0, "m")
     offset, rms = mvn_hip_offset(m)
     np.testing.assert_allclose(offset, hip_local / width, atol=1e-9)
     assert rms < 1e-9

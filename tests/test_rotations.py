@@ -114,7 +114,7 @@ def test_space_fixed_xyz_by_hand():
     np.testing.assert_allclose(R @ [0, 0, 1], [0, 1, 0], atol=1e-15)
     a = np.array([0.3, -0.4, 1.1])
     np.testing.assert_allclose(rot.matrix_from_euler_xyz_fixed(a),
-                               rot.rot_z(1.1) @ rot.rot_y(-0.4) @ rot.rot_x(0.3))  # fmt: skip
+                               rot.rot_z(1.1) @ rot.rot_y(-0.4) @ rot.rot_x(0.3))
     back = rot.euler_xyz_fixed_from_matrix(rot.matrix_from_euler_xyz_fixed(a))
     np.testing.assert_allclose(back, a)
 
@@ -127,7 +127,7 @@ def _hard_rotations(n=400, seed=3):
     angles = np.concatenate([
         rng.uniform(0.0, np.pi, n - 60), np.zeros(10), 10.0 ** -rng.uniform(5, 12, 20),
         np.pi - 10.0 ** -rng.uniform(3, 10, 20), np.full(10, np.pi),
-    ])  # fmt: skip
+    ])
     return axes * angles[:, None]
 
 
@@ -152,7 +152,7 @@ def test_maps_agree_with_scipy_and_pinocchio():
     np.testing.assert_allclose(rot.matrix_from_quat(q), R, atol=1e-13)
     e = Rotation.from_matrix(R[:300]).as_euler("ZYX")
     np.testing.assert_allclose(rot.matrix_from_euler_zyx(rot.euler_zyx_from_matrix(R)), R,
-                               atol=1e-12)  # fmt: skip
+                               atol=1e-12)
     np.testing.assert_allclose(rot.euler_zyx_from_matrix(R[:300]), e, atol=1e-9)
     xyz = Rotation.from_matrix(R[:300]).as_euler("xyz")
     np.testing.assert_allclose(rot.euler_xyz_fixed_from_matrix(R[:300]), xyz, atol=1e-9)
@@ -179,7 +179,7 @@ def test_quat_xyzw_integrate_is_pinocchio_spherical_integrate():
     ref = [pin.integrate(model, a, b) for a, b in zip(q, v, strict=True)]
     np.testing.assert_allclose(ours, ref, atol=1e-12)
     np.testing.assert_allclose(rot.matrix_from_quat_xyzw(ours),
-                               rot.matrix_from_quat_xyzw(q) @ rot.exp3(v), atol=1e-12)  # fmt: skip
+                               rot.matrix_from_quat_xyzw(q) @ rot.exp3(v), atol=1e-12)
 
 
 def test_nan_in_nan_out():

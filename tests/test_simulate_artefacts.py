@@ -42,7 +42,7 @@ def test_the_sensors_move_on_their_segments_during_the_motion_only(trials):
 
 def test_the_floor_bends_the_feets_field_and_not_the_thighs():
     real = simulate_trial(motion="gait", duration_s=10.0, seed=1, standing_s=2.0,
-                          artefacts=Artefacts())  # fmt: skip
+                          artefacts=Artefacts())
     fields = {f: (i.recording.mag, i.rotation[:, 2, :]) for f, i in real.imus.items()}
     trust = field_trust(fields)
     assert trust["right_femur_imu"].trusted and trust["pelvis_imu"].trusted
@@ -51,7 +51,7 @@ def test_the_floor_bends_the_feets_field_and_not_the_thighs():
 
 def test_the_gyro_bias_wanders():
     still = simulate_trial(motion="static", duration_s=60.0, seed=2, noise=SensorNoise.none(),
-                           artefacts=Artefacts())  # fmt: skip
+                           artefacts=Artefacts())
     b = still.imus["pelvis_imu"].recording.gyr - still.imus["pelvis_imu"].gyro_bias
     drift = np.linalg.norm(b[-500:].mean(axis=0) - b[:500].mean(axis=0))
     assert 2e-4 < drift < 1e-2  # ~ 2e-4 rad/s per sqrt(s) over ~55 s, per axis

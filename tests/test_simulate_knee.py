@@ -90,7 +90,7 @@ def test_the_walks_knee_is_not_a_hinge(free, monkeypatch):
         extra = knees[side].stride_angles(2 * np.pi * tau / trial.walk.T, s)
         np.testing.assert_allclose(b, c_x * k + extra[:, 0], atol=1e-6)
         np.testing.assert_allclose(r, c_y * k + screw * (1 - np.exp(-k / SCREW_HOME_RAD))
-                                   + extra[:, 1], atol=1e-6)  # fmt: skip
+                                   + extra[:, 1], atol=1e-6)
         # sizes as the biplane study's (module docstring), over the walk
         r, b, k = np.degrees(r[walking]), np.degrees(b[walking]), np.degrees(k[walking])
         assert 4.0 < np.ptp(r) < 20.0 and 1.0 < np.ptp(b) < 8.0

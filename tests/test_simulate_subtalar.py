@@ -16,7 +16,7 @@ GEOMETRY = geometry_from_measures(Measures("f", 1.62))[0]
 def test_each_leg_turns_by_its_own_coefficient_times_its_inversion():
     sk = Skeleton.build(GEOMETRY, ankle="free")
     inversion = {"right": np.radians(np.linspace(-3.0, 8.0, 50)),
-                 "left": np.radians(np.linspace(5.0, -2.0, 50))}  # fmt: skip
+                 "left": np.radians(np.linspace(5.0, -2.0, 50))}
     turns = ankle_turns(sk, inversion, np.random.default_rng(7))
     assert [i for i, _ in turns] == [sk.q_index(f"{x}_ankle_Y") for x in ("right", "left")]
     ks = []
@@ -33,5 +33,5 @@ def test_each_leg_turns_by_its_own_coefficient_times_its_inversion():
 def test_the_models_two_axis_ankle_gets_no_turn_and_draws_nothing():
     rng = np.random.default_rng(7)
     assert ankle_turns(Skeleton.build(GEOMETRY), {"right": np.ones(3), "left": np.ones(3)},
-                       rng) == []  # fmt: skip
+                       rng) == []
     assert rng.uniform() == np.random.default_rng(7).uniform()

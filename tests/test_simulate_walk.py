@@ -90,12 +90,12 @@ def test_a_free_ankle_lets_the_tibia_turn_on_its_planted_foot(trial):
     from pipeline.simulate.subtalar import ANKLE_TURN_PER_INVERSION
 
     sk = Skeleton.build(geometry_from_measures(MEASURES)[0], knee="free", root="freeflyer",
-                        ankle="free")  # fmt: skip
+                        ankle="free")
     free = simulate_trial(sk, "walk", duration_s=12.0, seed=3, standing_s=STANDING)
     for side in ("right", "left"):
         foot = f"{side}_foot_imu"
         np.testing.assert_allclose(free.imus[foot].rotation, trial.imus[foot].rotation,
-                                   atol=1e-6)  # fmt: skip
+                                   atol=1e-6)
         # the foot's inversion in the world: the vertical in its frame, (., cos r, -sin r) times
         # the cosine of its pitch
         R = free.imus[foot].rotation @ free.imus[foot].R_segment.T
@@ -137,11 +137,11 @@ def test_v_and_a_are_the_time_derivatives_of_q(trial):
     steps = np.cumsum(0.5 * h * (a[1:] + a[:-1]), axis=0)
     np.testing.assert_allclose((v[500::100] - v[400:-100:100]),
                                steps[499::100] - steps[399:-100:100],
-                               atol=1e-3 * np.abs(v).max())  # fmt: skip
+                               atol=1e-3 * np.abs(v).max())
     # five-point differences: the swinging knee's jerk (it flexes to ~65 deg) defeats three
     five = (q[:-4, 7:] - 8 * q[1:-3, 7:] + 8 * q[3:-1, 7:] - q[4:, 7:]) / (12 * h)
     np.testing.assert_allclose(five[moving], v[2:-2, 6:][moving],
-                               atol=3e-3 * np.abs(v[:, 6:]).max())  # fmt: skip
+                               atol=3e-3 * np.abs(v[:, 6:]).max())
     R = matrix_from_quat(q[:, [6, 3, 4, 5]])
     dp = (q[2:, :3] - q[:-2, :3]) / (2 * h)
     close(np.einsum("nji,nj->ni", R[1:-1], dp), v[:, :3], 1e-3)

@@ -18,7 +18,7 @@ print("pandas" in sys.modules)
 
 def _pandas_imported(setup: str) -> bool:
     out = subprocess.run([sys.executable, "-c", CODE.format(setup=setup)], check=True,
-                         capture_output=True, text=True).stdout  # fmt: skip
+                         capture_output=True, text=True).stdout
     return out.strip() == "True"
 
 

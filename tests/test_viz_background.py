@@ -14,7 +14,7 @@ import pytest
 from pipeline.viz.background import BackgroundRecording
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork") or sys.platform == "darwin",
-                                reason="forks only where fork is safe")  # fmt: skip
+                                reason="forks only where fork is safe")
 
 
 @pytest.fixture(autouse=True)

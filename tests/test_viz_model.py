@@ -301,10 +301,10 @@ def test_a_body_that_walks_through_the_room(motion, tmp_path):
     prints = np.full((n, 3), np.nan)
     prints[500:1500], prints[1500:] = [1.0, -0.9, 0.1], [2.5, -0.9, 0.1]
     path = log_motion(tmp_path / "walk.rrd", t, sk, Q, root_path=root, landmarks=False,
-                      reference_landmarks={"right_footprint": prints})  # fmt: skip
+                      reference_landmarks={"right_footprint": prints})
     strip = np.array(_rows(path, "/world/walk/path", static=True)["LineStrips3D:strips"][0][0])
     footprints = np.array(_rows(path, "/world/walk/right_footprints", static=True)[
-        "Points3D:positions"][0])  # fmt: skip
+        "Points3D:positions"][0])
     np.testing.assert_allclose(footprints, [[1.0, -0.9, 0.1], [2.5, -0.9, 0.1]])
     assert np.ptp(strip[:, 1]) == 0.0  # on the floor
     assert np.ptp(strip[:, 0]) > 3.9 and np.ptp(strip[:, 2]) > 0.29

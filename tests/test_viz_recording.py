@@ -205,7 +205,7 @@ def test_the_program_records_without_importing_pandas(tmp_path):
     code = ("import sys; sys.argv = ['pipeline', 'demo', '--out', sys.argv[1]]\n"
             "from pipeline.cli import main\nrc = main()\nprint(rc, 'pandas' in sys.modules)")
     res = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
-                         text=True, check=True)  # fmt: skip
+                         text=True, check=True)
     assert res.stdout.split()[-2:] == ["0", "False"]
     assert "Warning" not in res.stderr
     rrd = next(tmp_path.glob("*.rrd"))

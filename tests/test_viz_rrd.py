@@ -36,7 +36,7 @@ class SdkWriter:
     def send_columns(self, entity, t, archetype, **fields):
         cols = getattr(self.rr, archetype).columns(**fields)
         self.rec.send_columns(entity, indexes=[self.rr.TimeColumn("time", duration=t)],
-                              columns=cols)  # fmt: skip
+                              columns=cols)
 
     def log_file_from_path(self, path, entity_path_prefix):
         self.rec.log_file_from_path(path, entity_path_prefix=entity_path_prefix, static=True)
@@ -67,9 +67,9 @@ def _content(path: Path) -> list:
             if name.startswith("log_") or name.startswith("rerun."):
                 continue  # the writer's log time, row ids
             meta = {k.decode(): v.decode() for k, v in (rb.schema.field(i).metadata or {}).items()
-                    if b"component" in k or b"archetype" in k}  # fmt: skip
+                    if b"component" in k or b"archetype" in k}
             cols[name] = (str(rb.schema.field(i).type), sorted(meta.items()),
-                          rb.column(i).to_pylist())  # fmt: skip
+                          rb.column(i).to_pylist())
         rows.append((c.entity_path, c.is_static, sorted(cols.items(), key=lambda kv: kv[0])))
     return sorted(rows, key=repr)
 
@@ -114,7 +114,7 @@ def _scene(walk: bool = False):
         ref["left_footprint"] = np.where(t[:, None] < 1.0, [0.2, -0.9, -0.1], [1.3, -0.9, -0.1])
     return motion_scene(t, sim.skeleton, sim.q, reference_landmarks=ref, reference_angles=truth,
                         extra_scalars={"residual": extra}, recording_name="sim",
-                        root_path=root)  # fmt: skip
+                        root_path=root)
 
 
 @pytest.mark.parametrize("walk", [False, True])
@@ -168,7 +168,7 @@ def test_recording_written_without_importing_rerun(tmp_path):
         "print(sorted(m for m in sys.modules if m == 'rerun' or m.startswith('rerun.')))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, cwd=Path(__file__).resolve().parents[1])  # fmt: skip
+                         check=True, cwd=Path(__file__).resolve().parents[1])
     assert out.stdout.strip() == "[]"
     from pipeline.viz.recording import entity_row_counts
 
@@ -194,7 +194,7 @@ def test_trial_with_gaps_and_urdf_equals_rerun_sdk(tmp_path, monkeypatch):
     poses = {"femur": (R, rng.standard_normal((n, 3)))}
     angles = {"knee_flexion": np.sin(t)}
     kwargs = dict(reference_landmarks=ref, segment_poses=poses, joint_angles=angles,
-                  urdf_path=human_urdf(), recording_name="gaps")  # fmt: skip
+                  urdf_path=human_urdf(), recording_name="gaps")
     ours = recording.log_trial(tmp_path / "ours.rrd", t, lm, **kwargs)
     monkeypatch.setattr(recording, "RrdWriter", SdkWriter)
     sdk = recording.log_trial(tmp_path / "sdk.rrd", t, lm, **kwargs)
@@ -216,7 +216,7 @@ def test_rerun_verifies_the_file(tmp_path):
         pytest.skip("the rerun command-line program is not installed")
     path = log_scene(tmp_path / "ours.rrd", _scene())
     out = subprocess.run([exe, "rrd", "verify", str(path)], capture_output=True, text=True,
-                         timeout=120)  # fmt: skip
+                         timeout=120)
     assert out.returncode == 0 and "verified without error" in out.stdout + out.stderr, out
 
 

@@ -102,7 +102,7 @@ def test_sigterm_stops_the_served_viewer_and_its_children(rrd):
 
     web, grpc = _free_port(), _free_port()
     cmd = [sys.executable, "-m", "pipeline", "view", str(rrd), "--web", "--port", str(web),
-           "--grpc-port", str(grpc)]  # fmt: skip
+           "--grpc-port", str(grpc)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert f"127.0.0.1:{web}" in proc.stdout.readline()

@@ -26,7 +26,7 @@ import numpy as np
 from pipeline.analysis.strides import Stride, in_the_means
 
 __all__ = ["CYCLE_COLUMNS", "CYCLE_POINTS", "Cycles", "CycleMean", "cycle_angles", "cycle_means",
-           "cycle_table", "cycles_csv", "cycles_figures"]  # fmt: skip
+           "cycle_table", "cycles_csv", "cycles_figures"]
 
 #: Points per cycle: 0, 1, ..., 100 % of the stride.
 CYCLE_POINTS = 101
@@ -38,7 +38,7 @@ CYCLE_COLUMNS = {"pelvis_tilt": "pelvis_tilt", "pelvis_list": "pelvis_list",
                  "hip_adduction": "hip_adduction", "hip_rotation": "hip_rotation",
                  "knee_flexion": "knee_angle", "knee_adduction": "knee_adduction",
                  "knee_rotation": "knee_rotation", "ankle_flexion": "ankle_angle",
-                 "ankle_inversion": "subtalar_angle"}  # fmt: skip
+                 "ankle_inversion": "subtalar_angle"}
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def _curve(time: np.ndarray, angle: np.ndarray, stride: Stride) -> np.ndarray:
 
 
 def cycle_angles(time: np.ndarray, joint_angles: dict[str, np.ndarray],
-                 strides: list[Stride]) -> Cycles:  # fmt: skip
+                 strides: list[Stride]) -> Cycles:
     """Every stride's angles over its cycle (module docstring); columns a run has for neither
     leg are left out."""
     angles = {}
@@ -118,14 +118,14 @@ def cycles_csv(cycles: Cycles) -> str:
     import io
 
     columns = ["stride", "side", "straight", "steady", "in_means", "cycle_percent",
-               *cycles.angles]  # fmt: skip
+               *cycles.angles]
     buf = io.StringIO()
     buf.write(",".join(columns) + "\n")
     percent = np.arange(CYCLE_POINTS)
     for k, s in enumerate(cycles.strides):
         head = f"{k + 1},{s.side},{_bool(s.straight)},{_bool(s.steady)},{_bool(in_the_means(s))}"
         values = np.column_stack([np.degrees(a[k]) for a in cycles.angles.values()]) \
-            if cycles.angles else np.zeros((CYCLE_POINTS, 0))  # fmt: skip
+            if cycles.angles else np.zeros((CYCLE_POINTS, 0))
         for p, row in zip(percent, values, strict=True):
             cells = ",".join("" if not np.isfinite(v) else f"{v:.6g}" for v in row)
             buf.write(f"{head},{p},{cells}\n" if cells else f"{head},{p}\n")
@@ -144,7 +144,7 @@ def cycles_figures(cycles: Cycles) -> dict[str, dict[str, dict]]:
 
     return {side: {col: {"n": m.n, "mean_deg": listed(m.mean), "sd_deg": listed(m.sd)}
                    for col, m in means.items()}
-            for side, means in cycle_means(cycles).items()}  # fmt: skip
+            for side, means in cycle_means(cycles).items()}
 
 
 def cycle_table(cycles: Cycles) -> list[str]:
@@ -153,12 +153,12 @@ def cycle_table(cycles: Cycles) -> list[str]:
     means = cycle_means(cycles)
     counts = {side: max((m.n for m in means[side].values()), default=0) for side in means}
     lines = ["| angle over the cycle (deg) | right max | right min | right range | left max | "
-             "left min | left range |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+             "left min | left range |", "|---|---|---|---|---|---|---|"]
     for column, curves in cycles.angles.items():
         cells = []
         for side in ("right", "left"):
             chosen = [k for k, s in enumerate(cycles.strides) if s.side == side and in_the_means(s)
-                      and np.all(np.isfinite(curves[k]))]  # fmt: skip
+                      and np.all(np.isfinite(curves[k]))]
             c = np.degrees(curves[chosen]) if chosen else np.zeros((0, CYCLE_POINTS))
             for v in (c.max(axis=1), c.min(axis=1), np.ptp(c, axis=1)) if len(c) else ((),) * 3:
                 cells.append(_mean_sd(np.asarray(v)))

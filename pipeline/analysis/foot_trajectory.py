@@ -69,7 +69,7 @@ def _level(p: np.ndarray, rests: np.ndarray, up: int) -> None:
 
 def foot_trajectory(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.ndarray,
                     level_floor: bool = True, rotation: np.ndarray | None = None,
-                    up: int = 2) -> FootTrajectory:  # fmt: skip
+                    up: int = 2) -> FootTrajectory:
     """The sensor's path and orientation from its first rest to its last (module docstring);
     ``level_floor``: every rest at the same height (a level floor; off for stairs or slopes).
     ``rotation`` (N, 3, 3) sensor -> world: orientations known already (e.g. the IK's, in the

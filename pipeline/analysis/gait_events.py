@@ -45,7 +45,7 @@ __all__ = ["MAX_STANCE_S", "MIN_SHANK_PEAK", "SEGMENTS", "SHANK_PEAK_SHARE", "ST
            "STRIDE_RANGE_S", "GaitEvents",
            "MIN_STEP_M", "MIN_SWING_RATE", "REST_ACC", "REST_GYRO", "gait_events", "rest_periods",
            "rest_vertical", "sagittal_rate", "stance_rests", "stride_period",
-           "swing_peaks"]  # fmt: skip
+           "swing_peaks"]
 
 #: Rest: angular speed below this (rad/s; ~29 deg/s), specific force within REST_ACC (m/s^2) of
 #: 1 g, over a REST_WINDOW_S window; kept when it lasts MIN_REST_S.
@@ -131,7 +131,7 @@ def rest_vertical(acc: np.ndarray, rests: np.ndarray) -> np.ndarray:
 
 
 def sagittal_rate(gyr: np.ndarray, rests: np.ndarray,
-                  up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                  up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(w, axis)``: the gyroscope on the principal axis of its horizontal part over the samples
     out of rest, signed so that the swings (the largest turn between two rests; without rests,
     the largest peak) are positive.
@@ -153,7 +153,7 @@ def sagittal_rate(gyr: np.ndarray, rests: np.ndarray,
     axis = vt[0]
     w = g @ axis
     turns = [_largest_turn(w, a, b) for (_, a), (b, _) in zip(rests[:-1], rests[1:], strict=True)
-             if b - a >= 3]  # fmt: skip
+             if b - a >= 3]
     if turns:  # the walk's swings outweigh a standing start's or a shuffle's small turns
         flip = np.sum(turns) < 0
     else:
@@ -259,7 +259,7 @@ def stride_period(w: np.ndarray, rate_hz: float) -> float | None:
 
 
 def stance_rests(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.ndarray,
-                 w: np.ndarray) -> np.ndarray:  # fmt: skip
+                 w: np.ndarray) -> np.ndarray:
     """``rests`` with, for each stance between two swings (:func:`swing_peaks` of ``w``, at most
     :data:`MAX_STANCE_S` apart) within a stretch of more than one and a half strides without
     a rest, its stillest :data:`REST_WINDOW_S` window in its middle three fifths: the
@@ -274,7 +274,7 @@ def stance_rests(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.nda
     swing and a stance, not a stance alone."""
     n = max(1, int(round(REST_WINDOW_S * rate_hz)))
     energy = (np.linalg.norm(np.nan_to_num(gyr), axis=1) / REST_GYRO) ** 2 + (
-        (np.linalg.norm(np.nan_to_num(acc), axis=1) - G) / REST_ACC) ** 2  # fmt: skip
+        (np.linalg.norm(np.nan_to_num(acc), axis=1) - G) / REST_ACC) ** 2
     window = np.convolve(energy, np.ones(n) / n, mode="valid")  # window k: samples k..k+n-1
     added = []
     stride = stride_period(w, rate_hz)
@@ -289,7 +289,7 @@ def stance_rests(gyr: np.ndarray, acc: np.ndarray, rate_hz: float, rests: np.nda
 
 
 def _stances(peaks: np.ndarray, rests: np.ndarray, longest: float,
-             stride: float | None) -> list[tuple[int, int]]:  # fmt: skip
+             stride: float | None) -> list[tuple[int, int]]:
     """The sample ranges between consecutive swing ``peaks`` that hold no rest, at most
     ``longest`` samples long, within a stretch between two rests that lasts more than one and a
     half ``stride`` (a walk whose stances the fixed thresholds do not find; a stretch of one
@@ -299,7 +299,7 @@ def _stances(peaks: np.ndarray, rests: np.ndarray, longest: float,
     ends = [0, *(int(v) for r in rests for v in r), 1 << 62]
     gaps = [(a, b) for a, b in zip(ends[0::2], ends[1::2], strict=False) if b - a > 1.5 * stride]
     return [(int(a), int(b)) for a, b in zip(peaks[:-1], peaks[1:], strict=True)
-            if b - a <= longest and any(g0 <= a and b <= g1 for g0, g1 in gaps)]  # fmt: skip
+            if b - a <= longest and any(g0 <= a and b <= g1 for g0, g1 in gaps)]
 
 
 #: The segments whose sensor gives events: a foot's rests in stance, a shank's swing peaks.
@@ -307,7 +307,7 @@ SEGMENTS = ("foot", "shank")
 
 
 def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
-                segment: str = "foot") -> GaitEvents:  # fmt: skip
+                segment: str = "foot") -> GaitEvents:
     """Rests, swings and contacts of a ``segment`` (:data:`SEGMENTS`) sensor (module
     docstring), event times in fractional samples."""
     if segment not in SEGMENTS:
@@ -341,4 +341,4 @@ def gait_events(gyr: np.ndarray, acc: np.ndarray, rate_hz: float,
         fc.append(float(a + np.argmin(w[a:start])))
         ic.append(_crossing(w, stop))
     return GaitEvents(rests, np.asarray(swing, int), np.asarray(ic, float), np.asarray(fc, float),
-                      axis, path)  # fmt: skip
+                      axis, path)

@@ -31,7 +31,7 @@ __all__ = ["ANGLE_NAMES", "angles_of_segments", "jcs_angles", "joint_angles", "s
 #: Joint -> the names of its three JCS angles (the ankle's third is not in the model).
 ANGLE_NAMES = {"hip": ("flexion", "adduction", "rotation"),
                "knee": ("flexion", "adduction", "rotation"),
-               "ankle": ("flexion", "inversion", "rotation")}  # fmt: skip
+               "ankle": ("flexion", "inversion", "rotation")}
 
 
 def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: str) -> np.ndarray:
@@ -43,7 +43,7 @@ def jcs_angles(R_proximal: np.ndarray, R_distal: np.ndarray, joint: str, side: s
     """
     if joint not in JOINT_SEGMENTS:
         raise InputError(f"expected joint 'hip', 'knee' or 'ankle', got {joint!r}",
-                         field="joint")  # fmt: skip
+                         field="joint")
     if side not in ("right", "left"):
         raise InputError(f"expected side 'right' or 'left', got {side!r}", field="side")
     Rp, Rd = np.asarray(R_proximal, dtype=float), np.asarray(R_distal, dtype=float)

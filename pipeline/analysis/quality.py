@@ -89,6 +89,6 @@ def quality_flags(
             "joints at their limits for a long share of the trial: " + ", ".join(at_limit)
             + "; likely a mis-mounted or mis-mapped sensor, a wrong heading, or a knee model "
             "that cannot follow the data (try --knee free)"
-        )  # fmt: skip
+        )
     flags += [n for n in notes if "disagree" in n or "keeps its thigh sensor's heading" in n]
     return flags

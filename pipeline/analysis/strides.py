@@ -32,7 +32,7 @@ from pipeline.analysis.gait_events import GaitEvents
 __all__ = ["MAX_STRIDE_S", "MERGED_SHARE", "STRAIGHT_TURN_DEG", "STRIDES_CSV_COLUMNS",
            "STRIDE_COLUMNS", "Stride",
            "foot_strides", "in_the_means", "left_out", "mark_steady", "stride_rows",
-           "stride_summary", "stride_table", "strides_csv"]  # fmt: skip
+           "stride_summary", "stride_table", "strides_csv"]
 
 #: A stride turning less than this (deg) is straight.
 STRAIGHT_TURN_DEG = 20.0
@@ -87,12 +87,12 @@ def _path_measures(events: GaitEvents, path: FootTrajectory, k0: float, k1: floa
     length = float(np.linalg.norm(p1[:2] - p0[:2]))
     clearance = float(np.nanmax(path.position[r0[1]:r1[0] + 1, 2]) - p0[2])
     turn = np.degrees(np.angle(np.exp(1j * (_heading(path.rotation[m1]) -
-                                            _heading(path.rotation[m0])))))  # fmt: skip
+                                            _heading(path.rotation[m0])))))
     return length, clearance, float(turn)
 
 
 def foot_strides(side: str, time: np.ndarray, events: GaitEvents,
-                 path: FootTrajectory | None) -> list[Stride]:  # fmt: skip
+                 path: FootTrajectory | None) -> list[Stride]:
     """Every stride of one foot (module docstring)."""
     out = []
 
@@ -131,7 +131,7 @@ def left_out(strides: list[Stride]) -> dict[str, int]:
     """Why strides are left out of the means: their counts (``turning``, ``starting or
     stopping``, ``merged``: longer than :data:`MERGED_SHARE` times the side's median)."""
     typical = {side: float(np.median([s.stride_time_s for s in strides if s.side == side]))
-               for side in {s.side for s in strides}}  # fmt: skip
+               for side in {s.side for s in strides}}
     merged = [s for s in strides if s.stride_time_s > MERGED_SHARE * typical[s.side]]
     ends = [s for s in strides if not s.steady and s not in merged]
     turning = [s for s in strides if s.steady and not s.straight and np.isfinite(s.turn_deg)]
@@ -182,7 +182,7 @@ def strides_csv(strides: list[Stride]) -> str:
         return "" if isinstance(v, float) and not np.isfinite(v) else v
 
     rows = [{"stride": k + 1, **{c: cell(getattr(s, c)) for c in STRIDE_COLUMNS},
-             "in_means": cell(in_the_means(s))} for k, s in enumerate(strides)]  # fmt: skip
+             "in_means": cell(in_the_means(s))} for k, s in enumerate(strides)]
     return csv_text(rows, STRIDES_CSV_COLUMNS)
 
 
@@ -190,22 +190,22 @@ def strides_csv(strides: list[Stride]) -> str:
 _SHOWN = {"stride_time_s": ("stride time (s)", 1.0, 2), "stance_share": ("stance share", 1.0, 3),
           "stride_length_m": ("stride length (m)", 1.0, 2), "speed_m_s": ("speed (m/s)", 1.0, 2),
           "cadence_steps_min": ("cadence (steps/min)", 1.0, 1),
-          "clearance_m": ("clearance (cm)", 100.0, 1)}  # fmt: skip
+          "clearance_m": ("clearance (cm)", 100.0, 1)}
 
 
 def stride_table(strides: list[Stride]) -> list[str]:
     """The strides' mean ± SD per side and over both, as Markdown lines."""
     summary = stride_summary(strides)
     n = {g: sum(1 for s in strides if g in ("both", s.side) and in_the_means(s))
-         for g in summary}  # fmt: skip
+         for g in summary}
     lines = [f"| parameter | right (n={n['right']}) | left (n={n['left']}) | "
-             f"both (n={n['both']}) |", "|---|---|---|---|"]  # fmt: skip
+             f"both (n={n['both']}) |", "|---|---|---|---|"]
     for col, (label, scale, digits) in _SHOWN.items():
         cells = []
         for group in ("right", "left", "both"):
             mean, sd, k = summary[group][col]
             cells.append("" if k == 0 else f"{scale * mean:.{digits}f} ± {scale * sd:.{digits}f}"
-                         if k > 1 else f"{scale * mean:.{digits}f}")  # fmt: skip
+                         if k > 1 else f"{scale * mean:.{digits}f}")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     out = left_out(strides)
     lines.append(f"| strides turning {STRAIGHT_TURN_DEG:.0f} deg or more | | | {out['turning']} |")

@@ -92,7 +92,7 @@ class KneeAoR:
             femur_axis=normalize(femur_axis), tibia_axis=normalize(tibia_axis), n_pairs=0,
             sd_angle_femur=np.nan, sd_angle_tibia=np.nan, pairs=np.zeros((0, 2), dtype=int),
             angles=np.zeros(0), femur_axes=empty, tibia_axes=empty, world_axes=empty,
-        )  # fmt: skip
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -380,7 +380,7 @@ def measured_aor(
 ) -> KneeAoR:
     """The AoR the recording shows, where the closed-form corrections start: :func:`knee_aor`
     (eq 1-8), or, where eq 1-8 find no usable pair, ``fallback_axes`` (femoral, tibial; e.g. the
-    whole-trial hinge fit's) as a :class:`KneeAoR` without pairs."""  # fmt: skip
+    whole-trial hinge fit's) as a :class:`KneeAoR` without pairs."""
     try:
         return knee_aor(femur_R, tibia_R, **aor_kwargs)
     except InputError:

@@ -175,7 +175,7 @@ def still_start(gyr: np.ndarray, acc: np.ndarray) -> int:
     """How many samples the recording starts with still: |gyro| < 0.05 rad/s and
     | |a| - g | < 0.3 m/s^2 (the rest test of ``rest_start`` and :func:`rest_bias`)."""
     still = (np.linalg.norm(gyr, axis=1) < 0.05) & (
-        np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)  # fmt: skip
+        np.abs(np.linalg.norm(acc, axis=1) - _GRAVITY) < 0.3)
     return int(np.argmin(still)) if not still.all() else len(still)
 
 
@@ -217,7 +217,7 @@ def filter_orientations(
         if a.shape != (t.size, 3) or not np.all(np.isfinite(a)):
             bad = int(np.sum(~np.all(np.isfinite(a), axis=1))) if a.ndim == 2 else a.size
             raise InputError(f"expected {t.size} finite samples of 3 values, got shape "
-                             f"{a.shape} with {bad} missing", field=name)  # fmt: skip
+                             f"{a.shape} with {bad} missing", field=name)
     return _FILTERS[method](t, gyr, acc, mag)
 
 
@@ -249,7 +249,7 @@ def _pi(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray | None)
         return mahony_filter(t, gyr, acc, **TUNED).quat
     k = min(len(t), max(2, int(BACKWARD_START_S / period)))
     back = mahony_filter(t[:k], -gyr[:k][::-1], acc[:k][::-1],
-                         **{**TUNED, "rest_start": False})  # fmt: skip
+                         **{**TUNED, "rest_start": False})
     return mahony_filter(t, gyr, acc, q0=back.quat[-1], **TUNED).quat
 
 

@@ -75,7 +75,7 @@ def _ipopt(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationRes
 
 def _classic(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationResult:
     return calibrate_classic(data, joint, method, seed=seed, quat_1=quat_1, quat_2=quat_2,
-                             **options)  # fmt: skip
+                             **options)
 
 
 #: Method name -> how it calibrates (adding a method: one function and one entry here, its name
@@ -83,7 +83,7 @@ def _classic(data, joint, method, seed, quat_1, quat_2, options) -> CalibrationR
 #: and of its population option (swarms).
 SOLVERS = {"ipopt": _ipopt, "gn": _classic, "dwpso": _classic, "gwo": _classic}
 ITERATION_OPTION = {"ipopt": "max_iter", "gn": "max_iter", "dwpso": "iterations",
-                    "gwo": "iterations"}  # fmt: skip
+                    "gwo": "iterations"}
 POPULATION_OPTION = {"dwpso": "particles", "gwo": "wolves"}
 
 
@@ -105,11 +105,11 @@ def verify(result: CalibrationResult, second: CalibrationResult) -> CalibrationR
         if axis_deg > AGREEMENT_DEG:
             problems.append(f"axes of two independent starts {axis_deg:.2f} deg apart")
     pos_m = float(max(np.linalg.norm(result.position_1_m - second.position_1_m),
-                      np.linalg.norm(result.position_2_m - second.position_2_m)))  # fmt: skip
+                      np.linalg.norm(result.position_2_m - second.position_2_m)))
     if pos_m > AGREEMENT_M:
         problems.append(f"positions of two independent starts {1e3 * pos_m:.1f} mm apart")
     obs = result.observability
     note = f"independent start: axes {axis_deg:.3f} deg, positions {1e3 * pos_m:.2f} mm apart"
     obs = dataclasses.replace(obs, undetermined=obs.undetermined + tuple(problems),
-                              message=f"{obs.message} | {note}")  # fmt: skip
+                              message=f"{obs.message} | {note}")
     return dataclasses.replace(result, observability=obs, seconds=result.seconds + second.seconds)

@@ -161,7 +161,7 @@ def correct_knee(
     """
     if method not in _FROM_ORIENTATIONS:
         raise InputError(f"expected a correction in {_FROM_ORIENTATIONS}, got {method!r} "
-                         "('functional' is correct_knee_to_axes)", field="correction")  # fmt: skip
+                         "('functional' is correct_knee_to_axes)", field="correction")
     F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
     a_F = np.asarray(reference_femur_axis, dtype=float)
     a_T = np.asarray(reference_tibia_axis, dtype=float)
@@ -176,7 +176,7 @@ def correct_knee(
         reason = f"the knee AoR could not be estimated: {exc.message}"
         I3 = np.eye(3)
         return KneeCorrection(side, method, False, reason, I3, I3, None, None, a_F, a_T, 0,
-                              before, before)  # fmt: skip
+                              before, before)
     if method == "aor-ipopt":
         from pipeline.calibration.aor_ipopt import aor_correction_ipopt  # CasADi: only here
 
@@ -185,7 +185,7 @@ def correct_knee(
     else:
         C_F, C_T = correction_rotations(measured, a_F, a_T)
     return _applied(side, method, F, T, C_F, C_T, measured.femur_axis, measured.tibia_axis, a_F,
-                    a_T, measured.n_pairs, before)  # fmt: skip
+                    a_T, measured.n_pairs, before)
 
 
 def correct_knee_to_axes(
@@ -221,7 +221,7 @@ def correct_knee_to_axes(
                   f"{np.degrees(np.arccos(MIN_AXIS_Z)):.0f} deg from the medio-lateral axis)")
         I3 = np.eye(3)
         return KneeCorrection(side, method, False, reason, I3, I3, v_F, v_T, a_F, a_T, 0, before,
-                              before)  # fmt: skip
+                              before)
     C_F, C_T = rotation_aligning(a_F, v_F), rotation_aligning(a_T, v_T)  # as eq 10-12
     return _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, 0, before)
 
@@ -280,7 +280,7 @@ def population_correction(
     F, T = np.asarray(femur_R, dtype=float), np.asarray(tibia_R, dtype=float)
     before = knee_hinge_residual(F, T, a_F, a_T)
     c = _applied(side, "population", F, T, np.eye(3), rotation_aligning(a_T, v_T), a_F, v_T, a_F,
-                 a_T, 0, before)  # fmt: skip
+                 a_T, 0, before)
     return replace(c, reason=reason, measured_femur_axis=None, measured_tibia_axis=None)
 
 
@@ -288,7 +288,7 @@ def _applied(side, method, F, T, C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before) 
     """An applied correction, with the hinge residual about the reference after it."""
     after = knee_hinge_residual(F @ C_F, T @ C_T, a_F, a_T)
     return KneeCorrection(side, method, True, "", C_F, C_T, v_F, v_T, a_F, a_T, n_pairs, before,
-                          after)  # fmt: skip
+                          after)
 
 
 def carried_correction(R_co: np.ndarray, R_child: np.ndarray) -> np.ndarray:

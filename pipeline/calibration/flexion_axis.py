@@ -99,13 +99,13 @@ def flexion_axis(
     u = np.asarray(up, dtype=float)
     if u.shape != w.shape:
         raise InputError(f"expected the vertical per sample, {w.shape}, got {u.shape}",
-                         field="up")  # fmt: skip
+                         field="up")
     w_h = w - np.sum(w * u, axis=1, keepdims=True) * u
     moving = np.linalg.norm(w_h, axis=1) > min_speed
     if moving.sum() < _MIN_SAMPLES:
         raise InputError(f"the segment turns faster than {min_speed:g} rad/s in only "
                          f"{int(moving.sum())} samples: no flexion axis (does it walk?)",
-                         field="gyr")  # fmt: skip
+                         field="gyr")
     X = w_h[moving]
     _, S, Vt = np.linalg.svd(X, full_matrices=False)
     axis = Vt[0]
@@ -178,11 +178,11 @@ def leg_flexion_axes(
     axes = {seg: flexion_axis(g, u, rate_hz) for seg, (g, u) in segments.items()}
     if "femur" in axes and "tibia" in axes:
         s_f, s_t = knee_signs(segments["femur"][1], segments["tibia"][1], axes["femur"].axis,
-                              axes["tibia"].axis, rate_hz)  # fmt: skip
+                              axes["tibia"].axis, rate_hz)
         axes["femur"], axes["tibia"] = _flip(axes["femur"], s_f), _flip(axes["tibia"], s_t)
     if "foot" in axes and "tibia" in axes:
         rates = [lowpass(segments[seg][0], rate_hz, CUTOFF_HZ) @ axes[seg].axis
-                 for seg in ("tibia", "foot")]  # fmt: skip
+                 for seg in ("tibia", "foot")]
         axes["foot"] = _flip(axes["foot"], float(np.sign(np.corrcoef(*rates)[0, 1])) or 1.0)
     return axes
 
@@ -219,7 +219,7 @@ def stride_frequency(rate: np.ndarray, rate_hz: float) -> float:
     if share < MIN_STRIDE_SHARE:
         raise InputError(f"the thigh does not swing once per stride ({share:.2f} of its flexion "
                          f"rate's power near {f:.2f} Hz, walking: >= {MIN_STRIDE_SHARE:g})",
-                         field="gyr")  # fmt: skip
+                         field="gyr")
     return f
 
 
@@ -241,7 +241,7 @@ def pelvis_lateral_line(
     speed = float(np.sqrt(np.mean(np.sum(w_h**2, axis=1))))
     if not speed >= MIN_LIST_RATE:
         raise InputError(f"the pelvis does not list ({speed:.3f} rad/s at the stride frequency, "
-                         f"walking: >= {MIN_LIST_RATE:g})", field="gyr")  # fmt: skip
+                         f"walking: >= {MIN_LIST_RATE:g})", field="gyr")
     _, S, Vt = np.linalg.svd(w_h, full_matrices=False)
     line = np.cross(u.mean(axis=0), Vt[0])
     return FlexionAxis(line / np.linalg.norm(line), float(S[0] ** 2 / np.sum(S**2)), 1.0)

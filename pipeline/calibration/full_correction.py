@@ -121,7 +121,7 @@ NX = 11
 # Parameters p: the fixed geometry, then the term scales, then the hinge and plane samples.
 _GEOMETRY = (("R0F", 9), ("R0T", 9), ("aF", 3), ("aT", 3), ("TF", 6), ("TT", 6), ("n0", 3),
              ("TN", 6), ("K0", 9), ("S0inv", 9), ("M0", 9), ("pK", 3), ("pA", 3),
-             ("scales", 5))  # fmt: skip
+             ("scales", 5))
 _OFFSETS = {}
 _n = 0
 for _name, _size in _GEOMETRY:
@@ -184,7 +184,7 @@ def _cost_terms(x, p, nh: int, np_: int, loss: str, scale: float):
     # 3 - tr exp(δ) = 3 - tr(R0ᵀ C)
     gauge = s[4] * ((3 - ca.trace(ca.mtimes(R0F.T, CF))) + (3 - ca.trace(ca.mtimes(R0T.T, CT))))
     return {"hinge": s[0] * hinge, "axis": axis, "rest": rest, "plane": s[3] * plane,
-            "gauge": gauge}  # fmt: skip
+            "gauge": gauge}
 
 
 def _n_params(nh: int, np_: int) -> int:
@@ -295,20 +295,20 @@ def full_correction_ipopt(
 
     S0inv = np.linalg.inv(priors.rest_knee_cov)
     scales = np.array([priors.hinge_sd**-2, priors.sd_femur_axis**-2, priors.sd_tibia_axis**-2,
-                       priors.plane_sd**-2, gauge_weight])  # fmt: skip
+                       priors.plane_sd**-2, gauge_weight])
     geometry = {
         "R0F": R0F.ravel("F"), "R0T": R0T.ravel("F"), "aF": aF, "aT": aT,
         "TF": tangent_basis(aF).ravel("F"), "TT": tangent_basis(aT).ravel("F"), "n0": n0,
         "TN": tangent_basis(n0).ravel("F"), "K0": priors.rest_knee.ravel("F"),
         "S0inv": S0inv.ravel("F"), "M0": M0.ravel("F"), "pK": pK, "pA": pA, "scales": scales,
-    }  # fmt: skip
+    }
     nh, np_ = max_hinge_samples, max_plane_samples
     p = np.concatenate(
         [*(geometry[name] for name, _ in _GEOMETRY),
          _colmajor(M[hinge_idx], nh), _padded(w[hinge_idx], nh),
          _colmajor(F[plane_idx], np_), _colmajor(T[plane_idx], np_),
          _padded(np.ones(len(plane_idx)), np_)]
-    )  # fmt: skip
+    )
     solver, parts = _solver(nh, np_, loss, float(loss_scale), max_iter, tol)
     t1 = time.perf_counter()
     sol = solver(x0=np.zeros(NX), p=p)
@@ -340,4 +340,4 @@ def full_correction_ipopt(
         success=bool(stats["success"]), seconds=time.perf_counter() - t0,
         solver_seconds=solver_seconds, n_hinge_samples=len(hinge_idx),
         n_plane_samples=len(plane_idx),
-    )  # fmt: skip
+    )

@@ -137,7 +137,7 @@ def check_vertical(
 #: -40 deg or flexes beyond 140 deg, a knee neither hyperextends beyond -10 deg nor flexes
 #: beyond 160 deg.
 FLEXION_RANGE = {"hip": (np.radians(-40.0), np.radians(140.0)),
-                 "knee": (np.radians(-10.0), np.radians(160.0))}  # fmt: skip
+                 "knee": (np.radians(-10.0), np.radians(160.0))}
 
 
 def _signed_excursion(R_ref: np.ndarray, R_mov: np.ndarray, line: np.ndarray) -> np.ndarray:
@@ -186,7 +186,7 @@ def anatomical_right(
     cues = []
     for side in ("right", "left"):
         pairs = (("pelvis", f"{side}_femur", 1.0, "hip", start_flexion[0]),
-                 (f"{side}_femur", f"{side}_tibia", -1.0, "knee", start_flexion[1]))  # fmt: skip
+                 (f"{side}_femur", f"{side}_tibia", -1.0, "knee", start_flexion[1]))
         for ref, mov, sign, joint, start in pairs:
             if ref in rotations and mov in rotations:
                 axis, excursion = dominant_axis(rotations[ref], rotations[mov])
@@ -249,12 +249,12 @@ def pelvis_axis_right(rotations: dict[str, np.ndarray], spec: str) -> np.ndarray
 def subject_right(rotations: dict[str, np.ndarray], heading: str = "anatomical",
                   notes: list[str] | None = None,
                   start_flexion: tuple[float, float] = (0.0, 0.0),
-                  knee_axes: dict[str, np.ndarray] | None = None) -> np.ndarray:  # fmt: skip
+                  knee_axes: dict[str, np.ndarray] | None = None) -> np.ndarray:
     """The subject's horizontal right at t0 by the ``heading`` method (one of :data:`HEADINGS`;
     ``start_flexion`` and ``knee_axes`` as :func:`anatomical_right`)."""
     if heading not in HEADINGS:
         raise InputError(f"expected one of {HEADINGS}, got {heading!r}", field="heading")
     if heading == "anatomical":
         return anatomical_right(rotations, notes=notes, start_flexion=start_flexion,
-                                knee_axes=knee_axes)  # fmt: skip
+                                knee_axes=knee_axes)
     return pelvis_axis_right(rotations, heading)

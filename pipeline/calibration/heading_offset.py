@@ -131,7 +131,7 @@ def hinge_heading(
     R_1, R_2 = np.asarray(R_1, float), np.asarray(R_2, float)
     if R_1.shape != R_2.shape or R_1.ndim != 3 or R_1.shape[1:] != (3, 3):
         raise InputError(f"expected two (N, 3, 3) orientation series of one length, got "
-                         f"{R_1.shape} and {R_2.shape}", field="orientations")  # fmt: skip
+                         f"{R_1.shape} and {R_2.shape}", field="orientations")
     u = R_1 @ normalize(np.asarray(axis_1, float))
     v = R_2 @ normalize(np.asarray(axis_2, float))
     return heading_between(u, v, rate_hz, up=up, window_s=window_s, min_weight=MIN_HORIZONTAL,
@@ -164,10 +164,10 @@ def heading_between(
     u, v = np.asarray(u, float), np.asarray(v, float)
     if u.shape != v.shape or u.ndim != 2 or u.shape[1] != 3:
         raise InputError(f"expected two (N, 3) vector series of one length, got {u.shape} and "
-                         f"{v.shape}", field="orientations")  # fmt: skip
+                         f"{v.shape}", field="orientations")
     if not (np.isfinite(rate_hz) and rate_hz > 0 and window_s > 0):
         raise InputError(f"expected a positive rate and window, got {rate_hz}, {window_s}",
-                         field="rate_hz")  # fmt: skip
+                         field="rate_hz")
     g = normalize(np.asarray(up, float))
     n = len(u)
     ok = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(v), axis=1)
@@ -198,11 +198,11 @@ def heading_between(
     if not horizontal:
         raise InputError("the vectors are too close to vertical in every window (mean "
                          f"|u_h||v_h| < {min_weight:g}): the heading between the two sensors is "
-                         "not observable", field="orientations")  # fmt: skip
+                         "not observable", field="orientations")
     if not angles:
         raise InputError(f"the two sensors' views of it do not agree within any window "
                          f"(agreement < {min_agreement:g}): the joint does not hold the constraint",
-                         field="orientations")  # fmt: skip
+                         field="orientations")
     psi = _psi_by_runs(runs, n, centres, angles)
     sel = ok & used_rows
 
@@ -216,11 +216,11 @@ def heading_between(
     el_v = np.arcsin(np.clip(_unit(v[sel]) @ g, -1, 1))
     return HeadingDrift(psi, rms_deg(psi), rms_deg(mean_psi),
                         float(np.degrees(np.sqrt(np.mean((el_u - el_v) ** 2)))), len(windows),
-                        len(angles))  # fmt: skip
+                        len(angles))
 
 
 def _psi_by_runs(runs: list[tuple[int, int]], n: int, centres: list[float],
-                 angles: list[float]) -> np.ndarray:  # fmt: skip
+                 angles: list[float]) -> np.ndarray:
     """``psi`` per row: within each run from that run's informative windows alone (interpolated
     between their centres, held at the run's ends), NaN over a run without one (the heading is
     not observed there); the break rows between runs interpolated across (a sensor missing

@@ -65,7 +65,7 @@ def _position_norm(p: ca.MX, o: ca.MX) -> ca.MX:
 def _position_data(acc: np.ndarray, K: np.ndarray) -> np.ndarray:
     Kt = np.swapaxes(K, 1, 2)
     return np.hstack([np.sum(acc * acc, axis=1)[:, None], np.einsum("nij,nj->ni", Kt, acc),
-                      (Kt @ K).reshape(-1, 9)])  # fmt: skip
+                      (Kt @ K).reshape(-1, 9)])
 
 
 def _axis_norm(p: ca.MX, j: ca.MX) -> ca.MX:
@@ -77,7 +77,7 @@ def _axis_norm(p: ca.MX, j: ca.MX) -> ca.MX:
 
 @lru_cache(maxsize=16)
 def _solver(joint: str, n: int, loss: str, scale_hinge: float, scale_position: float,
-            max_iter: int) -> ca.Function:  # fmt: skip
+            max_iter: int) -> ca.Function:
     """The NLP of the module docstring for ``n`` samples, its data a parameter: built once per
     shape and reused by every calibration of that size (a trial's two knees, both starts).
     Parameter layout: the two sensors' position data (:func:`_position_data`, 13 columns each),
@@ -97,12 +97,12 @@ def _solver(joint: str, n: int, loss: str, scale_hinge: float, scale_position: f
         pri = P[n * cols :]  # [p_1, w_1, p_2, w_2]: w_S = 0 without that prior
         f = f + pri[3] * ca.sumsqr(j[:3] - pri[0:3]) + pri[7] * ca.sumsqr(j[3:] - pri[4:7])
         g = [ca.dot(j[:3], j[:3]) - 1, ca.dot(j[3:], j[3:]) - 1,
-             ca.dot(j[:3], o[:3]) + ca.dot(j[3:], o[3:])]  # fmt: skip
+             ca.dot(j[:3], o[:3]) + ca.dot(j[3:], o[3:])]
         x = ca.vertcat(j, o)
     nlp = {"x": x, "p": P, "f": f, "g": ca.vertcat(*g) if g else ca.MX(0, 1)}
     return ca.nlpsol("hu_calibration", "ipopt", nlp, {
         "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-        "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10})  # fmt: skip
+        "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10})
 
 
 def calibrate_ipopt(
@@ -141,7 +141,7 @@ def calibrate_ipopt(
     opts = {"restarts": 2, "max_iter": 15}
     if start is None:
         xo, _, it0 = solve_subproblem(coarse, "positions", "gn", seed,
-                                      {"restarts": 1, "max_iter": 15})  # fmt: skip
+                                      {"restarts": 1, "max_iter": 15})
         o1, o2 = xo[:3], xo[3:]
     else:
         o1, o2 = (np.asarray(o, float) for o in start)
@@ -169,7 +169,7 @@ def calibrate_ipopt(
         for w in (data.gyr_1, data.gyr_2):
             blocks.append(np.hstack([np.sum(w * w, axis=1)[:, None], w]))
         extra = np.concatenate([np.zeros(4) if p is None else [*p, prior_weight]
-                                for p in (p1, p2)])  # fmt: skip
+                                for p in (p1, p2)])
         x0 = np.concatenate([j1, j2, o1, o2])
     params = np.concatenate([np.hstack(blocks).ravel(order="F"), extra])
     solver = _solver(joint, n, loss, float(scale_hinge), float(scale_position), int(max_iter))
@@ -192,7 +192,7 @@ def calibrate_ipopt(
     if prior_axis_1 is not None or prior_axis_2 is not None:
         message += f" | axis prior used (weight {prior_weight})"
     obs = dataclasses.replace(obs, message=message,
-                              solver_status=str(stats.get("return_status", "")))  # fmt: skip
+                              solver_status=str(stats.get("return_status", "")))
     return CalibrationResult(
         axis_1=j1,
         axis_2=j2,

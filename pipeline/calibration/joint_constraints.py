@@ -74,7 +74,7 @@ def angular_acceleration(
     win = max(polyorder + 2, int(round(window_s / h)) | 1)
     if win > t.size:
         raise InputError(f"expected at least {win} samples ({window_s:g} s) for the angular "
-                         f"acceleration, got {t.size}", field="time")  # fmt: skip
+                         f"acceleration, got {t.size}", field="time")
     return savgol_derivative(np.asarray(gyr, float), win, polyorder, h)
 
 
@@ -93,7 +93,7 @@ def savgol_derivative(y: np.ndarray, window: int, polyorder: int, delta: float) 
     n, m = y.shape[0], window // 2
     if window % 2 != 1 or window > n or polyorder >= window:
         raise InputError(f"expected an odd window <= {n} samples above the degree {polyorder}, "
-                         f"got {window}", field="window")  # fmt: skip
+                         f"got {window}", field="window")
     x = np.arange(-m, m + 1, dtype=float)
     P = np.linalg.pinv(np.vander(x, polyorder + 1, increasing=True))  # samples -> coefficients
     k = np.arange(polyorder + 1, dtype=float)

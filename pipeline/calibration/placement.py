@@ -46,7 +46,7 @@ def pose_configuration(skeleton: Skeleton, pose: str) -> np.ndarray:
     """
     if pose not in CALIBRATION_POSES:
         raise InputError(f"expected a calibration pose in {CALIBRATION_POSES}, got {pose!r}",
-                         field="calibration_pose")  # fmt: skip
+                         field="calibration_pose")
     q = skeleton.neutral()
     if pose == "seated":
         knee = "knee_Z" if skeleton.knee == "free" else "knee"

@@ -123,4 +123,4 @@ def correction_priors(
         sd_tibia_axis=float(np.sqrt(np.mean(angle_between(aT, mT) ** 2))),
         rest_knee=K0, rest_knee_cov=np.cov(e.T), hinge_sd=float(np.sqrt(np.mean(hinge))),
         plane_sd=float(np.sqrt(np.mean(np.square(plane)))), n_subjects=len(trials),
-    )  # fmt: skip
+    )

@@ -275,7 +275,7 @@ def solve_subproblem(
     solve = CLASSIC_SOLVERS.get(method)
     if solve is None:
         raise InputError(f"expected method in {list(CLASSIC_SOLVERS)}, got {method!r}",
-                         field="method")  # fmt: skip
+                         field="method")
     return solve(p, which, seed, opts)
 
 

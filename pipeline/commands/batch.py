@@ -44,7 +44,7 @@ from pipeline.commands.batch_outputs import SUMMARY_COLUMNS, trial_figures, writ
 from pipeline.errors import InputError, Terminated
 
 __all__ = ["REQUIRED_COLUMNS", "SUMMARY_COLUMNS", "option_columns", "read_manifest", "run_batch",
-           "run_row"]  # fmt: skip
+           "run_row"]
 
 REQUIRED_COLUMNS = ("subject", "sex", "height_m", "orientations")
 _OUTPUTS = ("_ik.mot", "_landmarks.csv", "_summary.md", "_config.toml", "_figures.json")
@@ -80,7 +80,7 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
         raise InputError("no such manifest", file=path) from None
     except UnicodeDecodeError as exc:
         raise InputError(f"not UTF-8 text (byte {exc.start}): expected a CSV manifest in UTF-8",
-                         file=path) from None  # fmt: skip
+                         file=path) from None
     except csv.Error as exc:
         raise InputError(f"not a CSV manifest: {exc}", file=path) from None
     if any("\0" in h for h in header):
@@ -93,11 +93,11 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
     if missing:
         raise InputError(f"missing column(s) {missing}; expected {list(REQUIRED_COLUMNS)} and "
                          f"any of {sorted(set(columns) - set(REQUIRED_COLUMNS))}", file=path,
-                         field="header")  # fmt: skip
+                         field="header")
     unknown = [c for c in header if c != "subject" and c not in columns]
     if unknown:
         raise InputError(f"unknown column(s) {unknown}; the options are {sorted(columns)}",
-                         file=path, field="header")  # fmt: skip
+                         file=path, field="header")
     if not raw_rows:
         raise InputError("no rows after the header", file=path)
     rows = []
@@ -106,7 +106,7 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
         row: dict[str, object] = {"row": k, "line": line}
         if raw.get(None):
             raise InputError(f"{len(header) + len(raw[None])} cells, the header has "
-                             f"{len(header)}", file=path, field=f"line {line}")  # fmt: skip
+                             f"{len(header)}", file=path, field=f"line {line}")
         for key, value in raw.items():
             key = (key or "").strip()
             value = (value or "").strip()
@@ -123,7 +123,7 @@ def read_manifest(path: str | Path) -> list[dict[str, object]]:
         from pipeline.commands.ik import recording_name
 
         path_component(recording_name(str(row["orientations"])), path,
-                       f"orientations (line {line})")  # fmt: skip
+                       f"orientations (line {line})")
         if row.get("name"):
             path_component(str(row["name"]), path, f"name (line {line})")
         rows.append(row)
@@ -149,10 +149,10 @@ def _orientations_of(row: Mapping[str, object], path: Path, line: int) -> object
 def path_component(name: str, file: Path, field: str) -> str:
     """``name`` if it is one path component (a folder name inside ``--out``), else refused."""
     bad = (not name or name in (".", "..") or "/" in name or "\\" in name or "\0" in name
-           or Path(name).is_absolute() or (len(name) > 1 and name[1] == ":"))  # fmt: skip
+           or Path(name).is_absolute() or (len(name) > 1 and name[1] == ":"))
     if bad:
         raise InputError(f"expected a name for a folder inside --out (no '..', separator or "
-                         f"absolute path), got {name!r}", file=file, field=field)  # fmt: skip
+                         f"absolute path), got {name!r}", file=file, field=field)
     return name
 
 
@@ -170,7 +170,7 @@ def _check_distinct_folders(rows: list[dict], out: Path, manifest: Path) -> None
         if folder in seen:
             raise InputError(f"rows {seen[folder]} and {row['row']} would both write "
                              f"{folder}: give them different subjects or recording names",
-                             file=manifest)  # fmt: skip
+                             file=manifest)
         seen[folder] = int(row["row"])
 
 
@@ -184,7 +184,7 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
     name = output_name(row.get("name") or None, str(row["orientations"]))
     result: dict[str, object] = {c: "" for c in SUMMARY_COLUMNS}
     result.update(row=row["row"], subject=row["subject"], orientations=row["orientations"],
-                  out_dir=str(folder))  # fmt: skip
+                  out_dir=str(folder))
     t0 = time.perf_counter()
     values = {k: v for k, v in row.items() if k not in ("row", "line", "subject", "config")}
     values.update(out=str(folder), overwrite=True)  # a row's folder is the batch's own
@@ -201,10 +201,10 @@ def run_row(row: Mapping[str, object], out: str, force: bool = False) -> dict[st
         return result
     except Exception as exc:  # a worker must report, not die: anything else is a failed row too
         result.update(status="failed", message=f"{type(exc).__name__}: {exc}",
-                      seconds=f"{time.perf_counter() - t0:.2f}")  # fmt: skip
+                      seconds=f"{time.perf_counter() - t0:.2f}")
         return result
     result.update(status="ok", seconds=f"{time.perf_counter() - t0:.2f}",
-                  **trial_figures(folder / f"{name}_figures.json"))  # fmt: skip
+                  **trial_figures(folder / f"{name}_figures.json"))
     return result
 
 
@@ -265,9 +265,9 @@ def run_batch(
     counts = {s: sum(r["status"] == s for r in ordered) for s in ("ok", "failed", "skipped")}
     lines = [f"{len(rows)} trials {where} in {time.perf_counter() - t0:.1f} s: "
              f"{counts['ok']} ok, {counts['failed']} failed, {counts['skipped']} skipped; "
-             f"summary: {out / 'batch_summary.csv'}"]  # fmt: skip
+             f"summary: {out / 'batch_summary.csv'}"]
     lines += [f"row {r['row']} ({r['subject']}, {Path(str(r['orientations'])).name}): "
-              f"{r['message']}" for r in ordered if r["status"] == "failed"]  # fmt: skip
+              f"{r['message']}" for r in ordered if r["status"] == "failed"]
     return "\n".join(lines), counts["failed"]
 
 
@@ -299,17 +299,17 @@ def _run_on_dask(rows, out: Path, results: dict, workers, scheduler, force, bar)
     if scheduler is None:
         n = workers or min(os.cpu_count() or 1, len(rows))
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None)  # fmt: skip
+                               dashboard_address=None)
         where = f"on {n} local worker processes"
     try:
         try:
             client = Client(scheduler or cluster, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, TimeoutError) as exc:
             raise InputError(f"no Dask scheduler answered within {CONNECT_TIMEOUT_S} s ({exc})",
-                             field="scheduler") from None  # fmt: skip
+                             field="scheduler") from None
         with client:
             futures = [client.submit(run_row, row, str(out.resolve()), force, pure=False)
-                       for row in rows]  # fmt: skip
+                       for row in rows]
             try:
                 for fut in as_completed(futures):
                     res = fut.result()
@@ -333,10 +333,10 @@ def check_scheduler(address: str) -> None:
         port = parts.port
     except ValueError as exc:
         raise InputError(f"expected tcp://HOST:PORT, got {address!r} ({exc})",
-                         field="scheduler") from None  # fmt: skip
+                         field="scheduler") from None
     if parts.scheme not in ("tcp", "tls") or not parts.hostname or port is None or port < 1:
         raise InputError(f"expected tcp://HOST:PORT (or tls://), got {address!r}",
-                         field="scheduler")  # fmt: skip
+                         field="scheduler")
     if parts.scheme == "tcp":
         _probe_dask(parts.hostname, port, address)
 
@@ -357,7 +357,7 @@ def _probe_dask(host: str, port: int, address: str) -> None:
     except OSError as exc:
         why = exc.strerror or str(exc)
     raise InputError(f"no Dask scheduler answered at {address} within {CONNECT_TIMEOUT_S} s "
-                     f"({why})", field="scheduler")  # fmt: skip
+                     f"({why})", field="scheduler")
 
 
 def _write_summary(out: Path, rows, results: dict, missing: str, final: bool = False) -> list[dict]:
@@ -369,7 +369,7 @@ def _write_summary(out: Path, rows, results: dict, missing: str, final: bool = F
         if res is None:
             res = {c: "" for c in SUMMARY_COLUMNS}
             res.update(row=r["row"], subject=r["subject"], orientations=r["orientations"],
-                       status=missing, out_dir=str(_out_dir(out, r)))  # fmt: skip
+                       status=missing, out_dir=str(_out_dir(out, r)))
         ordered.append(res)
     write_summary(out, ordered, report=final)
     return ordered

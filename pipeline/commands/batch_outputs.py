@@ -13,10 +13,10 @@ __all__ = ["STRIDE_COLUMNS", "SUMMARY_COLUMNS", "trial_figures", "write_summary"
 
 #: The strides' means per trial (both sides, over the straight, steady strides; empty without).
 STRIDE_COLUMNS = ("strides", "stride_time_s", "stride_length_m", "speed_m_s", "cadence_steps_min",
-                  "stance_share")  # fmt: skip
+                  "stance_share")
 SUMMARY_COLUMNS = ("row", "subject", "orientations", "status", "message", "frames",
                    "residual_median_deg", "flags", *STRIDE_COLUMNS, "seconds",
-                   "out_dir")  # fmt: skip
+                   "out_dir")
 
 
 def _read_figures(path: Path) -> dict | None:
@@ -60,7 +60,7 @@ def write_summary(out: Path, ordered: list[dict], report: bool) -> None:
             for r in ordered:
                 found = sorted(Path(str(r["out_dir"])).glob("*_figures.json"))
                 name = found[0].name.removesuffix("_figures.json") if found else \
-                    recording_name(str(r["orientations"]))  # fmt: skip
+                    recording_name(str(r["orientations"]))
                 ok = r["status"] in ("ok", "skipped") and len(found) == 1
                 trials.append(GroupTrial(str(r["subject"]), name,
                                          _read_figures(found[0]) if ok else None))

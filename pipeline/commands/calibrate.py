@@ -44,7 +44,7 @@ MIN_MOTION_RAD_S = 0.05
 def _read_pair(imu1: Path, imu2: Path):
     if imu1.resolve() == imu2.resolve():
         raise InputError(f"--imu1 and --imu2 name the same file ({imu1}); expected the sensors "
-                         "on the two segments of the joint", field="imu2")  # fmt: skip
+                         "on the two segments of the joint", field="imu2")
     r1, r2 = read_imu_csv(imu1), read_imu_csv(imu2)
     check_same_length({str(imu1): r1.time.size, str(imu2): r2.time.size})
     check_same_rate({str(imu1): r1.rate_hz, str(imu2): r2.rate_hz})
@@ -58,7 +58,7 @@ def _read_pair(imu1: Path, imu2: Path):
         )
     if r1.gyr.shape == r2.gyr.shape and np.array_equal(r1.gyr, r2.gyr):
         raise InputError(f"{imu1} and {imu2} hold identical gyroscope signals; expected two "
-                         "sensors on the two segments of the joint", field="gyr")  # fmt: skip
+                         "sensors on the two segments of the joint", field="gyr")
     speeds = [float(np.sqrt(np.nanmean(np.sum(r.gyr**2, axis=1)))) for r in (r1, r2)]
     if max(speeds) < MIN_MOTION_RAD_S:  # one still segment is poor excitation, reported later
         raise InputError(
@@ -80,10 +80,10 @@ def _observability_summary(obs: Observability) -> dict:
         advice = []
         if any("independent starts" not in u for u in obs.undetermined):
             advice.append("the motion leaves these directions free: excite the segments about "
-                          "other axes, or use ipopt with a population-axis prior")  # fmt: skip
+                          "other axes, or use ipopt with a population-axis prior")
         if starts:
             advice.append("two starts disagree: the optimiser did not converge (raise "
-                          "--iterations/--population, or use gn or ipopt)")  # fmt: skip
+                          "--iterations/--population, or use gn or ipopt)")
         what = "; ".join(obs.undetermined)
         out["warning"] = f"UNDETERMINED: {what} - not trustworthy ({'; '.join(advice)})"
     return out
@@ -124,7 +124,7 @@ def run_calibration(
     if population is not None:
         if method not in POPULATION_OPTION:
             raise InputError(f"--population applies to the swarms ({', '.join(POPULATION_OPTION)})"
-                             f", not {method}", field="population")  # fmt: skip
+                             f", not {method}", field="population")
         options[POPULATION_OPTION[method]] = int(population)
     res = calibrate(data, joint, method, seed=seed, **quats, **options)
     obs = _observability_summary(res.observability)

@@ -68,11 +68,11 @@ class DemoResult:
 
 #: The files the demo writes.
 DEMO_FILES = ("subject.urdf", "demo_ik_model.urdf", "demo_ik.mot", "demo_landmarks.csv",
-              "demo.rrd", "demo_report.md")  # fmt: skip
+              "demo.rrd", "demo_report.md")
 
 
 def run_demo(out_dir: str | Path = "out/demo", seed: int = 0, standing_s: float = STANDING_S,
-             overwrite: bool = False) -> str:  # fmt: skip
+             overwrite: bool = False) -> str:
     """``pipeline demo``: run and return the text to print (the report and where files went); a
     previous demo's files in ``out_dir`` are refused, as ``pipeline ik`` refuses a previous run's,
     unless ``overwrite``."""
@@ -80,7 +80,7 @@ def run_demo(out_dir: str | Path = "out/demo", seed: int = 0, standing_s: float 
     if previous and not overwrite:
         raise InputError(f"a previous demo's outputs are there ({', '.join(previous)}): give "
                          "another --out, or --overwrite to replace them", file=out_dir,
-                         field="out")  # fmt: skip
+                         field="out")
     res = demo(out_dir, seed, standing_s=standing_s)
     names = ", ".join(p.name for p in res.files)
     return (
@@ -90,7 +90,7 @@ def run_demo(out_dir: str | Path = "out/demo", seed: int = 0, standing_s: float 
 
 
 def demo(out_dir: str | Path = "out/demo", seed: int = 0,
-         standing_s: float = STANDING_S) -> DemoResult:  # fmt: skip
+         standing_s: float = STANDING_S) -> DemoResult:
     """Run the demo (``standing_s`` of standing still first: the calibration pose, at least
     :data:`MIN_STANDING_S`); every output is written all-or-nothing into ``out_dir``."""
     standing_s = float(standing_s)
@@ -113,7 +113,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
         #    1.5 s transition, then gait; the simulator's world is z-up like an Xsens recording
         t0 = time.perf_counter()
         trial = simulate_trial(truth_model, "gait", duration_s=15.0 + standing_s, seed=seed,
-                               standing_s=standing_s)  # fmt: skip
+                               standing_s=standing_s)
         n0 = int(round(standing_s * 100))
         timings["simulate"] = time.perf_counter() - t0
 
@@ -123,9 +123,9 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
         shank = trial.imus["right_tibia_imu"].recording
         moving = slice(n0, None)
         data = joint_data(trial.time[moving], thigh.gyr[moving], thigh.acc[moving],
-                          shank.gyr[moving], shank.acc[moving])  # fmt: skip
+                          shank.gyr[moving], shank.acc[moving])
         cal = calibrate(data, "hinge", "ipopt", quat_1=thigh.quat[moving],
-                        quat_2=shank.quat[moving], seed=seed)  # fmt: skip
+                        quat_2=shank.quat[moving], seed=seed)
         timings["calibrate"] = time.perf_counter() - t0
         true_1, true_2 = trial.knee_axis["right_femur_imu"], trial.knee_axis["right_tibia_imu"]
         axis_err = [
@@ -140,24 +140,24 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
         names = {f"{seg}_imu": s for s, seg in SENSOR_TO_SEGMENT.items()}
         raw = {names[f]: SensorSignals(gyr=imu.recording.gyr, acc=imu.recording.acc,
                                        mag=imu.recording.mag)
-               for f, imu in trial.imus.items() if f in names}  # fmt: skip
+               for f, imu in trial.imus.items() if f in names}
         run = process_recording(Recording(trial.time, 100.0, raw), SUBJECT, filter="vqf")
         run.skeleton.write_urdf(out.path(out_dir / "demo_ik_model.urdf"))
         timings["ik"] = time.perf_counter() - t0
         fused = process_recording(
             Recording.from_orientations(trial.time, 100.0, {names[f]: imu.recording.quat
                                                             for f, imu in trial.imus.items()}),
-            SUBJECT, sensor_to_model=Z_UP_TO_Y_UP)  # fmt: skip
+            SUBJECT, sensor_to_model=Z_UP_TO_Y_UP)
         truth_angles = joint_angles(trial.skeleton, trial.q)
         angle_rows, angle_rms, landmark_rms = [], {}, {}
         for key in ("right_hip_flexion", "right_hip_adduction", "right_hip_rotation",
                     "right_knee_flexion", "right_knee_adduction", "right_knee_rotation",
-                    "right_ankle_flexion", "left_hip_flexion", "left_knee_flexion"):  # fmt: skip
+                    "right_ankle_flexion", "left_hip_flexion", "left_knee_flexion"):
             e = np.degrees(run.joint_angles[key][n0:] - truth_angles[key][n0:])
             e2 = np.degrees(fused.joint_angles[key][n0:] - truth_angles[key][n0:])
             angle_rms[key] = float(np.sqrt(np.mean(e**2)))
             angle_rows.append([key, f"{angle_rms[key]:.2f}", f"{np.abs(e).max():.2f}",
-                               f"{np.sqrt(np.mean(e2**2)):.2f}"])  # fmt: skip
+                               f"{np.sqrt(np.mean(e2**2)):.2f}"])
         # landmarks relative to the mid-hip point; the 9-D filter's world is the simulator's
         # (east, north, up), turned y-up like the estimate's
         W = sensor_to_opensim_matrix(Z_UP_TO_Y_UP)
@@ -170,7 +170,7 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
             e = np.linalg.norm(est_rel - true_rel, axis=1)[n0:]
             landmark_rms[name] = float(np.sqrt(np.mean(e**2)))
             lm_rows.append([name, f"{1e3 * np.sqrt(np.mean(e**2)):.1f}",
-                            f"{1e3 * e.max():.1f}"])  # fmt: skip
+                            f"{1e3 * e.max():.1f}"])
             world = true_rel + est_mid
             world[:n0] = np.nan
             reference[name] = world
@@ -182,20 +182,20 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
             write_landmarks_csv(fh, run)
         # the simulator's truth beside the estimate (NaN over the standing calibration pose)
         truth_curves = {k: np.where(np.arange(len(trial.time)) < n0, np.nan, truth_angles[k])
-                        for k in run.joint_angles if k in truth_angles}  # fmt: skip
+                        for k in run.joint_angles if k in truth_angles}
         log_motion(out.path(out_dir / "demo.rrd"), run.time, run.skeleton, run.q,
                    reference_angles=truth_curves,
-                   reference_landmarks=reference, recording_name="pipeline demo")  # fmt: skip
+                   reference_landmarks=reference, recording_name="pipeline demo")
         timings["write"] = time.perf_counter() - t0
         total = time.perf_counter() - t_start
         offset = _knee_neutral_offset(trial.skeleton)
         report = _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
-                         timings, total, offset, standing_s)  # fmt: skip
+                         timings, total, offset, standing_s)
         with out.open(out_dir / "demo_report.md") as fh:
             fh.write(report)
     files = tuple(out_dir / n for n in DEMO_FILES)
     return DemoResult(report, tuple(axis_err), angle_rms, landmark_rms, tuple(offset), files,
-                      total)  # fmt: skip
+                      total)
 
 
 def _knee_neutral_offset(sk) -> np.ndarray:
@@ -207,7 +207,7 @@ def _knee_neutral_offset(sk) -> np.ndarray:
 
 
 def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows, timings, total,
-            knee_offset, standing_s) -> str:  # fmt: skip
+            knee_offset, standing_s) -> str:
     fps = len(run.time) / max(timings["ik"], 1e-9)
     lines = [
         "# pipeline demo",
@@ -241,11 +241,11 @@ def _report(predicted, geometry, trial, cal, axis_err, run, angle_rows, lm_rows,
         f"{np.degrees(np.nanmedian(run.residual_rms)):.2f} deg.",
         "",
         markdown_table(["joint angle", "RMS error (deg)", "max error (deg)",
-                        "RMS error, simulated orientations (deg)"], angle_rows),  # fmt: skip
+                        "RMS error, simulated orientations (deg)"], angle_rows),
         "",
         markdown_table(
             ["landmark (relative to mid-hip)", "RMS error (mm)", "max error (mm)"], lm_rows
-        ),  # fmt: skip
+        ),
         "",
         "Errors are over the gait after the standing pose (sensor placements from it), for a "
         "free-knee IK model of the same regression geometry. Landmarks are compared relative to "

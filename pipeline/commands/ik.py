@@ -72,7 +72,7 @@ def run_ik(
     ``rerun=False``, ``strict=True``).
     """
     groups: dict[type, dict[str, object]] = {InputOptions: {"orientations": str(orientations)},
-                                             OutputOptions: {"out": str(out_dir)}}  # fmt: skip
+                                             OutputOptions: {"out": str(out_dir)}}
     ik_changes = {}
     for key, value in changes.items():
         cls = next((c for c in (InputOptions, OutputOptions) if key in _names(c)), None)
@@ -82,7 +82,7 @@ def run_ik(
             groups[cls][key] = value
     opts = (options or IKOptions()).replace(**ik_changes)
     settings = IKSettings(measures, InputOptions(**groups[InputOptions]), opts,
-                          OutputOptions(**groups[OutputOptions]))  # fmt: skip
+                          OutputOptions(**groups[OutputOptions]))
     return run_settings(settings, recorder=recorder)
 
 
@@ -173,7 +173,7 @@ def _write_run(trial, static, name: str, settings: IKSettings, recorder) -> IKRu
 #: Every file ``pipeline ik`` may write for a recording ``<name>``.
 OUTPUT_SUFFIXES = (".rrd", ".urdf", "_ik.mot", "_landmarks.csv", ".osim", "_summary.md",
                    "_config.toml", "_figures.json", "_strides.csv", "_cycles.csv",
-                   "_report.html")  # fmt: skip
+                   "_report.html")
 
 
 def written_text(run: IKRun, settings: IKSettings) -> str:
@@ -185,7 +185,7 @@ def written_text(run: IKRun, settings: IKSettings) -> str:
     n = len(run.gait.strides)
     head = (f"{name}: {len(run.time)} frames, {run.time[-1] - run.time[0]:.1f} s; joints "
             f"{', '.join(run.sensors.joints)}; {n} stride{'s' * (n != 1)}; "
-            f"{len(run.flags)} warning{'s' * (len(run.flags) != 1)}")  # fmt: skip
+            f"{len(run.flags)} warning{'s' * (len(run.flags) != 1)}")
     return "\n".join([head, f"wrote {len(files)} files to {out_dir}:",
                       *(f"  {f}" for f in files),
                       f"the summary: {out_dir / f'{name}_summary.md'} (--verbose prints it)"])
@@ -220,7 +220,7 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
         print(f"warning: {flag}", file=sys.stderr)
     if outputs.landmarks == "world" and run.gait.pelvis_path is None:
         run.notes.append("--landmarks world: no pelvis path (a foot sensor on each foot walking "
-                         "is needed): the landmarks are relative to the pelvis")  # fmt: skip
+                         "is needed): the landmarks are relative to the pelvis")
     step("writing the outputs")
     # first: the child writes the recording and the report while the other files are written
     report = _report_job(out, out_dir, name, run) if outputs.report else None
@@ -235,7 +235,7 @@ def _outputs(out, out_dir, name, trial, static, settings: IKSettings, worker) ->
 
         with out.open(out_dir / f"{name}.osim") as fh:
             fh.write(osim_text(run.skeleton, run.sensors.joints, pelvis=run.sensors.pelvis,
-                               name=name))  # fmt: skip
+                               name=name))
     if run.gait.strides:
         with out.open(out_dir / f"{name}_strides.csv") as fh:
             fh.write(strides_csv(run.gait.strides))
@@ -279,7 +279,7 @@ def _config(settings: IKSettings, name: str) -> str:
     from pipeline import __version__
 
     header = (f"pipeline ik configuration of {name} (pipeline {__version__}); to reproduce:\n"
-              f"pipeline ik --config {name}_config.toml --out DIR")  # fmt: skip
+              f"pipeline ik --config {name}_config.toml --out DIR")
     return settings_text(settings, header)
 
 
@@ -303,13 +303,13 @@ def figures_json(run: IKRun) -> str:
            "flags": list(run.flags), "joints": list(run.sensors.joints),
            "strides": len(run.gait.strides), **_stride_means(run),
            "strides_left_out": left_out(run.gait.strides) if run.gait.strides else {},
-           "cycles": cycles_figures(run_cycles(run))}  # fmt: skip
+           "cycles": cycles_figures(run_cycles(run))}
     return json.dumps(fig, indent=1) + "\n"
 
 
 #: The strides' means (both sides) that ``_figures.json`` and ``batch_summary.csv`` list.
 STRIDE_FIGURES = ("stride_time_s", "stride_length_m", "speed_m_s", "cadence_steps_min",
-                  "stance_share")  # fmt: skip
+                  "stance_share")
 
 
 def _stride_means(run: IKRun) -> dict[str, float | None]:

@@ -55,11 +55,11 @@ def summary_text(run: IKRun, name: str | None = None) -> str:
                   "sensor turned into the proximal one's heading, deg; a `thigh` row: without a "
                   "pelvis sensor, into the other thigh's):", "",
                   "| joint | from | to | drift | constraint residual | with a constant heading |",
-                  "|---|---|---|---|---|---|"]  # fmt: skip
+                  "|---|---|---|---|---|---|"]
         for key, d in run.heading_drifts.items():
             lines.append(f"| {key.replace('_', ' ')} | {np.degrees(np.nanmin(d.psi)):.1f} | "
                          f"{np.degrees(np.nanmax(d.psi)):.1f} | {d.drift_deg:.1f} | "
-                         f"{d.residual_deg:.2f} | {d.before_deg:.2f} |")  # fmt: skip
+                         f"{d.residual_deg:.2f} | {d.before_deg:.2f} |")
         lines.append("")
     if run.knee_calibrations:
         lines += ["", "Functional knee calibration from the raw signals (Hu 2021, "
@@ -67,7 +67,7 @@ def summary_text(run: IKRun, name: str | None = None) -> str:
                   "corrected towards its hinge axis):", "",
                   "| knee | axis in thigh sensor | axis in shank sensor | halves apart (deg) | "
                   "hinge residual (rad/s) | vs model axis (deg) | trusted | used |",
-                  "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+                  "|---|---|---|---|---|---|---|---|"]
         for c in run.knee_calibrations:
             def v(a):
                 return "(" + ", ".join(f"{x:.3f}" for x in a) + ")"
@@ -81,17 +81,17 @@ def summary_text(run: IKRun, name: str | None = None) -> str:
                 used = f"no: correction {o.correction}"
             lines.append(f"| {c.side} | {v(c.axis_thigh)} | {v(c.axis_shank)} | "
                          f"{c.split_half_deg:.1f} | {c.residual_rad_s:.3f} | {c.vs_model_deg:.1f} "
-                         f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")  # fmt: skip
+                         f"| {'yes' if c.trusted else 'no: ' + c.reason} | {used} |")
         lines.append("")
     if run.gait.strides:
         sources = "; ".join(f"{side}: {src}" for side, src in run.gait.sources.items())
         lines += ["", f"Strides (`<name>_strides.csv`; events and foot paths from {sources}; "
                   "the means over the straight, steady strides, the others counted):",
-                  "", *stride_table(run.gait.strides), ""]  # fmt: skip
+                  "", *stride_table(run.gait.strides), ""]
         cycles = cycle_angles(run.time, run.joint_angles, run.gait.strides)
         lines += ["Joint angles over the gait cycle (`<name>_cycles.csv`: each stride at 0-100 % "
                   "of its time; here each curve's maximum, minimum and range, mean ± SD over the "
-                  "same strides):", "", *cycle_table(cycles), ""]  # fmt: skip
+                  "same strides):", "", *cycle_table(cycles), ""]
     if not any(j.endswith("_ankle") for j in run.sensors.joints):
         lines.append("- no foot sensors: the ankle is held neutral and not reported")
     lines += ["", "| angle | min (deg) | max (deg) |", "|---|---|---|"]
@@ -112,14 +112,14 @@ def _sensor_table(run: IKRun) -> list[str]:
     lines = ["", "Sensor checks (`pipeline.process.sensor_checks`: what the reader repaired in "
              "the sensor's file, dead channels, dropouts, saturation, units, moving with the "
              "segment, slipping on it; magnetometers against the other sensors' field):",
-             "", "| sensor | checks | magnetometer | used |", "|---|---|---|---|"]  # fmt: skip
+             "", "| sensor | checks | magnetometer | used |", "|---|---|---|---|"]
     for n in names:
         fs = found.get(n, [])
         checks = "; ".join(f"{f.check}: {f.evidence} ({f.action})" for f in fs) or "ok"
         m = run.magnetometers.get(n)
         mag = "-" if m is None else ("trusted" if m.trusted else f"not trusted: {m.evidence}")
         used = "no: excluded, its joints not written" if any(
-            f.action == "excluded" for f in fs) else "yes"  # fmt: skip
+            f.action == "excluded" for f in fs) else "yes"
         lines.append(f"| {n} | {checks} | {mag} | {used} |")
     return lines + [""]
 
@@ -135,7 +135,7 @@ def _correction_table(run: IKRun) -> list[str]:
 
     lines = ["", "| knee | AoR seen (femur; tibia frame) | reference AoR | femur correction | "
              "tibia correction | hinge residual before -> after (deg) |",
-             "|---|---|---|---|---|---|"]  # fmt: skip
+             "|---|---|---|---|---|---|"]
     for side, c in run.corrections.items():
         seen = f"{vec(c.measured_femur_axis)}; {vec(c.measured_tibia_axis)}"
         if c.method == "functional":
@@ -151,5 +151,5 @@ def _correction_table(run: IKRun) -> list[str]:
             fem = tib = f"not applied: {c.reason}"
         lines.append(f"| {side} | {seen} | {ref} | {fem} | {tib} | "
                      f"{np.degrees(c.hinge_residual_before):.1f} -> "
-                     f"{np.degrees(c.hinge_residual_after):.1f} |")  # fmt: skip
+                     f"{np.degrees(c.hinge_residual_after):.1f} |")
     return lines + [""]

@@ -39,14 +39,14 @@ __all__ = ["live_mot_columns", "run_live"]
 
 
 def run_live(settings: IKSettings, live: LiveOptions, *, source=None,
-             stop: Callable[[], bool] | None = None) -> CaptureResult:  # fmt: skip
+             stop: Callable[[], bool] | None = None) -> CaptureResult:
     """The capture of the module docstring; ``source``: one given (tests), else ``live``'s;
     ``stop``: the capture ends when it says so (else Ctrl-C or SIGTERM)."""
     from pipeline.commands.ik import recording_name
 
     out_dir = Path(settings.outputs.out)
     name = settings.outputs.name or (recording_name(Path(live.replay)) if live.replay
-                                     else "live")  # fmt: skip
+                                     else "live")
     output_dir(out_dir, create=False)
     with output_lock(out_dir, f"pipeline live ({name})", []):
         source = source if source is not None else _source(live, settings)
@@ -54,7 +54,7 @@ def run_live(settings: IKSettings, live: LiveOptions, *, source=None,
         capture = LiveCapture(source, settings.subject, settings.options, viewer=viewer,
                               duration_s=live.duration_s,
                               in_line=bool(live.replay) and live.speed == "max",
-                              say=lambda line: print(line, file=sys.stderr))  # fmt: skip
+                              say=lambda line: print(line, file=sys.stderr))
         stopped = threading.Event()
         try:
             with _stopping_on_signals(stopped):
@@ -136,7 +136,7 @@ def _write(result: CaptureResult, name: str, settings: IKSettings) -> None:
         if raw:  # our IMU CSV, one per sensor
             for sensor in rec.sensor_names:
                 one = Recording.single(sensor, rec.time, rate_hz=rec.rate_hz,
-                                       **_signals(rec, sensor))  # fmt: skip
+                                       **_signals(rec, sensor))
                 write_imu_csv(out.path(where / f"{sensor}.csv"), one)
         else:  # orientations only: OpenSense's .sto
             write_orientations_sto(out.path(where), rec)
@@ -144,7 +144,7 @@ def _write(result: CaptureResult, name: str, settings: IKSettings) -> None:
         write_outputs(out, out_dir, name, rec, IKSettings(settings.subject, capture,
                                                           settings.options, settings.outputs))
         write_mot(out.path(out_dir / f"{name}_live.mot"), rec.time,
-                  live_mot_columns(result.angles))  # fmt: skip
+                  live_mot_columns(result.angles))
 
 
 def _signals(rec: Recording, sensor: str) -> dict[str, np.ndarray]:

@@ -39,10 +39,10 @@ def run_orientations(
     rec = orientations_from_signals(rec, filter, notes, every_sensor=True).recording
     rec = rec.with_sensors({n: s for n, s in rec.sensors.items() if s.quat is not None})
     write_orientations_sto(out, rec, header={"WorldUp": "z", "SensorToOpenSimRotations":
-                                             "-1.5708 0 0"})  # fmt: skip
+                                             "-1.5708 0 0"})
     lines = [f"wrote {out}: {len(rec.sensors)} sensors ({', '.join(rec.sensor_names)}), "
              f"{rec.n_samples} samples at {rec.rate_hz:.4g} Hz",
              *notes, *rec.notes,
              "world z up: give OpenSense sensor_to_opensim_rotations -1.5708 0 0 (pipeline ik: "
-             "--sensor-to-model -1.5708 0 0)"]  # fmt: skip
+             "--sensor-to-model -1.5708 0 0)"]
     return "\n".join(lines)

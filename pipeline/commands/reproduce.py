@@ -13,7 +13,7 @@ PAPERS = ("wang2023",)
 
 
 def run_reproduce(paper: str, data: str | Path, out: str | Path,
-                  rerun_dir: str | Path | None = None) -> str:  # fmt: skip
+                  rerun_dir: str | Path | None = None) -> str:
     """Run the reproduction of ``paper`` (one of :data:`PAPERS`); return its summary line."""
     if paper not in PAPERS:
         raise InputError(f"expected a paper in {PAPERS}, got {paper!r}", field="paper")

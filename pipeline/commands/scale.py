@@ -23,5 +23,5 @@ def run_scale(
     """Write the scaled URDF to ``out`` (see :func:`pipeline.model.scaling.scale_model`); return
     the line to print."""
     path = scale_model(measures, out, knee=knee, knee_axis_femur=knee_axis_femur,
-                       knee_axis_tibia=knee_axis_tibia)  # fmt: skip
+                       knee_axis_tibia=knee_axis_tibia)
     return f"wrote {path}"

@@ -106,9 +106,9 @@ def run_simulation(
     standing_s = float(standing_s)
     if not np.isfinite(standing_s) or not 0 <= standing_s < duration_s:
         raise InputError(f"expected a standing time in [0, {duration_s:g}) s, got {standing_s:g}",
-                         field="standing_s")  # fmt: skip
+                         field="standing_s")
     trial = simulate_trial(skeleton, motion, duration_s=duration_s, seed=seed,
-                           standing_s=standing_s)  # fmt: skip
+                           standing_s=standing_s)
     files = {name: f"{name}.csv" for name in trial.imus}
     truth = _truth(trial, files, measures.sex, measures.height_m)
     lm_names = list(trial.landmarks)

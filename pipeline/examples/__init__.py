@@ -17,7 +17,7 @@ _HERE = Path(__file__).resolve().parent
 #: Example name -> its file or folder here.
 EXAMPLES = {"opensense_imu_ik_test": "opensense_imu_ik_test.sto",
             "ximu3_lower_body": "ximu3_lower_body",
-            "batch_manifest.csv": "batch_manifest.csv"}  # fmt: skip
+            "batch_manifest.csv": "batch_manifest.csv"}
 #: How a command's path names an example.
 PREFIX = "example:"
 
@@ -26,7 +26,7 @@ def path(name: str) -> Path:
     """The installed example ``name`` (:data:`EXAMPLES`)."""
     if name not in EXAMPLES:
         raise InputError(f"no example {name!r}; expected one of {sorted(EXAMPLES)}",
-                         field="example")  # fmt: skip
+                         field="example")
     return _HERE / EXAMPLES[name]
 
 

@@ -100,5 +100,5 @@ def interpolate(ref: np.ndarray, known: np.ndarray, at: np.ndarray) -> np.ndarra
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.nan_to_num((x - nodes[1]) / (nodes[2] - nodes[1]))
     w = np.where(cubic[:, None], np.nan_to_num(w), np.c_[np.zeros_like(t), 1.0 - t, t,
-                                                        np.zeros_like(t)])  # fmt: skip
+                                                        np.zeros_like(t)])
     return sum(w[:, k, None] * known[ref[i]] for k, i in enumerate((i0, i1, i2, i3)))

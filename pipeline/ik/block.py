@@ -122,7 +122,7 @@ def _coupling(C: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
 
 
 def _solve_normal(At: np.ndarray, g: np.ndarray, C: np.ndarray, mu: float, b: BlockSetup,
-                  free: np.ndarray | None) -> np.ndarray:  # fmt: skip
+                  free: np.ndarray | None) -> np.ndarray:
     """``x`` with ``H x = g`` for every frame, ``H = (A^T A) o C + mu I`` (``At = A^T``: (B, na,
     3), the world axes of the DoFs as rows), the rows and columns of held DoFs (``free == 0``)
     replaced by the identity.
@@ -175,7 +175,7 @@ def block_frame_rotations(b: BlockSetup, Q: np.ndarray) -> np.ndarray:
 def _task_rotations(b: BlockSetup, Rw: dict[int, np.ndarray]) -> np.ndarray:
     """The task frames' world rotations (B, k, 3, 3) from the joints' ``Rw``."""
     return np.stack([times(Rw[j], P) for j, P in zip(b.frame_joints, b.frame_rotations,
-                                                     strict=True)], axis=1)  # fmt: skip
+                                                     strict=True)], axis=1)
 
 
 def solve_block(

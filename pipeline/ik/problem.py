@@ -232,7 +232,7 @@ def setup_ik(
     bsel = np.flatnonzero(bounded)
     problem = IKProblem(model, model.createData(), tuple(tasks), fids, RtT, finite, q_ref, cols, cs,
                         cq, masks, weights, bq, blo, bhi, bsel, euclid, max_iters, tol,
-                        float(damping), float(regularization), extrapolate)  # fmt: skip
+                        float(damping), float(regularization), extrapolate)
     problem.Wm_all, problem.C_all = problem.normal_weights(weights)
     problem.mu_eye = float(damping) * np.eye(na)
     problem.all_bounded = bool(bounded.all())

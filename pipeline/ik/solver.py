@@ -123,7 +123,7 @@ def orientation_residuals(
 def solve_frame(
     p: IKProblem, n: int, q: np.ndarray, previous: np.ndarray | None = None,
     tol: float | None = None,
-) -> tuple[np.ndarray, int, bool]:  # fmt: skip
+) -> tuple[np.ndarray, int, bool]:
     """Gauss-Newton on frame ``n`` from ``q`` (updated in place): ``(q, iterations, converged)``.
     ``tol``: the stopping tolerance (default the problem's).
 
@@ -239,7 +239,7 @@ def solve_ik(
     """
     p = setup_ik(model, targets, weights, q0=q0, root=root, max_iters=max_iters, tol=tol,
                  limits=limits, damping=damping, regularization=regularization,
-                 extrapolate=extrapolate)  # fmt: skip
+                 extrapolate=extrapolate)
     if not isinstance(stride, int | np.integer) or stride < 1:
         raise InputError(f"stride must be an integer >= 1, got {stride!r}", field="stride")
     b = None if stride == 1 or extrapolate else block_setup(p)
@@ -314,7 +314,7 @@ def _solve_strided(
 
 
 def _refine(p: IKProblem, b: BlockSetup, frames: np.ndarray, Q: np.ndarray, iters: np.ndarray,
-            conv: np.ndarray) -> None:  # fmt: skip
+            conv: np.ndarray) -> None:
     """``frames`` (all targets present) solved to ``tol`` in a block from ``Q[frames]``, in
     place (iterations added); the per-frame solver finishes what the block did not, with
     ``max_iters`` steps of its own."""

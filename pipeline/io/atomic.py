@@ -51,7 +51,7 @@ def output_dir(path: str | Path, *, create: bool = True) -> Path:
             path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(f"cannot create the output directory: {exc.strerror}", file=path,
-                             field="out") from exc  # fmt: skip
+                             field="out") from exc
         existing = path
     if not os.access(existing, os.W_OK | os.X_OK):
         what = "the output directory" if existing == path else f"its parent {existing}"

@@ -150,7 +150,7 @@ def check_rate(
         for unit, factor in (("milliseconds", 1e-3), ("microseconds", 1e-6)):
             if lo <= info.rate_hz / factor <= hi:
                 hint = (f"; the time looks like {unit} (that would be "
-                        f"{info.rate_hz / factor:.4g} Hz): expected seconds")  # fmt: skip
+                        f"{info.rate_hz / factor:.4g} Hz): expected seconds")
                 break
         raise InputError(
             f"the time stamps give {info.rate_hz:.4g} Hz (median interval {info.dt_s:.6g}), "
@@ -259,7 +259,7 @@ def check_quaternions(
         ok = np.all(np.isfinite(q), axis=1)
         out = np.full_like(q, np.nan)
         out[ok] = check_quaternions(q[ok], norm_range=norm_range, notes=notes, file=file,
-                                    field=field, note_above=note_above)  # fmt: skip
+                                    field=field, note_above=note_above)
         return out
     if bad.size:
         raise InputError(

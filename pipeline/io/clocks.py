@@ -57,7 +57,7 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
         if _jumps(r.time, r.rate_hz) is None:
             return Recording(r.time - r.time[0], r.rate_hz, {name: r.sensor},
                              _header(r.rate_hz, recs.values()), r.notes, source,
-                             _own_notes(recs))  # fmt: skip
+                             _own_notes(recs))
     rate = check_same_rate({n: r.rate_hz for n, r in recs.items()}, file=source)
     first = next(iter(recs.values()))
     reference = float(device_time(first)[0])
@@ -81,10 +81,10 @@ def align_clocks(recs: Mapping[str, Recording], *, source: Path | None = None) -
     if not same:
         spread = 1e3 * (max(starts.values()) - min(starts.values()))
         notes.append(f"clocks aligned by time stamp: devices started up to {spread:.1f} ms apart; "
-                     f"resampled to {rate:.4g} Hz over {t1 - t0:.2f} s")  # fmt: skip
+                     f"resampled to {rate:.4g} Hz over {t1 - t0:.2f} s")
         notes += _uncovered(times, t0, t1, rate)
     return Recording(t - t0, float(rate), sensors, _header(rate, recs.values()), tuple(notes),
-                     source, _own_notes(recs))  # fmt: skip
+                     source, _own_notes(recs))
 
 
 def _jumps(time: np.ndarray, rate_hz: float) -> list[int] | None:
@@ -113,7 +113,7 @@ def _on_grid(s: SensorSignals, tr: np.ndarray, t: np.ndarray, rate: float) -> Se
     for key in ("gyr", "acc", "mag"):
         v = getattr(s, key)
         fields[key] = None if v is None else np.stack(
-            [np.interp(t, tr, v[:, k]) for k in range(3)], axis=1)  # fmt: skip
+            [np.interp(t, tr, v[:, k]) for k in range(3)], axis=1)
     fields["quat"] = None if s.quat is None else _nlerp(tr, s.quat, t)
     for v in fields.values():
         if v is not None:

@@ -53,7 +53,7 @@ def read_config(path: str | Path, options: list[Spec]) -> dict[str, object]:
     if unknown:
         expected = ", ".join(f"[{s}]" for s in sections)
         raise InputError(f"unknown section(s) {sorted(unknown)}; expected {expected}", file=path,
-                         field=sorted(unknown)[0])  # fmt: skip
+                         field=sorted(unknown)[0])
     for section, table in data.items():
         if not isinstance(table, dict):
             raise InputError("expected a table", file=path, field=section)
@@ -70,7 +70,7 @@ def read_config(path: str | Path, options: list[Spec]) -> dict[str, object]:
             if spec is None:
                 names = [n for (sec, n) in by_key if sec == section]
                 raise InputError(f"unknown key; expected one of {names}", file=path,
-                                 field=f"{section}.{key}")  # fmt: skip
+                                 field=f"{section}.{key}")
             out[key] = from_toml(spec, value, path.parent, path)
     return out
 
@@ -93,7 +93,7 @@ def _read_text(path: Path) -> str:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputError(f"not UTF-8 text (byte {exc.start}): save it as UTF-8",
-                         file=path) from None  # fmt: skip
+                         file=path) from None
     if "\x00" in text:
         raise InputError("not a text file (it holds NUL bytes)", file=path)
     return text

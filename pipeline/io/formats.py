@@ -47,7 +47,7 @@ __all__ = ["DOCUMENTS", "FORMATS", "Format", "apply_sensor_map", "read_recording
 _HEAD_LINES = 40
 #: Entries of a folder that are documents, never recordings: left out with a note.
 DOCUMENTS = ("README*", "LICENSE*", "LICENCE*", "COPYING*", "*.md", "*.pdf", "*.docx", "*.png",
-             "*.jpg")  # fmt: skip
+             "*.jpg")
 
 
 @dataclass(frozen=True)
@@ -77,12 +77,12 @@ def _is_xsens_mt(path: Path, head: list[str]) -> bool:
     header = _header_line(head)
     orient = any(c in header for c in ("Quat_q0", "Mat[1][1]", "Roll"))
     return head[0].startswith("//") or orient or (path.suffix.lower() == ".txt"
-                                                  and "PacketCounter" in header)  # fmt: skip
+                                                  and "PacketCounter" in header)
 
 
 def _is_dot(path: Path, head: list[str]) -> bool:
     return (not _is_xsens_mt(path, head) and not _is_sto(path, head)
-            and any(ln.startswith("PacketCounter") for ln in head))  # fmt: skip
+            and any(ln.startswith("PacketCounter") for ln in head))
 
 
 def _is_imu_csv(path: Path, head: list[str]) -> bool:
@@ -108,7 +108,7 @@ FORMATS: tuple[Format, ...] = (
 #: is wrong with it (an empty .sto, a truncated export).
 _BY_SUFFIX = {".sto": "sto", ".mot": "sto", ".txt": "xsens_mt", ".csv": "imu_csv"}
 _EXPECTED = ("expected " + ", ".join(f.description for f in FORMATS[1:])
-             + " (one sensor per file), or " + FORMATS[0].description)  # fmt: skip
+             + " (one sensor per file), or " + FORMATS[0].description)
 
 
 def _head(path: Path) -> list[str]:
@@ -142,7 +142,7 @@ def read_recording(
     if sensor_map is not None and not isinstance(sensor_map, Mapping):
         raise InputError(f"expected a mapping of our sensor names to the recording's, e.g. "
                          f"{{'pelvis_imu': '00B40B91'}}, got {type(sensor_map).__name__} "
-                         f"{sensor_map!r:.60}", field="sensor_map")  # fmt: skip
+                         f"{sensor_map!r:.60}", field="sensor_map")
     path = resolve(path)
     if not path.exists():
         raise InputError("no such file or folder", file=path)
@@ -189,7 +189,7 @@ def _read_folder(folder: Path, sensor_map: Mapping[str, str], ignore: Sequence[s
         if fmt is None or not fmt.one_sensor:
             what = "holds several sensors" if fmt is not None else "is not a recording"
             raise InputError(f"{what}: in a folder, {_EXPECTED}; leave it out with --ignore "
-                             f"{entry.name!r}", file=entry)  # fmt: skip
+                             f"{entry.name!r}", file=entry)
         rec = fmt.read(entry)
         recs[entry.name] = rec.with_sensors({_entry_name(entry): rec.sensor})
     if not recs:
@@ -219,7 +219,7 @@ def _merge_names(recs: dict[str, Recording], folder: Path) -> _Named:
         name = rec.name
         if name in named:
             raise InputError(f"two entries give sensor {name!r}: {named.entries[name]} and "
-                             f"{entry}", file=folder)  # fmt: skip
+                             f"{entry}", file=folder)
         named[name], named.entries[name] = rec, entry
     return named
 
@@ -238,16 +238,16 @@ def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False
     for ours, theirs in sensor_map.items():
         if ours not in SENSOR_NAMES:
             raise InputError(f"expected a sensor name among {list(SENSOR_NAMES)}, got {ours!r}",
-                             file=source, field=f"sensors.{ours}")  # fmt: skip
+                             file=source, field=f"sensors.{ours}")
         hits = [n for n in names if n == theirs] or [n for n in names
                                                      if any(theirs in k for k in known[n])]
         if len(hits) != 1:
             what = "no sensor" if not hits else f"several sensors ({hits})"
             raise InputError(f"{what} of the recording matches {theirs!r}; its sensors: {names}",
-                             file=source, field=f"sensors.{ours}")  # fmt: skip
+                             file=source, field=f"sensors.{ours}")
         if hits[0] in renamed:
             raise InputError(f"sensor {hits[0]!r} is mapped twice", file=source,
-                             field=f"sensors.{ours}")  # fmt: skip
+                             field=f"sensors.{ours}")
         renamed[hits[0]] = our_name(ours) or ours
     unnamed = []
     for n in names:
@@ -261,12 +261,12 @@ def apply_sensor_map(rec, sensor_map: Mapping[str, str], *, folder: bool = False
         raise InputError(f"no sensor name for {where}: name each file after a sensor "
                          "(pelvis_imu.csv, femur_r_imu.csv, ...) or give --sensor-map "
                          "NAME=<part of its name>, or leave it out with --ignore",
-                         file=source, field="sensor_map")  # fmt: skip
+                         file=source, field="sensor_map")
     taken: dict[str, str] = {}
     for theirs, ours in renamed.items():
         if ours in taken:
             raise InputError(f"two sensors for {ours}: {taken[ours]!r} and {theirs!r}",
-                             file=source, field=f"sensors.{ours}")  # fmt: skip
+                             file=source, field=f"sensors.{ours}")
         taken[ours] = theirs
     if isinstance(rec, _Named):
         out = _Named({renamed[n]: rec[n] for n in names})

@@ -44,7 +44,7 @@ class Missing:
     def of(self, sensors) -> Missing:
         """The spans of ``sensors`` alone."""
         return Missing({k: v for k, v in self.spans.items() if k in sensors},
-                       self.restarted & frozenset(sensors))  # fmt: skip
+                       self.restarted & frozenset(sensors))
 
     def breaks(self, sensors, n: int) -> np.ndarray:
         """(n,) bool: the samples missing of those ``sensors`` whose filter started again
@@ -122,7 +122,7 @@ def fill_gaps(
             if notes is not None:
                 notes.add(f"missing {b - a} sample(s) ({(b - a) * dt:.3g} s) from t={t[a]:.4g} s "
                           f"to t={t[b - 1]:.4g} s: longer than the {max_gap_s:g} s that may be "
-                          "interpolated, not bridged", file=file, field=field)  # fmt: skip
+                          "interpolated, not bridged", file=file, field=field)
         runs = [r for r in runs if r not in long]
     for a, b in runs:
         dur = (b - a) * dt

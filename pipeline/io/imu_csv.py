@@ -87,7 +87,7 @@ def read_imu_csv(
     has_m = [c in labels for c in MAG_COLUMNS]
     if any(has_m) and not all(has_m):
         raise InputError(f"incomplete magnetometer: expected all of {', '.join(MAG_COLUMNS)}",
-                         file=path, field="header")  # fmt: skip
+                         file=path, field="header")
     notes = Notes()
     extra = [c for c in labels if c not in (*required, *QUAT_COLUMNS, *MAG_COLUMNS)]
     if extra:
@@ -124,7 +124,7 @@ def read_imu_csv(
             first_line=2,
         )
     return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, mag=mag, source=path,
-                            notes=notes.as_tuple())  # fmt: skip
+                            notes=notes.as_tuple())
 
 
 def write_imu_csv(path: str | Path, rec: Recording) -> Path:

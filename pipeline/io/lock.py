@@ -48,14 +48,14 @@ def _holder(path: Path) -> dict | None:
 
 def _stale(holder: dict | None) -> bool:
     return (holder is not None and holder.get("host") == socket.gethostname()
-            and not _alive(int(holder.get("pid", -1))))  # fmt: skip
+            and not _alive(int(holder.get("pid", -1))))
 
 
 def _take(path: Path, what: str) -> None:
     fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
     with os.fdopen(fd, "w") as f:
         json.dump({"pid": os.getpid(), "host": socket.gethostname(),
-                   "started": time.strftime("%Y-%m-%d %H:%M:%S"), "what": what}, f)  # fmt: skip
+                   "started": time.strftime("%Y-%m-%d %H:%M:%S"), "what": what}, f)
 
 
 @contextlib.contextmanager
@@ -74,9 +74,9 @@ def output_lock(out_dir: str | Path, what: str, notes: list[str] | None = None) 
         if not _stale(holder):
             by = ("another run" if holder is None else
                   f"another run (pid {holder.get('pid')} on {holder.get('host')}, started "
-                  f"{holder.get('started')}: {holder.get('what')})")  # fmt: skip
+                  f"{holder.get('started')}: {holder.get('what')})")
             raise InputError(f"{by} is writing into this folder: wait for it, or give another "
-                             "--out", file=out, field="out") from None  # fmt: skip
+                             "--out", file=out, field="out") from None
         path.unlink(missing_ok=True)
         _take(path, what)
         if notes is not None:

@@ -103,7 +103,7 @@ def read_orientations_sto(
     flat = ["time"] + [f"{s}[{c}]" for s in sensors_names for c in "wxyz"]
     cells = 1 + len(sensors_names)
     rows = [_missing_cells(r, cells) if "\t\t" in r or r.endswith("\t") or "nan" in r.lower()
-            else r for r in rows]  # fmt: skip
+            else r for r in rows]
     try:
         data = parse_table(rows, flat, file=path, first_line=first_line, also_sep=",")
     except InputError as e:
@@ -126,7 +126,7 @@ def read_orientations_sto(
         )
     rate = float(declared_rate(header, path) or info.rate_hz)
     return Recording.from_orientations(time, rate, sensors, header=header, notes=notes.as_tuple(),
-                                       source=path)  # fmt: skip
+                                       source=path)
 
 
 def write_orientations_sto(

@@ -72,7 +72,7 @@ class SensorSignals:
         """Whether the gyroscope's and the accelerometer's signals are there, every sample
         finite (what a joint's fit or a stride's view needs)."""
         return (self.gyr is not None and self.acc is not None
-                and bool(np.isfinite(self.gyr).all() and np.isfinite(self.acc).all()))  # fmt: skip
+                and bool(np.isfinite(self.gyr).all() and np.isfinite(self.acc).all()))
 
     def low_passed(self, rate_hz: float, cutoff_hz: float) -> SensorSignals:
         """The gyroscope's and the accelerometer's signals low-passed
@@ -86,7 +86,7 @@ class SensorSignals:
         orientation ``q' = q R``."""
         R = np.asarray(R, dtype=float)
         vectors = {k: getattr(self, k) @ R for k in ("gyr", "acc", "mag")
-                   if getattr(self, k) is not None}  # fmt: skip
+                   if getattr(self, k) is not None}
         if self.quat is not None:
             vectors["quat"] = quat_from_matrix(matrix_from_quat(self.quat) @ R)
         return self.replace(**vectors)
@@ -142,7 +142,7 @@ class Recording:
         """Orientations only: sensor name -> (N, 4) ``[w, x, y, z]``."""
         sensors = {name: SensorSignals(quat=np.asarray(q, float)) for name, q in quats.items()}
         return cls(np.asarray(time, float), float(rate_hz), sensors, dict(header or {}),
-                   tuple(notes), source)  # fmt: skip
+                   tuple(notes), source)
 
     def with_sensors(self, sensors: Mapping[str, SensorSignals]) -> Recording:
         """The same recording with other sensors (same time base)."""

@@ -42,13 +42,13 @@ SEGMENT_SENSOR = {seg: name for name, seg in SENSOR_TO_SEGMENT.items()}
 SENSOR_ALIASES = {"foot_r_imu": "calcn_r_imu", "foot_l_imu": "calcn_l_imu"}
 #: The model's IMU frame names (what ``pipeline simulate`` names its files) -> our sensor names.
 MODEL_FRAME_NAMES = {f"{seg}_imu": name for name, seg in SENSOR_TO_SEGMENT.items()
-                     if seg != "torso"}  # fmt: skip
+                     if seg != "torso"}
 #: x-IMU3 example labels (lower case) -> our sensor names.
 XIMU3_LABELS = {
     "pelvis": "pelvis_imu",
     "right upper leg": "femur_r_imu", "right lower leg": "tibia_r_imu", "right foot": "calcn_r_imu",
     "left upper leg": "femur_l_imu", "left lower leg": "tibia_l_imu", "left foot": "calcn_l_imu",
-}  # fmt: skip
+}
 #: Every name a sensor map may use on its left side (ours and the aliases).
 SENSOR_NAMES = tuple(sorted(set(SENSOR_TO_SEGMENT) | set(SENSOR_ALIASES)))
 

@@ -68,7 +68,7 @@ def _ascii_corners(data: bytes, path: Path) -> np.ndarray:
     text = data.decode("ascii", errors="replace")
     if not text.lstrip().lower().startswith("solid"):
         raise InputError("not an STL file (neither a binary STL of the right size nor ASCII "
-                         "'solid ...')", file=path)  # fmt: skip
+                         "'solid ...')", file=path)
     rows = [line.split()[1:4] for line in text.splitlines() if line.strip().startswith("vertex")]
     try:
         corners = np.array(rows, dtype=float).reshape(-1, 3)
@@ -76,7 +76,7 @@ def _ascii_corners(data: bytes, path: Path) -> np.ndarray:
         raise InputError(f"unreadable ASCII STL vertex: {exc}", file=path) from exc
     if len(corners) == 0 or len(corners) % 3:
         raise InputError(f"ASCII STL with {len(corners)} vertices: expected whole triangles",
-                         file=path)  # fmt: skip
+                         file=path)
     return corners
 
 

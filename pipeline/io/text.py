@@ -48,7 +48,7 @@ def parse_table(
         for start in range(0, len(lines), chunk):
             line0 = None if first_line is None else first_line + start
             parts.append(parse_table(lines[start : start + chunk], labels, sep=sep, file=file,
-                                     first_line=line0, also_sep=also_sep, chunk=chunk))  # fmt: skip
+                                     first_line=line0, also_sep=also_sep, chunk=chunk))
         return np.concatenate(parts)
     n = len(labels)
     fast = _parse_whole(lines, n, sep, also_sep)

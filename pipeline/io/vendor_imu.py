@@ -46,7 +46,7 @@ __all__ = ["DOT_COLUMNS", "G", "read_movella_dot_csv", "read_ximu3_folder"]
 G = 9.80665  # standard gravity: x-IMU3 accelerometers report g
 DOT_COLUMNS = ("PacketCounter", "SampleTimeFine", "Quat_W", "Quat_X", "Quat_Y", "Quat_Z",
                "Acc_X", "Acc_Y", "Acc_Z", "Gyr_X", "Gyr_Y", "Gyr_Z", "Mag_X", "Mag_Y", "Mag_Z",
-               "Status")  # fmt: skip
+               "Status")
 
 
 def _columns(rows, labels, path, first_line, names, field):
@@ -55,7 +55,7 @@ def _columns(rows, labels, path, first_line, names, field):
     missing = [c for c in names if c not in idx]
     if missing:
         raise InputError(f"missing column(s) {', '.join(missing)}; found {labels}", file=path,
-                         field=field)  # fmt: skip
+                         field=field)
     return data, idx
 
 
@@ -68,7 +68,7 @@ def _unwrap_ticks(ticks: np.ndarray, modulus: float) -> np.ndarray:
 
 #: Columns of DOT exports (app and SDK) that are read when present, and those known and not used.
 DOT_READ = {"SampleTimeFine", *(f"{k}_{a}" for k in ("Acc", "Gyr", "Mag", "Euler") for a in "XYZ"),
-            *(f"Quat_{a}" for a in "WXYZ")}  # fmt: skip
+            *(f"Quat_{a}" for a in "WXYZ")}
 DOT_NOT_USED = ("PacketCounter", "Status", "FreeAcc_", "dq_", "dv_", "UTC_", "Timestamp")
 
 
@@ -78,7 +78,7 @@ def _check_dot_columns(labels: list[str], path: Path, notes: Notes) -> None:
     if unknown:
         raise InputError(f"column(s) {unknown} are not Movella DOT export columns (expected "
                          f"{sorted(DOT_READ)} and the app's {list(DOT_NOT_USED)})", file=path,
-                         field="header")  # fmt: skip
+                         field="header")
     unused = [c for c in labels if c not in DOT_READ and c not in ("PacketCounter", "Status")]
     if unused:
         notes.add(f"DOT columns not used: {unused}", file=path)
@@ -101,7 +101,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     start = next((i for i, ln in enumerate(lines) if ln.startswith("PacketCounter")), None)
     if start is None:
         raise InputError("no header line starting with 'PacketCounter' (a Movella DOT export)",
-                         file=path)  # fmt: skip
+                         file=path)
     semicolons = ";" in lines[start] and "," not in lines[start]  # a decimal-comma locale
     labels = [s.strip() for s in _dot_line(lines[start], semicolons).split(",")]
     rows = [_dot_line(ln, semicolons) for ln in lines[start + 1 :] if ln.strip()]
@@ -112,7 +112,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     notes = Notes()
     if semicolons:
         notes.add("separated by semicolons with decimal commas (a decimal-comma locale): read so",
-                  file=path)  # fmt: skip
+                  file=path)
     _check_dot_columns(labels, path, notes)
     time = _unwrap_ticks(data[:, idx["SampleTimeFine"]], 2.0**32) * 1e-6
     clock = {"clock_start_s": repr(float(time[0])), "clock_wrap_s": repr(2.0**32 * 1e-6),
@@ -122,7 +122,7 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
 
     def cols(names, field, kind="vector"):
         return fill_gaps(time, data[:, [idx[c] for c in names]], kind=kind, max_gap_s=max_gap_s,
-                         notes=notes, file=path, field=field, keep_long=True)  # fmt: skip
+                         notes=notes, file=path, field=field, keep_long=True)
 
     gyr = np.radians(cols(("Gyr_X", "Gyr_Y", "Gyr_Z"), "Gyr"))  # deg/s in the file
     acc = cols(("Acc_X", "Acc_Y", "Acc_Z"), "Acc")
@@ -133,12 +133,12 @@ def read_movella_dot_csv(path: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP
     if "Quat_W" in idx:
         quat = check_quaternions(cols(("Quat_W", "Quat_X", "Quat_Y", "Quat_Z"), "Quat",
                                       "quaternion"), notes=notes, file=path,
-                                 field="Quat", allow_missing=True)  # fmt: skip
+                                 field="Quat", allow_missing=True)
     elif "Euler_X" in idx:  # roll, pitch, yaw in degrees; R = Rz(yaw) Ry(pitch) Rx(roll)
         eul = np.radians(cols(("Euler_Z", "Euler_Y", "Euler_X"), "Euler"))
         quat = quat_from_matrix(matrix_from_euler_zyx(eul))
     return Recording.single(path.stem, time, quat=quat, gyr=gyr, acc=acc, mag=mag, source=path,
-                            header=clock, notes=notes.as_tuple())  # fmt: skip
+                            header=clock, notes=notes.as_tuple())
 
 
 def _ximu3_csv(path: Path, names: tuple[str, ...]):
@@ -166,7 +166,7 @@ def read_ximu3_folder(folder: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_
     t = check_time(t, file=inertial, field="Timestamp (us)", first_line=2)
     check_rate(t, notes=notes, file=inertial, field="Timestamp (us)")
     v = fill_gaps(t, v, kind="vector", max_gap_s=max_gap_s, notes=notes, file=inertial,
-                  field="Inertial", keep_long=True)  # fmt: skip
+                  field="Inertial", keep_long=True)
     gyr, acc = np.radians(v[:, :3]), v[:, 3:] * G
     check_gyro_units(gyr, file=inertial, field="Gyroscope")
     check_acc_units(acc, file=inertial, field="Accelerometer")
@@ -176,14 +176,14 @@ def read_ximu3_folder(folder: str | Path, *, max_gap_s: float = DEFAULT_MAX_GAP_
         tq, q = _ximu3_csv(qpath, ("W", "X", "Y", "Z"))
         if tq.shape != t.shape or np.abs(tq - t).max() > 1e-6:
             raise InputError("expected the Inertial.csv time stamps", file=qpath,
-                             field="Timestamp (us)")  # fmt: skip
+                             field="Timestamp (us)")
         quat = check_quaternions(q, notes=notes, file=qpath, field="W,X,Y,Z", first_line=2,
-                                 allow_missing=True)  # fmt: skip
+                                 allow_missing=True)
     if mpath.is_file():
         tm, m = _ximu3_csv(mpath, tuple(f"{a} (a.u.)" for a in "XYZ"))
         tm = check_time(tm, file=mpath, field="Timestamp (us)", first_line=2)
         mag = np.stack([np.interp(t, tm, m[:, k]) for k in range(3)], axis=1)
         notes.add(f"magnetometer at {1 / np.median(np.diff(tm)):.0f} Hz interpolated onto the "
-                  f"inertial time stamps", file=mpath)  # fmt: skip
+                  f"inertial time stamps", file=mpath)
     return Recording.single(folder.name, t, quat=quat, gyr=gyr, acc=acc, mag=mag, source=folder,
-                            header={WORLD: "ximu3"}, notes=notes.as_tuple())  # fmt: skip
+                            header={WORLD: "ximu3"}, notes=notes.as_tuple())

@@ -181,7 +181,7 @@ def read_xsens_txt(
     clock: dict[str, str] = {}  # the device clock at the first sample (pipeline.io.clocks)
     if stf is not None and np.all(np.isfinite(stf)):
         clock = {"clock_start_s": repr(float(stf[0]) / SAMPLE_TIME_FINE_HZ),
-                 "clock_wrap_s": repr(2.0**32 / SAMPLE_TIME_FINE_HZ)}  # fmt: skip
+                 "clock_wrap_s": repr(2.0**32 / SAMPLE_TIME_FINE_HZ)}
         ticks = np.concatenate([[0.0], np.cumsum(np.mod(np.diff(stf), 2.0**32))])
         time = check_time(
             ticks / SAMPLE_TIME_FINE_HZ, file=path, field="SampleTimeFine", first_line=first_line
@@ -212,7 +212,7 @@ def read_xsens_txt(
         if pc is not None and np.all(np.isfinite(pc)):
             index = _counter_steps(pc, path, first_line)
             clock = {"clock_start_s": repr(float(pc[0]) / rate),
-                     "clock_wrap_s": repr(65536.0 / rate)}  # fmt: skip
+                     "clock_wrap_s": repr(65536.0 / rate)}
             n_drop = int(index[-1] + 1 - index.size)
             if n_drop:
                 notes.add(f"{n_drop} dropped packet(s) (PacketCounter jumps)", file=path)
@@ -231,7 +231,7 @@ def read_xsens_txt(
         if np.all(np.isnan(v)):
             return None
         return fill_gaps(time, v, max_gap_s=max_gap_s, notes=notes, file=path, field=prefix,
-                         keep_long=True)  # fmt: skip
+                         keep_long=True)
 
     acc, gyr, mag = vectors("Acc"), vectors("Gyr"), vectors("Mag")
     if acc is not None:
@@ -241,15 +241,15 @@ def read_xsens_txt(
     if orient is not None and not np.isfinite(block(orient[1])).any():
         orient = None  # the orientation columns are there but empty: a raw-signal export
         notes.add("the orientation columns are empty: read as raw signals", file=path,
-                  field="orientation")  # fmt: skip
+                  field="orientation")
     if orient is None:  # raw signals only: the orientations come from an attitude filter
         if acc is None or gyr is None:
             raise InputError("the Acc and Gyr columns are empty and there are no orientation "
-                             "columns", file=path, field="header")  # fmt: skip
+                             "columns", file=path, field="header")
         header = {**comments, **clock, "orientation_from": "none", WORLD: "xsens"}
         return Recording.single(_sensor_id(path), time, gyr=gyr, acc=acc, mag=mag,
                                 rate_hz=float(rate), header=header, notes=notes.as_tuple(),
-                                source=path)  # fmt: skip
+                                source=path)
     kind, cols = orient
     raw = block(cols)
     if kind != "quaternion":
@@ -282,8 +282,8 @@ def read_xsens_txt(
         keep_long=True,
     )
     quat = check_quaternions(quat, notes=notes, file=path, field="orientation",
-                             allow_missing=True)  # fmt: skip
+                             allow_missing=True)
     header = {**comments, **clock, "orientation_from": kind, WORLD: "xsens"}
     return Recording.single(_sensor_id(path), time, quat=quat, gyr=gyr, acc=acc, mag=mag,
                             rate_hz=float(rate), header=header, notes=notes.as_tuple(),
-                            source=path)  # fmt: skip
+                            source=path)

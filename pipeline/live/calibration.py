@@ -63,7 +63,7 @@ class LiveCalibration:
 
 
 def calibrate_capture(rec: Recording, measures: Measures, opts: IKOptions,
-                      live: dict[str, dict[str, np.ndarray]]) -> LiveCalibration:  # fmt: skip
+                      live: dict[str, dict[str, np.ndarray]]) -> LiveCalibration:
     """The calibration of the capture so far ``rec`` (module docstring); ``live``: kind ->
     sensor -> (N, 3, 3) the live orientations of its frames (y-up world;
     :class:`~pipeline.live.orientation.LiveOrientations`), to match the offline ones."""
@@ -73,11 +73,11 @@ def calibrate_capture(rec: Recording, measures: Measures, opts: IKOptions,
     run = process_recording(rec, measures, opts)
     if not run.sensors.pelvis:
         raise InputError("pipeline live needs a pelvis sensor (pelvis_imu) for now; pipeline ik "
-                         "processes a recording without one", field="sensor_map")  # fmt: skip
+                         "processes a recording without one", field="sensor_map")
     rows = slice(max(0, rec.n_samples - int(MATCH_S * rec.rate_hz)), None)
     turns, offline = {}, None
     nine_d = frozenset(n for n, f in run.magnetometers.items() if f.trusted) if run.filtered \
-        else frozenset()  # fmt: skip
+        else frozenset()
     if run.filtered:
         offline = orientations_from_signals(rec, opts.filter, []).recording
     for seg in run.sensors.segments:
@@ -91,7 +91,7 @@ def calibrate_capture(rec: Recording, measures: Measures, opts: IKOptions,
     return LiveCalibration(run.skeleton, run.sensors, run.placements, H, np.array(run.q[-1]),
                            turns, nine_d,
                            run.calibration, is_final(run), float(rec.time[-1]), list(run.notes),
-                           list(run.flags))  # fmt: skip
+                           list(run.flags))
 
 
 def _last_known(turns: np.ndarray | None) -> float:

@@ -72,7 +72,7 @@ class LiveCapture:
 
     def __init__(self, source, measures: Measures, opts: IKOptions, *, viewer=None,
                  duration_s: float | None = None, in_line: bool = False,
-                 say: Callable[[str], None] = print) -> None:  # fmt: skip
+                 say: Callable[[str], None] = print) -> None:
         self.source, self.measures, self.opts = source, measures, opts
         self.viewer, self.duration_s, self.in_line, self.say = viewer, duration_s, in_line, say
         self.header = dict(getattr(source, "header", {}) or {})
@@ -120,9 +120,9 @@ class LiveCapture:
             return True
         if self.orient is None:
             own = self.opts.filter is None and all(s.quat is not None
-                                                   for s in block.sensors.values())  # fmt: skip
+                                                   for s in block.sensors.values())
             self.orient = LiveOrientations(self.source.names, self.source.rate_hz, own,
-                                           self._world(own, block))  # fmt: skip
+                                           self._world(own, block))
         kinds = self.orient.update(block.sensors)
         rotations = self.orient.chosen(kinds)
         self.store.add(block, kinds)
@@ -136,7 +136,7 @@ class LiveCapture:
                 self.viewer.log(block.time, poses, angles, self.tracker.cal)
         self._angles.append(angles, m)
         self._frame_s.append({"s": np.full(m, (time.perf_counter() - arrived - calibrating) / m)},
-                             m)  # fmt: skip
+                             m)
         return self.duration_s is not None and block.time[-1] >= self.duration_s - 1e-9
 
     def _world(self, own: bool, block: Block) -> np.ndarray | None:
@@ -211,4 +211,4 @@ def _first(block: Block, m: int) -> Block:
     return Block(block.time[:m], {n: s.replace(**{g: getattr(s, g)[:m] for g in
                                                   ("quat", "gyr", "acc", "mag")
                                                   if getattr(s, g) is not None})
-                                  for n, s in block.sensors.items()})  # fmt: skip
+                                  for n, s in block.sensors.items()})

@@ -53,20 +53,20 @@ def layout_of(labels: list[str], stream: str, n_channels: int | None = None) -> 
     labels = [str(x).strip().lower() for x in labels]
     if n_channels is not None and len(labels) != n_channels:
         raise InputError(f"stream {stream!r} has {n_channels} channels but {len(labels)} labels: "
-                         f"{_expected()}", field="channels")  # fmt: skip
+                         f"{_expected()}", field="channels")
     where = {label: k for k, label in enumerate(labels)}
     known = {label for group in GROUPS.values() for label in group}
     unknown = [x for x in labels if x not in known]
     if unknown or len(where) != len(labels):
         what = f"unknown labels {unknown}" if unknown else "a label repeated"
         raise InputError(f"stream {stream!r}: {what} in {labels}: {_expected()}",
-                         field="channels")  # fmt: skip
+                         field="channels")
     columns = {}
     for signal, group in GROUPS.items():
         have = [x in where for x in group]
         if any(have) and not all(have) or signal in _REQUIRED and not all(have):
             raise InputError(f"stream {stream!r}: {signal} incomplete in {labels}: "
-                             f"{_expected()}", field="channels")  # fmt: skip
+                             f"{_expected()}", field="channels")
         if all(have):
             columns[signal] = tuple(where[x] for x in group)
     return Layout(columns, len(labels))

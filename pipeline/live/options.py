@@ -23,17 +23,17 @@ class LiveOptions:
 
     replay: str | None = option(None, "path", "a recording (any that pipeline ik reads) played as "
                                 "if live (default: none; --lsl or this)", section="live",
-                                metavar="RECORDING")  # fmt: skip
+                                metavar="RECORDING")
     lsl: bool = option(False, "bool", "read the Lab Streaming Layer streams of type IMU, one per "
                        "sensor, channels labelled as our IMU CSV's columns", section="live")
     speed: str = option("1", "text", "the replay's speed: a factor of real time, or max (as fast "
-                        "as it is processed)", section="live", metavar="X")  # fmt: skip
+                        "as it is processed)", section="live", metavar="X")
     duration_s: float | None = option(None, "float", "stop after this many seconds of capture "
                                       "(default: at the replay's end, or Ctrl-C)", section="live",
-                                      metavar="S")  # fmt: skip
+                                      metavar="S")
     viewer: str = option("auto", "choice", "where the capture is shown as it comes: a spawned "
                          "rerun viewer, the web viewer, none, or auto (spawned where a display "
-                         "is)", choices=VIEWERS, section="live")  # fmt: skip
+                         "is)", choices=VIEWERS, section="live")
 
     def __post_init__(self) -> None:
         if (self.replay is None) == (not self.lsl):
@@ -45,10 +45,10 @@ class LiveOptions:
                 ok = False
             if not ok:
                 raise InputError(f"expected a positive factor or max, got {self.speed!r}",
-                                 field="speed")  # fmt: skip
+                                 field="speed")
         if self.duration_s is not None and not self.duration_s > 0:
             raise InputError(f"expected a positive duration, got {self.duration_s}",
-                             field="duration_s")  # fmt: skip
+                             field="duration_s")
 
     @property
     def speed_factor(self) -> float:
@@ -58,4 +58,4 @@ class LiveOptions:
 def live_specs() -> list:
     """``pipeline live``'s options: its own and ``pipeline ik``'s but the recording's."""
     return specs(LiveOptions) + [s for s in all_specs()
-                                 if s.name not in ("orientations", "static_trial")]  # fmt: skip
+                                 if s.name not in ("orientations", "static_trial")]

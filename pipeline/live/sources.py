@@ -47,7 +47,7 @@ class ReplaySource:
 
     def __init__(self, rec: Recording, speed: float = 1.0, *, chunk_s: float = CHUNK_S,
                  clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep) -> None:  # fmt: skip
+                 sleep: Callable[[float], None] = time.sleep) -> None:
         if not speed > 0:
             raise InputError(f"expected a positive speed, got {speed}", field="speed")
         self.names, self.rate_hz = list(rec.sensor_names), float(rec.rate_hz)
@@ -85,18 +85,18 @@ class ReplaySource:
 
 
 def stream_name_map(names: list[str], sensor_map: Mapping[str, str] | None,
-                    where: str = "LSL") -> dict[str, str]:  # fmt: skip
+                    where: str = "LSL") -> dict[str, str]:
     """Stream name -> our sensor name: by ``sensor_map`` (our name -> the stream's name or a
     unique part of it), else the name itself when it is one we know (an alias, a label)."""
     out: dict[str, str] = {}
     for ours, theirs in (sensor_map or {}).items():
         if ours not in SENSOR_NAMES:
             raise InputError(f"expected a sensor name among {list(SENSOR_NAMES)}, got {ours!r}",
-                             field=f"sensors.{ours}")  # fmt: skip
+                             field=f"sensors.{ours}")
         hits = [n for n in names if n == theirs] or [n for n in names if theirs in n]
         if len(hits) != 1:
             raise InputError(f"{'no' if not hits else 'several'} {where} streams match "
-                             f"{theirs!r}: {names}", field=f"sensors.{ours}")  # fmt: skip
+                             f"{theirs!r}: {names}", field=f"sensors.{ours}")
         out[hits[0]] = ours
     for n in names:
         if n not in out and (ours := our_name(n)) is not None:
@@ -110,21 +110,21 @@ class LslSource:
     network)."""
 
     def __init__(self, sensor_map: Mapping[str, str] | None = None, *,
-                 resolve_s: float = RESOLVE_S, prefix: str = "") -> None:  # fmt: skip
+                 resolve_s: float = RESOLVE_S, prefix: str = "") -> None:
         from pipeline.optional import need
 
         lsl = need("pylsl", "pipeline live --lsl")
         infos = _resolve(lsl, prefix, resolve_s)
         if not infos:
             raise InputError(f"no LSL stream of type IMU found within {resolve_s:g} s",
-                             field="lsl")  # fmt: skip
+                             field="lsl")
         names = {i.name()[len(prefix):]: i for i in infos}
         mapped = stream_name_map(list(names), sensor_map)
         unnamed = sorted(set(names) - set(mapped))
         if unnamed:
             raise InputError(f"no sensor name for the LSL streams {unnamed}: name the streams "
                              "after our sensors or give --sensor-map NAME=<stream name>",
-                             field="sensor_map")  # fmt: skip
+                             field="sensor_map")
         self._lsl, self._inlets, self.layouts = lsl, {}, {}
         flags = lsl.proc_clocksync | lsl.proc_monotonize
         rates = {}
@@ -149,7 +149,7 @@ class LslSource:
                 continue
             if stamps:
                 chunks.append(Chunk(name, np.asarray(stamps, float),
-                                    split(np.asarray(values), self.layouts[name])))  # fmt: skip
+                                    split(np.asarray(values), self.layouts[name])))
         if not chunks:
             time.sleep(0.001)
         return chunks
@@ -181,7 +181,7 @@ def _layout(info, name: str) -> Layout:
 
 
 def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool] = lambda: False,
-                  prefix: str = "") -> int:  # fmt: skip
+                  prefix: str = "") -> int:
     """``rec``'s sensors as LSL outlets of type ``IMU`` (named ``prefix + sensor``), its samples
     pushed in real time (``speed``) with LSL time stamps; returns the samples pushed when the
     recording ends or ``stop()`` says so."""
@@ -193,7 +193,7 @@ def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool
         s = rec.sensors[name]
         groups = [g for g in GROUPS if getattr(s, g) is not None]
         info = lsl.StreamInfo(prefix + name, "IMU", sum(len(GROUPS[g]) for g in groups),
-                              rec.rate_hz, "float32", f"pipeline-{prefix}{name}")  # fmt: skip
+                              rec.rate_hz, "float32", f"pipeline-{prefix}{name}")
         channels = info.desc().append_child("channels")
         for g in groups:
             for label in GROUPS[g]:

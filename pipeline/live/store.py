@@ -84,7 +84,7 @@ class CaptureStore:
         if self._layout is None:
             self._layout = [(n, g, len(GROUPS[g])) for n in self.names
                             for g in GROUPS if getattr(block.sensors.get(n, SensorSignals()), g)
-                            is not None]  # fmt: skip
+                            is not None]
             self._spool = Spool(1 + sum(w for *_, w in self._layout))
         m = len(block.time)
         parts = [block.time[:, None]]
@@ -108,7 +108,7 @@ class CaptureStore:
             k += w
         return Recording(data[:, 0].copy(), rate_hz,
                          {n: SensorSignals(**sig) for n, sig in sensors.items()},
-                         dict(header))  # fmt: skip
+                         dict(header))
 
     def live_rotations(self) -> dict[str, dict[str, np.ndarray]]:
         """Kind (``own``, ``6-D``, ``9-D``) -> sensor -> (N, 3, 3) the live orientations."""

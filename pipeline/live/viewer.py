@@ -30,7 +30,7 @@ class LiveViewer:
     ``'web'`` (the web viewer on 127.0.0.1:``port``) or ``'save'`` (to ``path``, for tests)."""
 
     def __init__(self, name: str, mode: str, *, path: Path | None = None,
-                 port: int = 9090) -> None:  # fmt: skip
+                 port: int = 9090) -> None:
         import rerun as rr
 
         self.rr = rr
@@ -61,7 +61,7 @@ class LiveViewer:
         self._last = t
         frame = {seg: (R[-1], p[-1]) for seg, (R, p) in poses.items()}
         self._put(("frame", t, frame, {k: float(v[-1]) for k, v in angles.items()},
-                   cal if cal is not self._cal else None))  # fmt: skip
+                   cal if cal is not self._cal else None))
         self._cal = cal
 
     def _put(self, item) -> None:
@@ -92,7 +92,7 @@ class LiveViewer:
         for key, value in angles.items():
             side, joint, angle = key.split("_", 2) if key.count("_") >= 2 else ("", "", key)
             entity = f"plots/{side}_{joint}/{angle}" if side in ("right", "left") else \
-                f"plots/{key}"  # fmt: skip
+                f"plots/{key}"
             if np.isfinite(value):
                 s.log(entity, rr.Scalars(np.degrees(value)))
 
@@ -102,7 +102,7 @@ class LiveViewer:
         for seg, mesh in segment_meshes(cal.skeleton).items():
             self.stream.log(f"world/model/{seg}/mesh", self.rr.Mesh3D(
                 vertex_positions=mesh.vertices, triangle_indices=mesh.triangles,
-                vertex_normals=mesh.normals), static=True)  # fmt: skip
+                vertex_normals=mesh.normals), static=True)
 
     def close(self) -> None:
         """Log what is queued, then stop."""

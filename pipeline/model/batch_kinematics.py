@@ -68,7 +68,7 @@ class JointRotations:
             M = model.jointPlacements[j]
             R, t = (np.asarray(x, dtype=float).copy() for x in (M.rotation, M.translation))
             self.joints.append(_Joint(j, int(model.parents[j]), R, t, kind, axis, jm.idx_q,
-                                      jm.idx_v))  # fmt: skip
+                                      jm.idx_v))
         self._MK = {}  # (M, M K, M K^2) of each revolute joint
         self._cols = {}  # revolute joints about +-e_k: (i, j, k, sign, M is the identity)
         revolute = [jt for jt in self.joints if jt.kind == "revolute"]
@@ -179,7 +179,7 @@ class JointRotations:
 
     @staticmethod
     def axis_columns(owners: list[int], axes: np.ndarray
-                     ) -> list[tuple[int, int, float, np.ndarray]]:  # fmt: skip
+                     ) -> list[tuple[int, int, float, np.ndarray]]:
         """Per tangent DoF (``owners``, ``axes`` from :meth:`tangent_plan`): ``(joint, k, sign,
         axis)``, its world axis being ``sign`` times column ``k`` of the joint's rotation when
         the axis is ``+-e_k`` (``k = -1``: any other axis), for :meth:`world_axes`."""

@@ -127,7 +127,7 @@ def imu_frame_names(legs: Sequence[str] = ("right", "left")) -> list[str]:
 
 
 def joint_names(knee: str = "hinge", legs: Sequence[str] = ("right", "left"),
-                ankle: str = "universal") -> list[str]:  # fmt: skip
+                ankle: str = "universal") -> list[str]:
     """Actuated joints in URDF order (hip Z-X-Y, knee, ankle Z-X(-Y) per leg).
 
     Pinocchio orders the legs alphabetically (left first); use ``Skeleton`` for q indices.
@@ -163,7 +163,7 @@ def _revolute(
     name: str, parent: str, child: str, origin: np.ndarray, axis, limit_key: str
 ) -> Joint:
     return Joint(name, "revolute", parent, child, origin, axis=np.asarray(axis, dtype=float),
-                 limit=tuple(_LIMITS[limit_key]))  # fmt: skip
+                 limit=tuple(_LIMITS[limit_key]))
 
 
 def _fixed_frame(name: str, parent: str, T: np.ndarray) -> tuple[Link, Joint]:
@@ -202,7 +202,7 @@ def _placement(name: str, value: object) -> np.ndarray:
 
 
 def _leg(g: SubjectGeometry, knee: str, imus: Mapping[str, np.ndarray],
-         ankle: str = "universal") -> tuple[list, list]:  # fmt: skip
+         ankle: str = "universal") -> tuple[list, list]:
     side, lat = g.side, g.lateral_sign
     femur, tibia, foot = f"{side}_femur", f"{side}_tibia", f"{side}_foot"
     l_thigh, l_shank = g.thigh_length / _T_THIGH, g.shank_length / _T_SHANK

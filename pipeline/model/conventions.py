@@ -24,10 +24,10 @@ SEGMENTS = ("femur", "tibia", "foot")
 #: The segment each landmark is fixed in.
 LANDMARK_SEGMENT = {"HJC": "femur", "KJC": "femur", "EFM": "femur", "EFL": "femur",
                     "AJC": "tibia", "MM": "tibia", "LM": "tibia",
-                    "HEE": "foot", "MT1": "foot", "MT5": "foot", "TOE": "foot"}  # fmt: skip
+                    "HEE": "foot", "MT1": "foot", "MT5": "foot", "TOE": "foot"}
 #: Joint -> (proximal, distal) segment of one leg (the pelvis has no side), from the pelvis down.
 JOINT_SEGMENTS = {"hip": ("pelvis", "femur"), "knee": ("femur", "tibia"),
-                  "ankle": ("tibia", "foot")}  # fmt: skip
+                  "ankle": ("tibia", "foot")}
 
 
 def landmark_segment(frame: str) -> str:

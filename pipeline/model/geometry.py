@@ -155,7 +155,7 @@ class SubjectGeometry:
         if not 0.10 * h <= self.foot_length_m <= 0.20 * h:
             raise InputError(f"expected a foot length of 10-20 % of the height, got "
                              f"{self.foot_length_m:.3f} m for {h:.2f} m",
-                             field="foot_length")  # fmt: skip
+                             field="foot_length")
         if self.body_mass_kg is not None:
             m = float(self.body_mass_kg)
             if not np.isfinite(m) or not 20.0 <= m <= 250.0:
@@ -197,7 +197,7 @@ class SubjectGeometry:
 
         f = FOOT_FRACTIONS
         return {"HEE": at(0.0, 0.0), "MT1": at(f["MT1"], -0.5 * b), "MT5": at(f["MT5"], 0.5 * b),
-                "TOE": at(f["TOE"], 0.0)}  # fmt: skip
+                "TOE": at(f["TOE"], 0.0)}
 
     @property
     def thigh_length(self) -> float:

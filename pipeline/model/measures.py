@@ -66,22 +66,22 @@ class Measures:
     """A subject's body dimensions in metres (h required; the others optional, used if given)."""
 
     sex: str = option(None, "choice", "sex, for the regression equations", choices=("m", "f"),
-                      section="subject", required=True)  # fmt: skip
+                      section="subject", required=True)
     height_m: float = option(None, "float", "body height in metres", section="subject",
-                             required=True)  # fmt: skip
+                             required=True)
     shank_lateral_m: float | None = option(None, "float", f"s_L = |EFL - LM| in metres "
-                                           f"({_ABSENT})", section="subject")  # fmt: skip
+                                           f"({_ABSENT})", section="subject")
     shank_medial_m: float | None = option(None, "float", f"s_M = |EFM - MM| in metres "
-                                          f"({_ABSENT})", section="subject")  # fmt: skip
+                                          f"({_ABSENT})", section="subject")
     knee_width_m: float | None = option(None, "float", f"k = |EFM - EFL| in metres ({_ABSENT})",
-                                        section="subject")  # fmt: skip
+                                        section="subject")
     ankle_width_m: float | None = option(None, "float", f"a = |MM - LM| in metres ({_ABSENT})",
-                                         section="subject")  # fmt: skip
+                                         section="subject")
     pelvis_width_m: float | None = option(None, "float", "the distance between the anterior "
                                           "superior iliac spines in metres: the hip centres "
                                           "0.72 of it apart (Bell 1989; default: not measured, "
                                           "the template's hips scaled with height)",
-                                          section="subject")  # fmt: skip
+                                          section="subject")
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sex", normalize_sex(self.sex))
@@ -93,4 +93,4 @@ class Measures:
     def inputs_mm(self) -> dict[str, float]:
         """The available regression inputs ('h', 's_L', 's_M', 'k', 'a') in millimetres."""
         return {key: 1000.0 * getattr(self, name) for key, name in FIELD_OF_INPUT.items()
-                if getattr(self, name) is not None}  # fmt: skip
+                if getattr(self, name) is not None}

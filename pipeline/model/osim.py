@@ -55,7 +55,7 @@ _JOINTS = {  # joint -> (proximal, distal, [(coordinate, axis with L for the sid
                                 ("knee_rotation", (0, "L", 0))]),
     "ankle": ("tibia", "foot", [("ankle_angle", (0, 0, 1)), ("subtalar_angle", ("L", 0, 0)),
                                 (None, (0, 1, 0))]),
-}  # fmt: skip
+}
 _PELVIS = [("pelvis_tilt", (0, 0, 1)), ("pelvis_list", (1, 0, 0)), ("pelvis_rotation", (0, 1, 0))]
 
 
@@ -131,7 +131,7 @@ def osim_text(
         _sub(marker, "location", (np.linalg.inv(pose[seg]) @ skeleton.frame_pose(frame))[:3, 3])
         _sub(marker, "fixed", "true")
     return etree.tostring(root, xml_declaration=True, pretty_print=True,
-                          encoding="UTF-8").decode("utf-8")  # fmt: skip
+                          encoding="UTF-8").decode("utf-8")
 
 
 def _add_body(bodies, skeleton: Skeleton, segment: str, visuals: list) -> None:
@@ -255,7 +255,7 @@ def _range(skeleton: Skeleton, joint: str, coordinate: str) -> list[float]:
     side = {"r": "right", "l": "left"}.get(joint[-1], "")
     ours = {"hip_flexion": "hip_Z", "hip_adduction": "hip_X", "hip_rotation": "hip_Y",
             "knee_angle": "knee_Z", "knee_adduction": "knee_X", "knee_rotation": "knee_Y",
-            "ankle_angle": "ankle_Z", "subtalar_angle": "ankle_X"}.get(coordinate)  # fmt: skip
+            "ankle_angle": "ankle_Z", "subtalar_angle": "ankle_X"}.get(coordinate)
     name = f"{side}_{ours}"
     if ours is None or name not in skeleton.joint_names:
         return [-np.pi, np.pi]

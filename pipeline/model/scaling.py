@@ -61,7 +61,7 @@ def _aor_table(path: str) -> dict[str, PopulationKneeAxis]:
             t = np.array([float(r[f"tibia_{a}"]) for a in "xyz"])
             sds = [np.radians(float(r[k])) for k in (
                 "sd_femur_transverse_deg", "sd_femur_frontal_deg",
-                "sd_tibia_transverse_deg", "sd_tibia_frontal_deg")]  # fmt: skip
+                "sd_tibia_transverse_deg", "sd_tibia_frontal_deg")]
             out[r["sex"]] = PopulationKneeAxis(
                 r["sex"], int(r["n_subjects"]), normalize(f), normalize(t), *sds
             )
@@ -129,7 +129,7 @@ def _landmarks_at(measures: Measures, table: RegressionTable | None) -> Landmark
     at = predict_landmarks(dataclasses.replace(measures, height_m=bound), table=table)
     k = h / bound
     return LandmarkPositions({n: k * p for n, p in at.femur.items()},
-                             {n: k * p for n, p in at.tibia.items()}, at.equations)  # fmt: skip
+                             {n: k * p for n, p in at.tibia.items()}, at.equations)
 
 
 #: The hip centre's distance from the midline as a share of the inter-ASIS distance: Bell et al.

@@ -75,7 +75,7 @@ def _root_joint(root: str):
     if root not in ROOTS:
         raise InputError(f"expected root in {ROOTS}, got {root!r}", field="root")
     return {"fixed": None, "freeflyer": pin.JointModelFreeFlyer,
-            "spherical": pin.JointModelSpherical}[root]  # fmt: skip
+            "spherical": pin.JointModelSpherical}[root]
 
 
 @dataclass

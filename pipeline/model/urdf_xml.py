@@ -29,7 +29,7 @@ __all__ = [
 
 _EPS = float(np.finfo(float).eps) * 4.0
 _INERTIA = (("ixx", (0, 0)), ("ixy", (0, 1)), ("ixz", (0, 2)), ("iyy", (1, 1)), ("iyz", (1, 2)),
-            ("izz", (2, 2)))  # fmt: skip
+            ("izz", (2, 2)))
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ def rpy_from_matrix(T: np.ndarray) -> tuple[float, float, float]:
     cy = np.sqrt(M[0, 0] * M[0, 0] + M[1, 0] * M[1, 0])
     if cy > _EPS:
         return (float(atan2(M[2, 1], M[2, 2])), float(atan2(-M[2, 0], cy)),
-                float(atan2(M[1, 0], M[0, 0])))  # fmt: skip
+                float(atan2(M[1, 0], M[0, 0])))
     return float(atan2(-M[1, 2], M[1, 1])), float(atan2(-M[2, 0], cy)), 0.0
 
 
@@ -100,7 +100,7 @@ def _num(values) -> str:
 
 def _origin(parent, T: np.ndarray) -> None:
     etree.SubElement(parent, "origin", attrib={"xyz": _num(np.asarray(T)[:3, 3]),
-                                                "rpy": _num(rpy_from_matrix(T))})  # fmt: skip
+                                                "rpy": _num(rpy_from_matrix(T))})
 
 
 def _material(parent, m: Material) -> None:

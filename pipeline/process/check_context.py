@@ -43,7 +43,7 @@ class CheckContext:
         if not gone.any():
             return s
         return s.replace(**{k: np.where(gone[:, None], np.nan, v) for k in ("quat", "gyr", "acc",
-                            "mag") if (v := getattr(s, k)) is not None})  # fmt: skip
+                            "mag") if (v := getattr(s, k)) is not None})
 
     @property
     def missing(self) -> Missing:

@@ -100,7 +100,7 @@ def calibrate_knees(
             continue
         n, own = trial.n_samples, trial.present(thigh, shank)  # not over a bridged gap
         moving = np.flatnonzero((np.linalg.norm(s1.gyr, axis=1) + np.linalg.norm(s2.gyr, axis=1)
-                                 > MOVING_RAD_S) & own)  # fmt: skip
+                                 > MOVING_RAD_S) & own)
         if n < 2 * min_samples or moving.size < 2 * min_samples:
             continue
         middle = int(moving[moving.size // 2])
@@ -109,14 +109,14 @@ def calibrate_knees(
         full, first, second = (fit_joint(trial.time, s1, s2, rows, method,
                                          shared_world=shared_world,
                                          verify_start=rows is halves[0])
-                               for rows in halves)  # fmt: skip
+                               for rows in halves)
         sign = 1.0 if float(first.axis_1 @ second.axis_1) >= 0 else -1.0
         split = float(np.degrees(max(angle_between(first.axis_1, sign * second.axis_1),
                                      angle_between(first.axis_2,
-                                                   sign * second.axis_2))))  # fmt: skip
+                                                   sign * second.axis_2))))
         # eq 6 alone: |w_1 x j_1| - |w_2 x j_2| (rad/s), over the whole trial
         r = (np.linalg.norm(np.cross(s1.gyr[own], full.axis_1), axis=1)
-             - np.linalg.norm(np.cross(s2.gyr[own], full.axis_2), axis=1))  # fmt: skip
+             - np.linalg.norm(np.cross(s2.gyr[own], full.axis_2), axis=1))
         residual = float(np.sqrt(np.mean(r**2)))
         vs_model = (float("nan") if placements is None else
                     _vs_model(full.axis_1, full.axis_2, placements, side, model_axes[side]))
@@ -128,10 +128,10 @@ def calibrate_knees(
         if residual > RESIDUAL_BOUND_RAD_S:
             reasons.append(f"hinge residual {residual:.2f} rad/s (> {RESIDUAL_BOUND_RAD_S:g})")
         axes_ok = (not any(u.startswith("ax") for u in full.observability.undetermined)
-                   and split <= SPLIT_HALF_DEG and residual <= RESIDUAL_BOUND_RAD_S)  # fmt: skip
+                   and split <= SPLIT_HALF_DEG and residual <= RESIDUAL_BOUND_RAD_S)
         out.append(KneeCalibration(side, full.axis_1, full.axis_2, split, residual,
                                    full.observability.determined, vs_model, not reasons,
-                                   "; ".join(reasons), axes_ok))  # fmt: skip
+                                   "; ".join(reasons), axes_ok))
     return out
 
 
@@ -169,7 +169,7 @@ def _vs_model(axis_thigh, axis_shank, placements, side, model_axes):
 
 
 def fit_joint(time, s1, s2, rows: slice | np.ndarray, method: str, *, shared_world: bool,
-              joint: str = "hinge", verify_start: bool = True, **options):  # fmt: skip
+              joint: str = "hinge", verify_start: bool = True, **options):
     """Hu 2021's calibration of one joint between sensors ``s1`` and ``s2``
     (:class:`~pipeline.io.recording.SensorSignals`) on the samples ``rows``, at most
     :data:`MAX_SAMPLES` of them (``verify_start``: solved again from an independent start);
@@ -192,11 +192,11 @@ def fit_joint(time, s1, s2, rows: slice | np.ndarray, method: str, *, shared_wor
         q1 = None if q1 is None else q1[keep]
         q2 = None if q2 is None else q2[keep]
     return calibrate(d, joint, method, quat_1=q1, quat_2=q2, verify_start=verify_start,
-                     **options)  # fmt: skip
+                     **options)
 
 
 def joint_residual(time, rate_hz: float, s1, s2, *, joint: str = "spherical", cutoff_hz: float,
-                   step: int, method: str = DEFAULT_METHOD) -> float:  # fmt: skip
+                   step: int, method: str = DEFAULT_METHOD) -> float:
     """RMS residual of :func:`fit_joint` between sensors ``s1`` and ``s2`` on their signals
     low-passed at ``cutoff_hz``, fitted on every ``step``-th sample and measured on all: Hu 2021
     eq 3 (``joint='spherical'``, the centre's force, m/s^2) or eq 6 (``'hinge'``, rad/s)."""
@@ -208,10 +208,10 @@ def joint_residual(time, rate_hz: float, s1, s2, *, joint: str = "spherical", cu
 
     s1, s2 = (s.low_passed(rate_hz, cutoff_hz) for s in (s1, s2))
     fit = fit_joint(time, s1, s2, slice(None, None, step), method, shared_world=False,
-                    joint=joint, verify_start=False)  # fmt: skip
+                    joint=joint, verify_start=False)
     if joint == "hinge":
         e = hinge_residual(fit.axis_1, fit.axis_2, s1.gyr, s2.gyr)
     else:
         e = spherical_residual(fit.position_1_m, fit.position_2_m,
-                               joint_data(time, s1.gyr, s1.acc, s2.gyr, s2.acc))  # fmt: skip
+                               joint_data(time, s1.gyr, s1.acc, s2.gyr, s2.acc))
     return float(np.sqrt(np.nanmean(e**2)))

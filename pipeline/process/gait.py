@@ -95,7 +95,7 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
             paths[side] = path
         elif found:
             notes.append(f"{side} strides from the shank sensor {name} ({why}): times only, no "
-                         "length, speed, clearance or turn")  # fmt: skip
+                         "length, speed, clearance or turn")
         strides += found
     if not sources:
         notes.append("no strides: no foot or shank sensor with raw signals")
@@ -105,7 +105,7 @@ def gait_of(rec: Recording, notes: list[str]) -> Gait:
                                        swings else "swings found (" + ", ".join(
                                            f"{side} {n}" for side, n in swings.items())
                                        + f") but no two contacts of one foot within "
-                                       f"{MAX_STRIDE_S:g} s of each other"))  # fmt: skip
+                                       f"{MAX_STRIDE_S:g} s of each other"))
     return Gait(sorted(strides, key=lambda s: s.start_s), events, paths, sources)
 
 
@@ -126,7 +126,7 @@ def _stance_weight(ev: GaitEvents, n: int, rate_hz: float) -> np.ndarray:
 
 
 def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
-                     notes: list[str]) -> Gait:  # fmt: skip
+                     notes: list[str]) -> Gait:
     """``gait`` with its ``pelvis_path`` (module docstring); ``rec``: the recording in the
     model's world, ``Q`` the IK's configurations of ``skeleton`` (pelvis at the origin)."""
     from pipeline.analysis.landmarks import frame_trajectories
@@ -146,10 +146,10 @@ def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
     if unsolved:  # e.g. a foot sensor without its shank's and no pelvis sensor
         notes.append(f"the pelvis's path needs both feet's orientations from the IK, and the "
                      f"model has no {' or '.join(unsolved)} foot (its leg's joints are not "
-                     "observed): not written")  # fmt: skip
+                     "observed): not written")
         return gait
     soles = [f for f in skeleton.landmark_frames
-             if LANDMARK_SEGMENT.get(f.split("_", 1)[1]) == "foot"]  # fmt: skip
+             if LANDMARK_SEGMENT.get(f.split("_", 1)[1]) == "foot"]
     traj = frame_trajectories(skeleton, Q, feet + soles)
     first = {side: int(gait.events[side].rests[0][0]) for side in sides}
     order = sorted(sides, key=first.get)
@@ -158,7 +158,7 @@ def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
         s = rec.sensors[gait.sources[side].split()[-1]]
         R, p = traj[f"{side}_foot_imu"]
         path = foot_trajectory(s.gyr, s.acc, rec.rate_hz, gait.events[side].rests, rotation=R,
-                               up=1).position  # fmt: skip
+                               up=1).position
         k = first[side]
         pelvis_then = np.zeros(3) if not estimate else estimate[order[0]][k]
         estimate[side] = pelvis_then + p[k] + path - path[k] - p
@@ -175,7 +175,7 @@ def with_pelvis_path(gait: Gait, rec: Recording, skeleton, Q: np.ndarray,
     if soles:
         pelvis[:, 1] -= min(traj[f][1][k, 1] for f in soles) + pelvis[k, 1]
     notes.append("the pelvis's path: the stance foot carries the body (both foot sensors' paths "
-                 "with the IK's orientations; pelvis_tx/ty/tz in the .mot)")  # fmt: skip
+                 "with the IK's orientations; pelvis_tx/ty/tz in the .mot)")
     return replace(gait, pelvis_path=pelvis)
 
 
@@ -203,7 +203,7 @@ def too_short(strides: list[Stride]) -> str | None:
     if not strides or walked(strides):
         return None
     counts = ", ".join(f"{side} {sum(s.side == side for s in strides)}"
-                       for side in ("right", "left"))  # fmt: skip
+                       for side in ("right", "left"))
     return (f"a short walk ({counts} strides, {MIN_STRIDES} a leg needed): whether the legs' "
             "sensors are named for their sides, and the shanks' and feet's for their legs, was "
             "not checked")

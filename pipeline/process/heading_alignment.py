@@ -150,7 +150,7 @@ def align_headings(
                     how = f"the {joint} centre's acceleration"
                 else:
                     drift, how = knee_heading(trial, out[p], out[d], p, d, side, knees, axes[side],
-                                       method)  # fmt: skip
+                                       method)
                 _check_residual(drift)
             except InputError as e:
                 notes.append(f"{name}: {dist} sensor's heading not aligned: {e.message}")
@@ -184,7 +184,7 @@ def _rows_nan(R: np.ndarray) -> np.ndarray:
 def _check_residual(drift: HeadingDrift) -> None:
     if drift.residual_deg > MAX_RESIDUAL_DEG:
         raise InputError(f"the constraint's residual after the turn is "
-                         f"{drift.residual_deg:.1f} deg (> {MAX_RESIDUAL_DEG:g})")  # fmt: skip
+                         f"{drift.residual_deg:.1f} deg (> {MAX_RESIDUAL_DEG:g})")
 
 
 def _turned(name: str, dist: str, prox: str, how: str, drift: HeadingDrift) -> str:
@@ -195,7 +195,7 @@ def _turned(name: str, dist: str, prox: str, how: str, drift: HeadingDrift) -> s
             f"constraint residual {drift.residual_deg:.1f} deg, {drift.before_deg:.1f} deg with a "
             "constant heading)" + (f"; not observed on {100 * unknown:.0f}% of the samples (a "
             "filter started again after a sensor's gap, and no window after it shows the "
-            "heading): the joints it turns are blank there" if unknown else ""))  # fmt: skip
+            "heading): the joints it turns are blank there" if unknown else ""))
 
 
 def _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes) -> None:
@@ -214,7 +214,7 @@ def _align_adrift_thigh(trial, out, side, align, axes, drifts, method, notes) ->
         notes.append(f"{side} hip: the {side} leg keeps its thigh sensor's heading "
                      f"({'; '.join(reasons)}): the {side} hip's angles depend on how that sensor "
                      "sits, unreliable; its magnetometer or the vendor's orientations would give "
-                     "it the pelvis's")  # fmt: skip
+                     "it the pelvis's")
         return
     _turn_leg(out, side, drift, drifts)
     drifts[f"{side}_hip"] = drift
@@ -246,12 +246,12 @@ def _legs_in_one_heading(trial, out, align, axes, drifts, notes) -> None:
         _check_residual(drift)
     except InputError as e:
         notes.append(f"the two legs keep their thighs' own headings ({e.message}): the angles "
-                     "between the legs and the subject's heading may be unreliable")  # fmt: skip
+                     "between the legs and the subject's heading may be unreliable")
         return
     _turn_leg(out, side, drift, drifts)
     drifts[f"{side}_thigh"] = drift
     notes.append(_turned(f"{side} thigh", "femur", f"{other} femur", f"the {other} thigh's "
-                         "flexion axis (no pelvis sensor)", drift))  # fmt: skip
+                         "flexion axis (no pelvis sensor)", drift))
 
 
 def _leg_axes_of(axes, side: str) -> dict[str, FlexionAxis]:
@@ -276,7 +276,7 @@ def _by_other_thigh(trial, out, side, align, axes, drifts, method) -> tuple[Head
     o = f"{other}_femur"
     if o not in out or (o in align and f"{other}_hip" not in drifts):
         raise InputError(f"the {other} thigh's sensor is not in the pelvis sensor's heading "
-                         "either")  # fmt: skip
+                         "either")
     return _thigh_on_thigh(trial, out, axes, side), f"the {other} thigh's flexion axis"
 
 
@@ -295,15 +295,15 @@ def _by_pelvis_line(trial, out, side, align, axes, drifts, method) -> tuple[Head
         if f"{s}_femur" not in out or not has_signals(trial, f"{s}_femur"):
             continue
         fit, _, _ = centre_fit(trial, out["pelvis"], out[f"{s}_femur"], "pelvis", f"{s}_femur",
-                                method)  # fmt: skip
+                                method)
         rightward += sign * fit.position_1_m
     margin = float(rightward @ line) / max(float(np.linalg.norm(rightward)), 1e-9)
     if abs(margin) < MIN_SIDE_MARGIN:
         raise InputError(f"the hip centres do not say which way the pelvis's medio-lateral line "
-                         f"points (cosine {margin:.2f})")  # fmt: skip
+                         f"points (cosine {margin:.2f})")
     line = line if margin > 0 else -line
     drift = hinge_heading(out["pelvis"], out[femur], line, thigh.axis, trial.rate_hz, up=UP,
-                          window_s=WINDOW_S)  # fmt: skip
+                          window_s=WINDOW_S)
     return drift, "the pelvis's medio-lateral line (its list at the stride frequency)"
 
 

@@ -86,7 +86,7 @@ def signals_of(trial: Recording, segment: str):
 
 
 def knee_heading(trial, R_1, R_2, prox, dist, side, knees, axes,
-                 method) -> tuple[HeadingDrift, str]:  # fmt: skip
+                 method) -> tuple[HeadingDrift, str]:
     """The knee's heading by the trusted hinge axes where they hold, else by whichever of the knee
     centre's force and the segments' flexion axes the data hold better: the smaller residual,
     within :data:`MAX_RESIDUAL_DEG` where either is (module docstring)."""
@@ -94,16 +94,16 @@ def knee_heading(trial, R_1, R_2, prox, dist, side, knees, axes,
     if c is not None:  # the fit leaves each axis's sign free: the knee's flexion signs them
         rows = own_rows(trial, prox, dist)
         s_1, s_2 = knee_signs(*(np.einsum("nji,j->ni", R[rows], UP) for R in (R_1, R_2)),
-                              c.axis_thigh, c.axis_shank, trial.rate_hz)  # fmt: skip
+                              c.axis_thigh, c.axis_shank, trial.rate_hz)
         drift = hinge_heading(R_1, R_2, s_1 * c.axis_thigh, s_2 * c.axis_shank, trial.rate_hz,
-                              up=UP, window_s=WINDOW_S, breaks=breaks_of(trial, dist))  # fmt: skip
+                              up=UP, window_s=WINDOW_S, breaks=breaks_of(trial, dist))
         if drift.residual_deg <= MAX_HINGE_RESIDUAL_DEG:
             return drift, "the knee's hinge axis"
     solvers = {
         "the knee centre's acceleration": partial(ball_heading, trial, R_1, R_2, prox, dist,
                                                   method),
         "the segments' flexion axes": partial(flexion_heading, trial, R_1, R_2, axes, prox,
-                                              dist)}  # fmt: skip
+                                              dist)}
     found, why = {}, None  # how -> its drift
     for how, solve in solvers.items():
         try:
@@ -115,7 +115,7 @@ def knee_heading(trial, R_1, R_2, prox, dist, side, knees, axes,
     held = {k: d for k, d in found.items() if d.residual_deg <= MAX_RESIDUAL_DEG} or found
     best = min(held, key=lambda k: held[k].residual_deg)
     return held[best], best + "".join(f", not {k} (its residual {d.residual_deg:.1f} deg)"
-                                      for k, d in held.items() if k != best)  # fmt: skip
+                                      for k, d in held.items() if k != best)
 
 
 def leg_axes(trial: Recording, rotations, side: str) -> dict[str, FlexionAxis] | str:
@@ -142,7 +142,7 @@ def flexion_heading(trial: Recording, R_1, R_2, axes, prox: str, dist: str) -> H
     if prox not in axes or dist not in axes:
         raise InputError("raw gyroscope signals of both sensors are needed")
     return hinge_heading(R_1, R_2, axes[prox].axis, axes[dist].axis, trial.rate_hz, up=UP,
-                         window_s=WINDOW_S, breaks=breaks_of(trial, dist))  # fmt: skip
+                         window_s=WINDOW_S, breaks=breaks_of(trial, dist))
 
 
 def centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
@@ -158,7 +158,7 @@ def centre_fit(trial: Recording, R_1, R_2, prox: str, dist: str, method: str):
     options = {}
     if method == "ipopt":  # started alike however the sensors sit (the vertical's part of eq 2)
         c = joint_centre(trial.time, s1.gyr, s1.acc, R_1, s2.gyr, s2.acc, R_2, rows=rows,
-                         cutoff_hz=CUTOFF_HZ, shared_axis=1)  # fmt: skip
+                         cutoff_hz=CUTOFF_HZ, shared_axis=1)
         options = {"start": (c.o_1, c.o_2), "position_bound": CENTRE_BOUND_M}
     s1, s2 = (s.low_passed(rate, CUTOFF_HZ) for s in (s1, s2))
     return fit_joint(trial.time, s1, s2, rows, method, shared_world=False,
@@ -177,4 +177,4 @@ def ball_heading(trial: Recording, R_1, R_2, prox: str, dist: str, method: str) 
     u, v = (np.einsum("nij,nj->ni", R, f) for R, f in ((R_1, f1), (R_2, f2)))
     return heading_between(u, v, trial.rate_hz, up=UP, window_s=WINDOW_S,
                            min_weight=MIN_ACCELERATION**2,
-                           breaks=breaks_of(trial, dist))  # fmt: skip
+                           breaks=breaks_of(trial, dist))

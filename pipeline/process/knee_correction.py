@@ -44,7 +44,7 @@ from pipeline.process.functional import KneeCalibration
 from pipeline.process.pose import CalibrationPose
 
 __all__ = ["CORRECTIONS", "MAX_SPREAD_DEG", "KneeInputs", "apply_correction", "choose_correction",
-           "correct_knees"]  # fmt: skip
+           "correct_knees"]
 
 #: Largest angle (deg) between the corrections of the two halves of a knee's moving span for which
 #: a correction from the orientations is applied.
@@ -76,13 +76,13 @@ class KneeInputs:
 def _closed_form(k: KneeInputs, notes: list[str]) -> KneeCorrection:
     """Wang eq 9-12 on the AoR the orientations show (eq 1-8)."""
     return correct_knee(k.femur_R, k.tibia_R, k.axis_femur, k.axis_tibia, method="aor",
-                        side=k.side, rate_hz=k.rate_hz)  # fmt: skip
+                        side=k.side, rate_hz=k.rate_hz)
 
 
 def _ipopt(k: KneeInputs, notes: list[str]) -> KneeCorrection:
     """The whole-trial IPOPT version of eq 9-13 (:mod:`pipeline.calibration.aor_ipopt`)."""
     return correct_knee(k.femur_R, k.tibia_R, k.axis_femur, k.axis_tibia, method="aor-ipopt",
-                        side=k.side, rate_hz=k.rate_hz)  # fmt: skip
+                        side=k.side, rate_hz=k.rate_hz)
 
 
 def _functional(k: KneeInputs, notes: list[str]) -> KneeCorrection:
@@ -94,7 +94,7 @@ def _functional(k: KneeInputs, notes: list[str]) -> KneeCorrection:
         v_F = k.placement_thigh @ c.axis_thigh
         v_T = k.placement_shank @ c.axis_shank
         out = correct_knee_to_axes(k.femur_R, k.tibia_R, v_F, v_T, k.axis_femur, k.axis_tibia,
-                                   side=k.side)  # fmt: skip
+                                   side=k.side)
         if out.applied:
             return out
         why = f"its functional axis is not used: {out.reason}"
@@ -119,16 +119,16 @@ def choose_correction(k: KneeInputs, method: str, notes: list[str]) -> KneeCorre
     """One knee's correction by ``method`` with the decisions of the module docstring."""
     if not k.headings_shared:
         reason = ("its thigh and shank sensors' headings were not aligned: the AoR seen across "
-                  "two worlds is turned by their heading difference")  # fmt: skip
+                  "two worlds is turned by their heading difference")
         c = None
     else:
         c = CORRECTIONS[method](k, notes)
         reason = c.reason
     if c is None or not c.applied:  # as the reference population's knee
         c = population_correction(k.femur_R, k.tibia_R, k.axis_femur, k.axis_tibia,
-                                  k.pose_tibia_in_femur, side=k.side, reason=reason)  # fmt: skip
+                                  k.pose_tibia_in_femur, side=k.side, reason=reason)
         notes.append(f"{k.side} knee: its AoR is not seen ({c.reason}); corrected as the "
-                     "reference population's knee")  # fmt: skip
+                     "reference population's knee")
     elif c.method in ("aor", "aor-ipopt"):
         return _if_supported(k, c, notes)
     return c
@@ -166,7 +166,7 @@ def apply_correction(
 
 
 def correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, method: str,
-                  unaligned: set[str], rate_hz: float, notes: list[str]):  # fmt: skip
+                  unaligned: set[str], rate_hz: float, notes: list[str]):
     """Step 5 on every knee: ``(placements, corrections)``. ``rotations``: segment -> (N, 3, 3)
     sensor orientations; ``knee_axes``: side -> the reference axes (femur, tibia);
     ``knee_cal``: the knees' functional calibrations; ``unaligned``: the tibias whose sensors'
@@ -183,7 +183,7 @@ def correct_knees(rotations, cal: CalibrationPose, knee_axes, knee_cal, method: 
         k = KneeInputs(side, rotations[fem] @ P_F.T, rotations[tib] @ P_T.T, a_F, a_T,
                        cal.pose[fem].T @ cal.pose[tib], P_F, P_T, rate_hz,
                        calibrations.get(side),
-                       headings_shared=tib not in unaligned)  # fmt: skip
+                       headings_shared=tib not in unaligned)
         c = choose_correction(k, method, notes)
         corrections[side] = c
         placements = apply_correction(placements, c, cal.pose)

@@ -30,10 +30,10 @@ __all__ = ["blank_after_restart", "blank_angles", "blank_landmarks", "blank_path
 
 #: A segment -> the joints it takes part in.
 _JOINTS = {"pelvis": ("hip",), "femur": ("hip", "knee"), "tibia": ("knee", "ankle"),
-           "foot": ("ankle",)}  # fmt: skip
+           "foot": ("ankle",)}
 #: A segment -> the segments whose position hangs from it (the landmarks are the pelvis's).
 _BELOW = {"pelvis": ("femur", "tibia", "foot"), "femur": ("femur", "tibia", "foot"),
-          "tibia": ("tibia", "foot"), "foot": ("foot",)}  # fmt: skip
+          "tibia": ("tibia", "foot"), "foot": ("foot",)}
 
 
 def _channels(s: SensorSignals) -> list[np.ndarray]:
@@ -68,7 +68,7 @@ def bridged(rec: Recording, missing: Missing) -> Recording:
             v = getattr(s, key)
             if v is not None and not np.all(np.isfinite(v)) and np.isfinite(v).any():
                 filled[key] = fill_gaps(rec.time, v, kind="quaternion" if key == "quat" else
-                                        "vector", max_gap_s=np.inf)  # fmt: skip
+                                        "vector", max_gap_s=np.inf)
         sensors[name] = s.replace(**filled)
     return dataclasses.replace(rec.with_sensors(sensors), missing=missing)
 
@@ -106,7 +106,7 @@ def unknown_in(rotations: dict[str, np.ndarray]) -> Missing:
 
 
 def blank_after_restart(angles: dict[str, np.ndarray], keys, sensor: str, missing: Missing,
-                        notes: list[str]) -> dict[str, np.ndarray]:  # fmt: skip
+                        notes: list[str]) -> dict[str, np.ndarray]:
     """The angles ``keys`` NaN from ``sensor``'s first missing sample on: a sensor whose heading
     is its filter's own (6-D) has after a gap, where its filter started again, a heading no one
     observes (the pelvis's: the subject's heading its angles are taken in)."""
@@ -138,7 +138,7 @@ def blank_angles(angles: dict[str, np.ndarray], missing: Missing) -> dict[str, n
 
 
 def blank_landmarks(landmarks: dict[str, np.ndarray], missing: Missing,
-                    segment_of) -> dict[str, np.ndarray]:  # fmt: skip
+                    segment_of) -> dict[str, np.ndarray]:
     """The landmarks NaN where a sensor their segment's position needs is missing;
     ``segment_of``: landmark name -> its segment (``right_tibia``)."""
     out = {k: np.array(v, dtype=float) for k, v in landmarks.items()}
@@ -161,7 +161,7 @@ def blank_path(path: np.ndarray, missing: Missing) -> np.ndarray:
 
 
 def without_strides_over(strides: list, sources: dict[str, str], time: np.ndarray,
-                         missing: Missing, notes: list[str]) -> list:  # fmt: skip
+                         missing: Missing, notes: list[str]) -> list:
     """The strides but those overlapping a missing span of the sensor that gave their side's
     events (``sources``: side -> ``'foot sensor <name>'``); what was left out goes to
     ``notes``."""

@@ -59,7 +59,7 @@ _FOOT_LENGTH_RANGE_M = (0.15, 0.35)
 _FORMATS = ("an OpenSim .sto of quaternions, one IMU file (our CSV, Movella DOT .csv, Xsens MT "
             ".txt), or a folder of them (Xsens MT .txt exports, <sensor>.csv, Movella DOT "
             ".csv, x-IMU3 device folders), or example:NAME, a recording shipped with the "
-            "package (example:ximu3_lower_body, example:opensense_imu_ik_test)")  # fmt: skip
+            "package (example:ximu3_lower_body, example:opensense_imu_ik_test)")
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,12 @@ class IKOptions:
     help says what it does (``pipeline ik --help`` prints the same)."""
 
     knee: str = option(DEFAULT_KNEE, "choice", "knee model: free (3 rotations, Wang eq 15-17) or "
-                       "hinge (one about the knee AoR)", choices=KNEE_MODES)  # fmt: skip
+                       "hinge (one about the knee AoR)", choices=KNEE_MODES)
     correction: str = option(DEFAULT_CORRECTION, "choice", "knee-AoR orientation correction: "
                              "Wang eq 9-13 closed form (aor), whole-trial IPOPT (aor-ipopt), "
                              "towards the gyroscopes' hinge axis where the knee's functional "
                              "calibration is trusted (functional), or none",
-                             choices=CORRECTIONS)  # fmt: skip
+                             choices=CORRECTIONS)
     knee_axis_femur: tuple[float, float, float] | None = option(
         None, "vec3", "the subject's knee AoR in the femur frame (pointing right), for the hinge "
         "and the correction; both or neither (default: the population mean of the subject's sex)")
@@ -81,17 +81,17 @@ class IKOptions:
         None, "vec3", "the subject's knee AoR in the tibia frame (pointing right)")
     segment_orientations: bool = option(False, "bool", "the orientations are segment frames "
                                         "(ISB), e.g. an Xsens MVN suit export: no sensor "
-                                        "placement is estimated")  # fmt: skip
+                                        "placement is estimated")
     calibration_pose: str = option(DEFAULT_CALIBRATION_POSE, "choice", "the pose the subject "
                                    "holds still somewhere in the recording (or in "
                                    "--static-trial), found and checked; walking: none, each "
                                    "sensor calibrated from the walk (also where no still "
-                                   "window shows the pose)", choices=CALIBRATIONS)  # fmt: skip
+                                   "window shows the pose)", choices=CALIBRATIONS)
     filter: str | None = option(None, "choice", "attitude filter for raw gyroscope and "
                                 "accelerometer (and magnetometer) signals; also replaces "
                                 "orientations the recording has (default: the recording's own "
                                 f"orientations, {DEFAULT_FILTER} where it has none)",
-                                choices=FILTERS)  # fmt: skip
+                                choices=FILTERS)
     sensor_to_model: tuple[float, float, float] | None = option(
         None, "vec3", "fixed world rotation (rad, space-fixed XYZ) as OpenSense's "
         "sensor_to_opensim_rotations, making the world's y axis point up (default: y up already); "
@@ -99,23 +99,23 @@ class IKOptions:
     heading: str = option("anatomical", "choice", "how the subject's forward direction is found "
                           "at the calibration pose: from hip and knee flexion (anatomical, "
                           "independent of sensor mounting) or OpenSense's pelvis_imu:-z style",
-                          choices=HEADINGS, metavar="{anatomical,pelvis_imu:AXIS}")  # fmt: skip
+                          choices=HEADINGS, metavar="{anatomical,pelvis_imu:AXIS}")
     foot_length_m: float | None = option(None, "float", "heel-to-toe foot length in metres "
                                          "(default: 0.152 x height, Drillis & Contini 1966)")
     joint_limits: bool = option(True, "bool", "keep the joints within the model's ranges",
                                 off="let the joints leave the model's ranges")
     calibration_method: str = option(DEFAULT_METHOD, "choice", "joint-constraint calibration of "
                                      "knees with raw signals, reported with its trust decision "
-                                     "(none skips it)", choices=(*METHODS, "none"))  # fmt: skip
+                                     "(none skips it)", choices=(*METHODS, "none"))
     drift: str = option("auto", "choice", "sensors whose headings are their own (6-D filter "
                         "output, a disturbed magnetometer's sensor) turned into their neighbours' "
                         "world by the joints (auto), every sensor so (joints), or none",
-                        choices=DRIFT_CORRECTIONS)  # fmt: skip
+                        choices=DRIFT_CORRECTIONS)
     posture: str = option("measured", "choice", "the standing posture at the calibration pose: "
                           "the femurs' and tibias' forward lean measured from the joint centres "
                           "the raw signals locate (measured; upright where they cannot), or the "
                           "model's neutral pose with every joint at zero (neutral)",
-                          choices=POSTURES)  # fmt: skip
+                          choices=POSTURES)
 
     def __post_init__(self) -> None:
         for s in specs(IKOptions):
@@ -127,7 +127,7 @@ class IKOptions:
         axes = (self.knee_axis_femur, self.knee_axis_tibia)
         if (axes[0] is None) != (axes[1] is None):
             raise InputError("expected both knee axes (femur and tibia) or neither",
-                             field="knee_axis_femur")  # fmt: skip
+                             field="knee_axis_femur")
         for name, a in zip(("knee_axis_femur", "knee_axis_tibia"), axes, strict=True):
             if a is not None:
                 object.__setattr__(self, name, _unit(a, name))
@@ -139,7 +139,7 @@ class IKOptions:
             if not lo <= v <= hi:
                 hint = " (looks like cm or mm: give metres)" if v > hi else ""
                 raise InputError(f"expected a foot length of {lo}-{hi} m, got {v}{hint}",
-                                 field="foot_length_m")  # fmt: skip
+                                 field="foot_length_m")
             object.__setattr__(self, "foot_length_m", v)
 
     def replace(self, **changes: object) -> IKOptions:
@@ -149,7 +149,7 @@ class IKOptions:
     def as_dict(self) -> dict[str, object]:
         """Option name -> value (lists for vectors), None for an unset optional value."""
         return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
-                for f in dataclasses.fields(self)}  # fmt: skip
+                for f in dataclasses.fields(self)}
 
 
 @dataclass(frozen=True)
@@ -158,20 +158,20 @@ class InputOptions:
     recording's (``pelvis_imu`` -> ``00B421AF``, or any unique part of a name)."""
 
     orientations: str = option(None, "path", f"the recording: {_FORMATS}", required=True,
-                               metavar="PATH")  # fmt: skip
+                               metavar="PATH")
     static_trial: str | None = option(None, "path", "a separate static recording (same sensors) "
                                       "that gives the calibration pose (default: the first sample "
-                                      "of the trial)", metavar="PATH")  # fmt: skip
+                                      "of the trial)", metavar="PATH")
     sensor_map: Mapping[str, str] = option({}, "pairs", "our sensor name = the recording's "
                                            "sensor name, label or device id (a unique part of "
                                            "it), e.g. pelvis_imu=00B421AF femur_r_imu=thigh_R "
                                            "(default: the names as they are)", section="sensors",
                                            metavar="NAME=ID",
-                                           aliases=("--xsens-map",))  # fmt: skip
+                                           aliases=("--xsens-map",))
     ignore: tuple[str, ...] = option((), "words", "entries of a recording folder to leave out "
                                      "(file name patterns, e.g. notes.txt '*.log'), each named "
                                      "in the summary (default: none; any other entry that is not "
-                                     "a recording is an error)", metavar="PATTERN")  # fmt: skip
+                                     "a recording is an error)", metavar="PATTERN")
 
     def __post_init__(self) -> None:
         if isinstance(self.ignore, str) or not all(isinstance(p, str) for p in self.ignore):
@@ -188,10 +188,10 @@ class InputOptions:
         for key, value in self.sensor_map.items():
             if key not in SENSOR_NAMES:
                 raise InputError(f"expected a sensor name among {list(SENSOR_NAMES)}, got "
-                                 f"{key!r}", field=f"sensors.{key}")  # fmt: skip
+                                 f"{key!r}", field=f"sensors.{key}")
             if not isinstance(value, str) or not value:
                 raise InputError(f"expected the recording's sensor name or id as text, got "
-                                 f"{value!r}", field=f"sensors.{key}")  # fmt: skip
+                                 f"{value!r}", field=f"sensors.{key}")
         object.__setattr__(self, "sensor_map", dict(self.sensor_map))
 
     def replace(self, **changes: object) -> InputOptions:
@@ -209,25 +209,25 @@ class OutputOptions:
     out: str = option(None, "path", "output folder", required=True, metavar="DIR")
     name: str | None = option(None, "text", "the outputs' name (<name>_ik.mot, ...; default: the "
                               "recording's file or folder name; a generic folder name such as "
-                              "imu or data: its parent folder's)")  # fmt: skip
+                              "imu or data: its parent folder's)")
     rerun: bool = option(True, "bool", "write the .rrd recording (rerun)",
                          off="do not write the .rrd recording (rerun)")
     report: bool = option(True, "bool", "write <name>_report.html, the one-page gait report "
                           "(needs matplotlib, the 'report' extra: without it the run says so "
                           "and writes the rest)", off="do not write <name>_report.html")
     osim: bool = option(False, "bool", "also write <name>.osim, an OpenSim model whose "
-                        "coordinates are the .mot's columns")  # fmt: skip
+                        "coordinates are the .mot's columns")
     landmarks: str = option("pelvis", "choice", "landmark positions in <name>_landmarks.csv "
                             "relative to the pelvis (pelvis) or in the room (world: carried by "
                             "the feet, with a foot sensor on each foot; else relative to the "
-                            "pelvis, with a note)", choices=LANDMARK_FRAMES)  # fmt: skip
+                            "pelvis, with a note)", choices=LANDMARK_FRAMES)
     overwrite: bool = option(False, "bool", "replace a previous run's outputs of the same "
                              "recording in --out, removing its files of that name first (e.g. "
                              "an old .osim or .rrd); without it such a run is refused, naming "
-                             "the files")  # fmt: skip
+                             "the files")
     strict: bool = option(False, "bool", "implausible results (e.g. a large orientation "
                           "residual) exit with code 3 and write nothing (otherwise they are "
-                          "flagged in the summary and on stderr)")  # fmt: skip
+                          "flagged in the summary and on stderr)")
 
     def __post_init__(self) -> None:
         if self.out is not None and not isinstance(self.out, (str, Path)):
@@ -288,10 +288,10 @@ def resolve_settings(config: str | Path | None, values: Mapping[str, object]) ->
         if s.required and s.name not in merged:
             table = f"[{s.section}] {s.name}"
             raise InputError(f"{s.flag} is required (or {table} in the configuration file)",
-                             file=where)  # fmt: skip
+                             file=where)
     try:
         return IKSettings(*(_build(cls, merged) for cls in (Measures, InputOptions, IKOptions,
-                                                            OutputOptions)))  # fmt: skip
+                                                            OutputOptions)))
     except InputError as exc:
         if exc.file is None and where is not None:
             raise InputError(exc.message, file=where, field=exc.field) from None
@@ -333,7 +333,7 @@ def _replace(obj, changes: Mapping[str, object]):
     unknown = set(changes) - {f.name for f in dataclasses.fields(obj)}
     if unknown:
         raise InputError(f"unknown option(s) {sorted(unknown)}; expected some of "
-                         f"{[f.name for f in dataclasses.fields(obj)]}")  # fmt: skip
+                         f"{[f.name for f in dataclasses.fields(obj)]}")
     return dataclasses.replace(obj, **changes)
 
 
@@ -373,7 +373,7 @@ def _unit(a: object, name: str) -> tuple[float, float, float]:
         raise InputError("expected a non-zero axis, got a zero vector", field=name)
     if v[2] <= 0:
         raise InputError(f"expected an axis pointing right (z > 0 in the right-leg frame), got "
-                         f"{v}", field=name)  # fmt: skip
+                         f"{v}", field=name)
     return tuple(x / n for x in v)  # type: ignore[return-value]
 
 
@@ -384,7 +384,7 @@ def check_sensor_to_model(angles: object) -> tuple[float, float, float]:
         seq = [float(x) for x in (angles if hasattr(angles, "__iter__") else [angles])]  # type: ignore[union-attr]
     except (TypeError, ValueError):
         raise InputError(f"expected three angles in radians, got {angles!r}",
-                         field="sensor_to_model") from None  # fmt: skip
+                         field="sensor_to_model") from None
     if len(seq) != 3:
         raise InputError(f"expected three angles, got {len(seq)}", field="sensor_to_model")
     if not all(math.isfinite(x) for x in seq):
@@ -392,5 +392,5 @@ def check_sensor_to_model(angles: object) -> tuple[float, float, float]:
     if any(abs(x) > 2 * math.pi + 1e-9 for x in seq):
         rad = " ".join(f"{math.radians(x):.4f}" for x in seq)
         raise InputError(f"angles {seq} exceed 2 pi: they are radians; if you meant degrees, give "
-                         f"{rad}", field="sensor_to_model")  # fmt: skip
+                         f"{rad}", field="sensor_to_model")
     return seq[0], seq[1], seq[2]

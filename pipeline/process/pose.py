@@ -47,7 +47,7 @@ from pipeline.rotations import matrix_from_quat, rotation_aligning
 
 __all__ = ["MIN_STILL_S", "STILL_HEADING_DEG", "CalibrationPose", "PoseInputs",
            "read_calibration_pose", "static_orientations", "still_gravity",
-           "walking_calibration_pose"]  # fmt: skip
+           "walking_calibration_pose"]
 
 #: A still run shorter than this (s) gives no accelerometer vertical (:func:`still_gravity`).
 MIN_STILL_S = 0.5
@@ -154,10 +154,10 @@ def read_calibration_pose(
     start = (np.pi / 2, np.pi / 2) if options.calibration_pose == "seated" else (0.0, 0.0)
     pose0 = pose_rotations(inputs.model, options.calibration_pose, np.eye(3))  # zero heading
     knee_axes = {s: pose0[f"{s}_femur"] @ inputs.geometry.for_side(s).knee_axis_femur
-                 for s in inputs.legs}  # fmt: skip
+                 for s in inputs.legs}
     try:
         right = subject_right(cue, options.heading, notes=notes, start_flexion=start,
-                              knee_axes=knee_axes)  # fmt: skip
+                              knee_axes=knee_axes)
     except InputError:
         if _largest_joint_turn(rotations) > np.radians(STILL_HEADING_DEG):
             raise
@@ -165,7 +165,7 @@ def read_calibration_pose(
         if notes is not None:
             notes.append(f"no joint turns by {STILL_HEADING_DEG:g} deg: the subject's heading is "
                          "not observed and was taken as the world's z (a still subject's joint "
-                         "angles do not depend on it)")  # fmt: skip
+                         "angles do not depend on it)")
     H = heading_rotation(right)
     pose = pose_rotations(inputs.model, options.calibration_pose, H)
     if options.segment_orientations:
@@ -209,7 +209,7 @@ def walking_calibration_pose(
     up = np.array([0.0, 1.0, 0.0])
     z = (rotations["pelvis"][0] @ frames["pelvis"][2] if "pelvis" in frames else
          np.sum([rotations[f"{s}_femur"][0] @ frames[f"{s}_femur"][2] for s in inputs.legs],
-                axis=0))  # fmt: skip
+                axis=0))
     right = z - (z @ up) * up
     right = right / np.linalg.norm(right)
     H = heading_rotation(right)
@@ -228,7 +228,7 @@ def static_orientations(
     missing = sorted(set(segments) - set(still))
     if missing:
         raise InputError(f"the static trial lacks sensors for {missing}", file=static.source,
-                         field="static_trial")  # fmt: skip
+                         field="static_trial")
     notes.append(f"calibration pose ({pose_name}) from the static trial: mean of "
-                 f"{static.n_samples} samples")  # fmt: skip
+                 f"{static.n_samples} samples")
     return {seg: mean_rotation(still[seg]) for seg in segments}

@@ -47,7 +47,7 @@ POSE_TOL_DEG = 30.0
 #: Each pose's long axes (pelvis, femur, tibia: their ``y``) from the vertical (deg).
 _POSE_ELEVATION = {"standing": {"pelvis": 0.0, "femur": 0.0, "tibia": 0.0},
                    "supine": {"pelvis": 90.0, "femur": 90.0, "tibia": 90.0},
-                   "seated": {"pelvis": 0.0, "femur": 90.0, "tibia": 0.0}}  # fmt: skip
+                   "seated": {"pelvis": 0.0, "femur": 90.0, "tibia": 0.0}}
 _UP = np.array([0.0, 1.0, 0.0])
 
 
@@ -66,7 +66,7 @@ class PoseSource:
 
 
 def pose_errors(window: StillWindow, frames: WalkingFrames, rotations, pose: str
-                ) -> dict[str, float]:  # fmt: skip
+                ) -> dict[str, float]:
     """Segment -> how far (deg) its long axis lies in ``window`` from where ``pose`` puts it, its
     axes in its sensor's frame from the walk (``frames``)."""
     want = _POSE_ELEVATION[pose]
@@ -94,7 +94,7 @@ def source_of(trial, rotations, windows, gait, inputs: PoseInputs) -> PoseSource
 
 
 def calibrate(trial, rotations, source: PoseSource, inputs: PoseInputs, notes: list[str],
-              flags: list[str]) -> CalibrationPose:  # fmt: skip
+              flags: list[str]) -> CalibrationPose:
     """The calibration pose from the first source of the module docstring that holds; what was
     done goes to ``notes``, what was not as asked to ``flags``."""
     pose = inputs.options.calibration_pose
@@ -104,10 +104,10 @@ def calibrate(trial, rotations, source: PoseSource, inputs: PoseInputs, notes: l
     if pose == "walking":
         if source.frames is None:
             raise InputError(f"--calibration-pose walking: {source.why}",
-                             field="calibration_pose")  # fmt: skip
+                             field="calibration_pose")
         return _from_walk(rotations, source.frames, inputs, "asked for")
     checked = {w: _fits(w, source.frames, rotations, pose) for w in source.windows
-               if _all_oriented(w, rotations)}  # fmt: skip
+               if _all_oriented(w, rotations)}
     showing = [w for w, fit in checked.items() if fit is None or fit[0]]
     before = [w for w in showing if source.walk_starts is None or w.stop <= source.walk_starts]
     if before or (showing and source.frames is None):
@@ -123,7 +123,7 @@ def calibrate(trial, rotations, source: PoseSource, inputs: PoseInputs, notes: l
         return _from_walk(rotations, source.frames, inputs, why)
     flags.append(f"no still window (every sensor at rest for half a second) and no walk to "
                  f"calibrate from ({source.why}): the first sample is taken as the {pose} pose, "
-                 "unchecked")  # fmt: skip
+                 "unchecked")
     cal = read_calibration_pose(rotations, inputs, notes, gravity=still_gravity(trial, rotations))
     return _described(cal, f"{pose} pose assumed at the first sample (no still window, no walk)")
 
@@ -154,7 +154,7 @@ def _from_window(trial, rotations, window, inputs, notes, checked) -> Calibratio
     cal = read_calibration_pose(rotations, inputs, notes, at=window.start, gravity=gravity)
     fit = checked[window]
     check = ("not checked: no walk to check it by" if fit is None
-             else f"checked by the walk: {fit[1]}")  # fmt: skip
+             else f"checked by the walk: {fit[1]}")
     others = len(checked) - 1
     return _described(cal, f"{pose} pose, read in the still window {window.span} ({check})"
                       + (f"; {others} other still window(s)" if others else ""))

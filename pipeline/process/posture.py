@@ -80,7 +80,7 @@ from pipeline.model.conventions import other_side
 from pipeline.rotations import normalize, rot_z
 
 __all__ = ["HINGE_LIKE_DEG", "LENGTH_TOL", "MAX_LEAN_DEG", "MAX_RESIDUAL", "Posture",
-           "lean_pose", "standing_posture"]  # fmt: skip
+           "lean_pose", "standing_posture"]
 
 #: The centres' distance must be within this fraction of the model's shank length.
 LENGTH_TOL = 0.25
@@ -117,7 +117,7 @@ def _centre(trial: Recording, rotations, prox: str, dist: str) -> JointCentre:
     if any(s is None or s.gyr is None or s.acc is None for s in (s1, s2)):
         raise InputError("raw gyroscope and accelerometer signals of both sensors are needed")
     return joint_centre(trial.time, s1.gyr, s1.acc, rotations[prox], s2.gyr, s2.acc,
-                        rotations[dist])  # fmt: skip
+                        rotations[dist])
 
 
 def _hinge_axis(knee: JointCentre, ankle: JointCentre, ml: np.ndarray) -> np.ndarray | None:
@@ -196,7 +196,7 @@ def standing_posture(
             f"{side} leg leans {np.degrees(lean[f'{side}_tibia']):+.1f} deg"
             + (" (hinge-like centre fits: their place along the axis left out)"
                if hinged.get(side) else "")
-            for side in legs if f"{side}_tibia" in lean))  # fmt: skip
+            for side in legs if f"{side}_tibia" in lean))
     for side, why in unmeasured.items():
         notes.append(f"{side} leg: standing lean not measured ({why}); "
                      + _borrow_other_legs_lean(lean, side))

@@ -58,7 +58,7 @@ def prepared(trial: Recording, static, opts: IKOptions) -> Prepared:
     trial, gait, windows = ctx.rec, ctx.gait, ctx.windows
     notes += ctx.gait_notes
     gait = replace(gait, strides=without_strides_over(gait.strides, gait.sources, trial.time,
-                                                      missing, notes))  # fmt: skip
+                                                      missing, notes))
     notes += [short] if (short := too_short(gait.strides)) else []
     rejected = frozenset(f.sensor for f in findings if f.action == Action.ORIENTATION_FROM_SIGNALS)
     trial, static, oriented, world = _in_model_world(trial, static, opts, notes, rejected)
@@ -68,16 +68,16 @@ def prepared(trial: Recording, static, opts: IKOptions) -> Prepared:
         check_vertical(rotations["pelvis"], notes=notes, applied=world)
     elif not sensors.pelvis:
         notes.append("no pelvis sensor: hip and pelvis angles are not observed; landmarks are "
-                     "relative to each leg's hip centre")  # fmt: skip
+                     "relative to each leg's hip centre")
     if opts.heading != "anatomical" and not sensors.pelvis:
         raise InputError(f"heading {opts.heading!r} needs a pelvis sensor (pelvis_imu)",
-                         file=trial.source, field="heading")  # fmt: skip
+                         file=trial.source, field="heading")
     static_pose = None
     if static is not None:
         static_pose = static_orientations(static, list(rotations), notes,
-                                          opts.calibration_pose)  # fmt: skip
+                                          opts.calibration_pose)
     return Prepared(trial, oriented, rotations, sensors, findings, gait, windows, static_pose,
-                     notes)  # fmt: skip
+                     notes)
 
 
 def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=frozenset()):
@@ -89,7 +89,7 @@ def _in_model_world(trial, static, opts: IKOptions, notes: list[str], rejected=f
     if static is not None:
         notes += [f"static trial: {n}" for n in static.notes]
         static = orientations_from_signals(static, opts.filter if filtered else None,
-                                           []).recording  # fmt: skip
+                                           []).recording
     world, note = model_world(trial, opts, bool(filtered))
     notes += [note] if note else []
     if not np.allclose(world, np.eye(3)):
@@ -108,7 +108,7 @@ def model_world(trial: Recording, opts: IKOptions, filtered: bool) -> tuple[np.n
         if to_model is not None:
             raise InputError("--sensor-to-model applies to a recording's own orientations; the "
                              "filter's world is z up and is turned to y up already",
-                             file=trial.source, field="sensor_to_model")  # fmt: skip
+                             file=trial.source, field="sensor_to_model")
         to_model = Z_UP_TO_Y_UP
     elif to_model is None:
         to_model, note = world_to_model(trial)
@@ -119,7 +119,7 @@ def _segment_rotations(trial: Recording, notes: list[str]):
     """Step 1: segment -> (N, 3, 3) sensor orientations of the segments whose sensors observe a
     joint, and the :class:`SensorSet`; the others noted."""
     rotations = {seg: matrix_from_quat(q) for seg, q in map_sensors(trial).items()
-                 if seg != "torso"}  # fmt: skip
+                 if seg != "torso"}
     sensors = sensor_set(set(rotations), source=trial.source)
     ignored = sorted(set(trial.sensor_names) - set(known_segments(trial)))
     if ignored:

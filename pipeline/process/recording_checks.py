@@ -81,7 +81,7 @@ def check_units(rec: Recording) -> None:
     raise InputError(f"the gyroscopes turn {ratio:.3g} times as fast as gravity's direction "
                      f"turns in the accelerometers (median; {per}; 0.3-1.7 in rad/s, 57.3 times "
                      f"that for deg/s): they look like {hint}", file=rec.source,
-                     field="gyr")  # fmt: skip
+                     field="gyr")
 
 
 #: Quaternion order: refused as x, y, z, w when, read that way, the orientations keep gravity
@@ -118,7 +118,7 @@ def check_quaternion_order(rec: Recording) -> None:
         raise InputError("the orientations keep gravity vertical far better read as x, y, z, w "
                          f"than as w, x, y, z (median tilt, deg: {', '.join(each)}): "
                          "give the quaternions scalar first (w, x, y, z)", file=rec.source,
-                         field="quat")  # fmt: skip
+                         field="quat")
 
 
 #: A sensor's orientations turn as its gyroscope says when the median cosine between their rates

@@ -174,14 +174,14 @@ def process_recording(
     """
     if not isinstance(trial, Recording):
         raise InputError(f"expected a read Recording (pipeline.read_recording), got "
-                         f"{type(trial).__name__}", field="trial")  # fmt: skip
+                         f"{type(trial).__name__}", field="trial")
     opts = (options or IKOptions()).replace(**changes) if changes else (options or IKOptions())
     run = _one_pass(trial, measures, opts, static, check_sides=True)
     if not isinstance(run, Sides):
         return run
     parts, evidence = exchange_of(run, trial)  # the second pass: the legs' names read back
     again = _one_pass(mirrored(trial, parts), measures, opts, mirrored(static, parts),
-                      check_sides=False)  # fmt: skip
+                      check_sides=False)
     finding = Finding("femur_r_imu", "sides", Action.SWAPPED_BACK, evidence)
     again.sensor_findings.insert(0, finding)
     again.flags.insert(0, finding.line())
@@ -196,21 +196,21 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
     geometry = _geometry(measures, opts)
     legs, method = s.sensors.legs, _method(opts)
     inputs = PoseInputs(Skeleton.build(geometry, knee=opts.knee, legs=legs), geometry, legs,
-                        opts)  # fmt: skip
+                        opts)
     knee_axes = {side: (geometry.for_side(side).knee_axis_femur,
                         geometry.for_side(side).knee_axis_tibia)
-                 for side in legs if s.sensors.observes(side, "knee")}  # fmt: skip
+                 for side in legs if s.sensors.observes(side, "knee")}
     align = sensors_to_align(opts.drift, list(s.rotations), s.oriented.shared)
     knee_cal = []
     step("functional calibration and headings")
     if opts.calibration_method != "none":
         thighs_shanks = {f"{side}_{seg}" for side in legs for seg in ("femur", "tibia")}
         knee_cal = calibrate_knees(s.trial, None, knee_axes, opts.calibration_method,
-                                   shared_world=not align & thighs_shanks)  # fmt: skip
+                                   shared_world=not align & thighs_shanks)
     rotations, drifts = s.rotations, {}
     if align:
         rotations, drifts = align_headings(s.trial, rotations, legs, align, knee_cal, method,
-                                           s.notes)  # fmt: skip
+                                           s.notes)
     turns = {seg: vertical_turn(rotations[seg], s.rotations[seg]) for seg in align}
     step("calibration pose")
     cal = _calibration(s, rotations, inputs)
@@ -225,9 +225,9 @@ def _one_pass(trial, measures, opts: IKOptions, static, *, check_sides: bool) ->
         cal = cal.with_pose(lean_pose(cal.pose, posture), geometry, legs)
         knee_cal = with_placements(knee_cal, cal.placements, knee_axes)
     unaligned = {f"{side}_tibia" for side in legs
-                 if f"{side}_tibia" in align and f"{side}_knee" not in drifts}  # fmt: skip
+                 if f"{side}_tibia" in align and f"{side}_knee" not in drifts}
     placements, corrections = correct_knees(rotations, cal, knee_axes, knee_cal, opts.correction,
-                                            unaligned, s.trial.rate_hz, s.notes)  # fmt: skip
+                                            unaligned, s.trial.rate_hz, s.notes)
     step("inverse kinematics")
     run = _solved(s, geometry, opts, placements, rotations, cal)
     run.measures, run.posture, run.corrections = measures, posture, corrections
@@ -254,14 +254,14 @@ def _solved(s: Prepared, geometry, opts: IKOptions, placements, rotations, cal) 
     flags, as an :class:`IKRun` (its calibration's fields filled by the caller)."""
     t0 = _time.perf_counter()
     sk, Q, result = solve(geometry, opts, s.sensors.legs, placements, rotations, cal,
-                           s.sensors.pelvis)  # fmt: skip
+                           s.sensors.pelvis)
     seconds = _time.perf_counter() - t0
     notes = s.notes
     if not np.all(result.converged):
         notes.append(f"IK did not converge on {int(np.sum(~result.converged))} frames")
     missing = unknown_in(rotations)
     angles = blank_angles(joint_angles_of(sk, Q, s.sensors, rotations, placements, cal.H),
-                          missing)  # fmt: skip
+                          missing)
     if "pelvis_imu" in s.trial.missing.restarted:
         angles = blank_after_restart(angles, PELVIS_ANGLES, "pelvis_imu", s.trial.missing, notes)
     gait = with_pelvis_path(s.gait, s.trial, sk, Q, notes)
@@ -272,13 +272,13 @@ def _solved(s: Prepared, geometry, opts: IKOptions, placements, rotations, cal) 
         still[w.rows] = True
     flags = [f.line() for f in s.findings if f.flagged] + s.flags + quality_flags(
         sk, Q, result.residual_rms, notes, [j for j in sk.joint_names if observed(j, s.sensors)],
-        still)  # fmt: skip
+        still)
     landmarks = blank_landmarks(landmarks_of(sk, Q, s.sensors), missing, landmark_segment)
     return IKRun(s.trial.time, Q, angles, landmarks, cal.right, opts.heading,
                  result.residual_rms, sk, seconds, notes, flags, opts, s.sensors, placements,
                  filtered=s.oriented.filtered, magnetometers=s.oriented.magnetometers,
                  source=s.trial.source, sensor_findings=s.findings, gait=gait,
-                 calibration=cal.how)  # fmt: skip
+                 calibration=cal.how)
 
 
 def _measured_posture(trial, rotations, cal: CalibrationPose, geometry, legs, notes) -> Posture:
@@ -292,7 +292,7 @@ def _geometry(measures: Measures, opts: IKOptions):
     axes = {}
     if opts.knee_axis_femur is not None:
         axes = dict(knee_axis_femur=np.array(opts.knee_axis_femur),
-                    knee_axis_tibia=np.array(opts.knee_axis_tibia))  # fmt: skip
+                    knee_axis_tibia=np.array(opts.knee_axis_tibia))
     geometry, _ = geometry_from_measures(measures, foot_length_m=opts.foot_length_m, **axes)
     return geometry
 

@@ -132,11 +132,11 @@ def _dead(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
         axes = _constant_axes(getattr(s, field))
         if axes:
             return Finding(name, "dead", Action.EXCLUDED,
-                           f"{what} axes {''.join(axes)} never change")  # fmt: skip
+                           f"{what} axes {''.join(axes)} never change")
     axes = _constant_axes(s.mag)
     if axes:
         return Finding(name, "dead", Action.MAGNETOMETER_NOT_USED,
-                       f"magnetometer axes {''.join(axes)} never change")  # fmt: skip
+                       f"magnetometer axes {''.join(axes)} never change")
     return None
 
 
@@ -171,13 +171,13 @@ def _saturation(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | Non
     found = []
     if fast > 0:
         found.append((fast, f"gyroscope beyond a human segment's speed ({MAX_HUMAN_GYRO_DPS:.0f} "
-                            f"deg/s, peak {np.degrees(speed.max()):.0f})"))  # fmt: skip
+                            f"deg/s, peak {np.degrees(speed.max()):.0f})"))
     if g_share > 0:
         found.append((g_share, f"gyroscope held at {np.degrees(g_level):.0f} deg/s (its range's "
-                               "limit?)"))  # fmt: skip
+                               "limit?)"))
     if a_share > 0:
         found.append((a_share, f"accelerometer held at {a_level / 9.81:.1f} g (its range's "
-                               "limit?)"))  # fmt: skip
+                               "limit?)"))
     if not found:
         return None
     share, what = max(found)
@@ -206,7 +206,7 @@ def _neighbours(name: str, rec: Recording) -> list[str]:
     k = _CHAIN.index(kind)
     near = [c for c in (_CHAIN[k - 1] if k > 0 else None, _CHAIN[k + 1] if k < 3 else None) if c]
     want = {c if c == "pelvis" else f"{s}_{c}" for c in near
-            for s in ((side,) if side else ("right", "left"))}  # fmt: skip
+            for s in ((side,) if side else ("right", "left"))}
     return [n for n, g in seg.items() if g in want and rec.sensors[n].gyr is not None]
 
 
@@ -226,7 +226,7 @@ def _moves_with_segment(name: str, s: SensorSignals, ctx: CheckContext) -> Findi
                    f"it turns at {np.degrees(mine):.0f} deg/s "
                    f"({'upper quartile' if foot else 'median'}) while its neighbours "
                    f"({', '.join(near)}) turn at {np.degrees(min(speeds)):.0f} or more: it does "
-                   "not follow a segment (loose or fallen off?)")  # fmt: skip
+                   "not follow a segment (loose or fallen off?)")
 
 
 def _action_on_stillness(neighbours: list[str]) -> Action:
@@ -243,10 +243,10 @@ def _dropout(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
     share = sum(b - a for a, b in spans) / rec.n_samples
     if share >= MAX_MISSING:
         return Finding(name, "dropout", Action.EXCLUDED,
-                       f"missing {100 * share:.0f}% of the recording")  # fmt: skip
+                       f"missing {100 * share:.0f}% of the recording")
     return Finding(name, "dropout", Action.NOTED,
                    f"missing at {ctx.missing.describe(name, rec.time)} ({100 * share:.1f}% of "
-                   "the recording): not bridged, what needs it is blank there")  # fmt: skip
+                   "the recording): not bridged, what needs it is blank there")
 
 
 def _repaired_on_reading(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
@@ -256,7 +256,7 @@ def _repaired_on_reading(name: str, s: SensorSignals, ctx: CheckContext) -> Find
         return None
     return Finding(name, "read", Action.LISTED, "its file's reader: " + "; ".join(
         n.split(": ", 1)[1] if rec.source and n.startswith(str(rec.source)) else n
-        for n in said))  # fmt: skip
+        for n in said))
 
 
 def _orientations(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
@@ -267,7 +267,7 @@ def _orientations(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | N
                    f"its orientations do not turn as its gyroscope does (median cosine "
                    f"{agreement:.2f} between their rates; real sensors' 0.995-0.999): their "
                    "component order (w, x, y, z), direction (sensor -> world) or handedness is "
-                   "wrong")  # fmt: skip
+                   "wrong")
 
 
 def _slipped(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
@@ -279,7 +279,7 @@ def _slipped(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
         return Finding(name, "slipped", Action.LISTED, step.evidence())
     if step.slipped:
         return Finding(name, "slipped", Action.EXCLUDED if step.certain else Action.NOTED,
-                       step.evidence())  # fmt: skip
+                       step.evidence())
     return None
 
 
@@ -363,7 +363,7 @@ def run_checks(ctx: CheckContext) -> tuple[CheckContext, list[Finding]]:
                     break
     ctx = ctx.of(apply_findings(ctx.rec, findings))  # each sensor's own faults first
     faulty = {f.sensor for f in findings
-              if f.flagged and f.action != Action.MAGNETOMETER_NOT_USED}  # fmt: skip
+              if f.flagged and f.action != Action.MAGNETOMETER_NOT_USED}
     for check in of["legs"]:
         found, rec = check.run(ctx, faulty)
         findings += found

@@ -22,7 +22,7 @@ from pipeline.model.conventions import JOINT_SEGMENTS
 
 __all__ = ["SensorSet", "known_segments", "sensor_set"]
 _LANDMARK_CHAIN = {"femur": ("femur",), "tibia": ("femur", "tibia"),
-                   "foot": ("femur", "tibia", "foot")}  # fmt: skip
+                   "foot": ("femur", "tibia", "foot")}
 
 
 @dataclass(frozen=True)
@@ -78,4 +78,4 @@ def sensor_set(segments: set[str] | frozenset[str], source: object = None) -> Se
 def known_segments(trial: Recording) -> dict[str, str]:
     """Sensor name -> segment for the recording's sensors that have one in the model."""
     return {s: SENSOR_TO_SEGMENT[s] for s in trial.sensor_names
-            if SENSOR_TO_SEGMENT.get(s, "torso") != "torso"}  # fmt: skip
+            if SENSOR_TO_SEGMENT.get(s, "torso") != "torso"}

@@ -45,7 +45,7 @@ from pipeline.model.geometry import SubjectGeometry
 from pipeline.process.gait import walked
 
 __all__ = ["DISTANCE_FACTOR", "MIN_MARGIN", "Sides", "exchange_of", "in_one_heading", "mirrored",
-           "side_evidence"]  # fmt: skip
+           "side_evidence"]
 
 #: Eq (1): the cosine below ``-MIN_MARGIN`` reads the legs as mirrored.
 MIN_MARGIN = 0.3
@@ -92,20 +92,20 @@ def exchange_of(sides: Sides, rec: Recording) -> tuple[tuple[str, ...], str]:
         said = "" if w is None else f"; each thigh swings with its named leg (swap eq 4: {w:+.2f})"
         return ("femur", "tibia", "foot"), (f"{sides.evidence()}{said}: the legs' sensors are "
                                             "named left for right (check the sensor map or the "
-                                            "straps)")  # fmt: skip
+                                            "straps)")
     if w <= -MIN_THIGH_GAIN:
         return ("femur",), (f"{sides.evidence()}; each thigh swings with the other leg's shank "
                             f"and foot (swap eq 4: {w:+.2f}): the thighs' sensors are named left "
                             "for right, the shanks' and feet's rightly (check the sensor map or "
-                            "the straps)")  # fmt: skip
+                            "the straps)")
     raise InputError(f"sensor femur_r_imu: {sides.evidence()}, and the stride's rhythm does not "
                      f"tell whether the shanks and feet go with the thighs (swap eq 4: {w:+.2f}, "
                      f"beyond +-{MIN_THIGH_GAIN:g} needed): name the legs' sensors for their "
-                     "sides", file=rec.source, field="sensor_map")  # fmt: skip
+                     "sides", file=rec.source, field="sensor_map")
 
 
 def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], cal, method: str,
-                  geometry: SubjectGeometry, strides: list[Stride]) -> Sides | None:  # fmt: skip
+                  geometry: SubjectGeometry, strides: list[Stride]) -> Sides | None:
     """Eq (1) on a recording in the model's world: ``rotations`` segment -> (N, 3, 3) sensor
     orientations (the pelvis's own; each thigh's inclination is what the fit's start uses),
     ``cal`` the calibration (:class:`~pipeline.process.pose.CalibrationPose`: the subject's
@@ -123,7 +123,7 @@ def side_evidence(trial: Recording, rotations: dict[str, np.ndarray], cal, metho
     o = {}
     for side in ("right", "left"):
         fit, _, _ = centre_fit(trial, rotations["pelvis"], rotations[f"{side}_femur"], "pelvis",
-                               f"{side}_femur", method)  # fmt: skip
+                               f"{side}_femur", method)
         o[side] = fit.position_1_m
     d = cal.at_pose["pelvis"] @ (o["right"] - o["left"])
     d_h = d - (d @ _UP) * _UP
@@ -142,7 +142,7 @@ def in_one_heading(shared: Collection[str], aligned: Collection[str]) -> bool:
     for side in ("right", "left"):
         for prox, dist, joint in (("pelvis", "femur", "hip"), ("femur", "tibia", "knee")):
             pair = {SEGMENT_SENSOR[prox if prox == "pelvis" else f"{side}_{prox}"],
-                    SEGMENT_SENSOR[f"{side}_{dist}"]}  # fmt: skip
+                    SEGMENT_SENSOR[f"{side}_{dist}"]}
             if f"{side}_{joint}" not in aligned and not pair <= set(shared):
                 return False
     return True
@@ -154,7 +154,7 @@ def _complete(trial: Recording, name: str) -> bool:
 
 
 def mirrored(rec: Recording | None, parts: Collection[str] = ("femur", "tibia", "foot")
-             ) -> Recording | None:  # fmt: skip
+             ) -> Recording | None:
     """The recording with every leg sensor's name given to its namesake on the other leg
     (``femur_r_imu`` <-> ``femur_l_imu``, ...), the readers' notes on them too; ``parts``: the
     segments whose sensors are exchanged (default: all)."""

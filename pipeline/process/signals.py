@@ -63,7 +63,7 @@ class Orientations:
 
 
 def filter_own_samples(trial: Recording, name: str, method: str = DEFAULT_FILTER,
-                       mag: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+                       mag: np.ndarray | None = None) -> np.ndarray:
     """(N, 4) orientations of sensor ``name`` from its raw signals by ``method`` (``mag``: its
     magnetometer, for a 9-D filter); each run of its own samples (:meth:`Recording.present`)
     filtered on its own: a filter's state is not carried across a gap it did not see, it starts
@@ -107,7 +107,7 @@ def orientations_from_signals(
             return _filtered_alone(trial, names, missing, notes)
         raise InputError(f"sensors {have} have orientations and {missing} do not: give --filter "
                          "vqf|pi to estimate all of them from their raw signals",
-                         file=trial.source, field="filter")  # fmt: skip
+                         file=trial.source, field="filter")
     fields = check_fields(trial, names)
     for n, f in sorted(fields.items()):
         if not f.trusted:
@@ -122,7 +122,7 @@ def orientations_from_signals(
         s = trial.sensors[n]
         if s.gyr is None or s.acc is None:
             raise InputError(f"sensor {n} has no gyroscope and accelerometer signals to estimate "
-                             "its orientation from", file=trial.source, field=n)  # fmt: skip
+                             "its orientation from", file=trial.source, field=n)
         use_mag = method in MAGNETOMETER_FILTERS and n in fields and fields[n].trusted
         mag = s.mag if use_mag else None
         sensors[n] = s.replace(quat=filter_own_samples(trial, n, method, mag))
@@ -132,14 +132,14 @@ def orientations_from_signals(
     six = sorted(n for n, d in dims.items() if d == "6-D")
     what = f"{method.upper()}, {filtered}" + (f" (6-D: {six})" if len(kinds) > 1 else "")
     notes.append(f"orientations estimated from the raw signals by {what}"
-                 + (f", replacing the recording's own for {have}" if have else ""))  # fmt: skip
+                 + (f", replacing the recording's own for {have}" if have else ""))
     shared = frozenset(n for n, d in dims.items() if d == "9-D")
     out = _restarted(trial.with_sensors(sensors), [n for n, d in dims.items() if d == "6-D"])
     return Orientations(out, filtered, shared, fields)
 
 
 def _filtered_alone(trial: Recording, names: list[str], missing: list[str],
-                    notes: list[str]) -> Orientations:  # fmt: skip
+                    notes: list[str]) -> Orientations:
     """The recording's own orientations, and the ``missing`` sensors' from their raw signals
     (:data:`DEFAULT_FILTER`, 6-D: a z-up world whose heading is each one's own, beside the
     vendor's z-up world)."""
@@ -149,13 +149,13 @@ def _filtered_alone(trial: Recording, names: list[str], missing: list[str],
         s = trial.sensors[n]
         if s.gyr is None or s.acc is None:
             raise InputError(f"sensor {n} has no gyroscope and accelerometer signals to estimate "
-                             "its orientation from", file=trial.source, field=n)  # fmt: skip
+                             "its orientation from", file=trial.source, field=n)
         sensors[n] = s.replace(quat=filter_own_samples(trial, n))
     notes.append(f"orientations of {missing} estimated from their raw signals by "
                  f"{DEFAULT_FILTER.upper()}, 6-D (their own were rejected); the others' are the "
-                 "recording's")  # fmt: skip
+                 "recording's")
     shared = frozenset(n for n in names if n not in missing
-                       and (n not in fields or fields[n].trusted))  # fmt: skip
+                       and (n not in fields or fields[n].trusted))
     return Orientations(_restarted(trial.with_sensors(sensors), missing), None, shared, fields)
 
 
@@ -211,7 +211,7 @@ def world_to_model(rec: Recording) -> tuple[tuple[float, float, float] | None, s
     vendor = rec.header.get(WORLD)
     if vendor in Z_UP_WORLDS:
         return Z_UP_TO_Y_UP, (f"the orientations' world: {Z_UP_WORLDS[vendor]} (the vendor's "
-                              "format), turned to y up (no --sensor-to-model needed)")  # fmt: skip
+                              "format), turned to y up (no --sensor-to-model needed)")
     up = measured_up(rec)
     if up is None:
         return None, None
@@ -219,5 +219,5 @@ def world_to_model(rec: Recording) -> tuple[tuple[float, float, float] | None, s
     if up[2] > close:
         return Z_UP_TO_Y_UP, ("the orientations' world: z up, measured by the accelerometers "
                               f"(up {np.round(up, 2).tolist()}), turned to y up (no "
-                              "--sensor-to-model needed)")  # fmt: skip
+                              "--sensor-to-model needed)")
     return None, None

@@ -130,7 +130,7 @@ def _strides(ctx, side: str) -> tuple[list[tuple[int, int]], np.ndarray]:
     longest = MAX_STRIDE_S * ctx.rec.rate_hz
     own = ctx.rec.present(*(n for n in ctx.rec.sensors if _on_leg(n, side)))
     strides = [(a, b) for a, b in zip(ics[:-1], ics[1:], strict=True)
-               if b - a <= longest and own[a:b].all()]  # fmt: skip
+               if b - a <= longest and own[a:b].all()]
     foot = ctx.gait.sources[side].startswith("foot")
     return strides, (ev.rests if foot else np.zeros((0, 2), int))
 
@@ -188,9 +188,9 @@ def walking_strides(strides: list[tuple[int, int]]) -> list[int]:
     n = np.array([b - a for a, b in strides], float)
     typical = np.median(n) if len(n) else 0.0
     joined = [(k > 0 and strides[k - 1][1] == a) or (k + 1 < len(strides)
-              and strides[k + 1][0] == b) for k, (a, b) in enumerate(strides)]  # fmt: skip
+              and strides[k + 1][0] == b) for k, (a, b) in enumerate(strides)]
     return [k for k in range(len(strides))
-            if joined[k] and abs(n[k] - typical) <= STRIDE_TOL * typical]  # fmt: skip
+            if joined[k] and abs(n[k] - typical) <= STRIDE_TOL * typical]
 
 
 def _step_at(C: np.ndarray, g: np.ndarray, m: int) -> tuple[float, float]:
@@ -210,7 +210,7 @@ def _largest_step(C: np.ndarray, g: np.ndarray, strides, time: np.ndarray) -> Sl
     for m in range(MIN_SIDE, len(strides) - MIN_SIDE + 1):
         pause = float(time[strides[m][0]] - time[strides[m - 1][1]])
         step = Slip(*_step_at(C, g, m), float(time[strides[m][0]]), m, len(strides) - m,
-                    pause_s=pause)  # fmt: skip
+                    pause_s=pause)
         if best is None or step.deg > best.deg:
             best = step
     return best
@@ -227,7 +227,7 @@ def _leg_views(ctx, side: str, pelvis: bool):
     pelvis_name = SEGMENT_SENSOR["pelvis"]
     names += [pelvis_name] if pelvis else []
     leg = {n: rec.sensors[n] for n in names if n in rec.sensors
-           and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}  # fmt: skip
+           and rec.sensors[n].gyr is not None and rec.sensors[n].acc is not None}
     views = {}
     for n, s in leg.items():
         gyr, acc = np.nan_to_num(s.gyr), np.nan_to_num(s.acc)
@@ -270,7 +270,7 @@ def _slips(rec: Recording, this, other) -> dict[str, Slip]:
     for name, (C, g) in views.items():
         best = _largest_step(C, g, strides, rec.time)
         others = [larger(*_step_at(*views[n], best.before)) for n in views
-                  if n not in (name, pelvis_name) and leg[n].complete]  # fmt: skip
+                  if n not in (name, pelvis_name) and leg[n].complete]
         seen = [d for d in others if np.isfinite(d)]
         out[name] = dataclasses.replace(
             best, others_deg=float(max(seen, default=0.0)),
@@ -285,7 +285,7 @@ def legs_slips(ctx) -> dict[str, tuple[dict[str, Slip], int]]:
     computed once for its own check and the other leg's (the context keeps the result)."""
     views = {side: _leg_views(ctx, side, pelvis=True) for side in ("right", "left")}
     return {side: (_slips(ctx.rec, views[side], views[other_side(side)]), len(views[side][0]))
-            for side in views}  # fmt: skip
+            for side in views}
 
 
 def slip_step(name: str, ctx) -> Slip | None:
@@ -297,7 +297,7 @@ def slip_step(name: str, ctx) -> Slip | None:
         return None
     if segment == "pelvis":
         return next((found for side in ("right", "left")
-                     if (found := ctx.slips[side][0].get(name)) is not None), None)  # fmt: skip
+                     if (found := ctx.slips[side][0].get(name)) is not None), None)
     if not segment.startswith(("right_", "left_")):
         return None
     return ctx.slips[segment.split("_", 1)[0]][0].get(name)

@@ -68,7 +68,7 @@ class Slip:
         run differently, or have strapped the sensor again)."""
         together = self.mirror_deg < ALONE_DEG and self.others_min_deg < ALONE_DEG
         return (self.deg > SLIP_DEG and self.pause_s <= MAX_STRIDE_S
-                and (self.others_deg < ALONE_DEG or together))  # fmt: skip
+                and (self.others_deg < ALONE_DEG or together))
 
     @property
     def certain(self) -> bool:
@@ -76,7 +76,7 @@ class Slip:
         sensor: gravity at mid-stance turns with the movement, and the pelvis's rocking axis as
         much where a walk starts, stops or turns (:mod:`pipeline.process.slip`)."""
         return (self.slipped and self.axis_name != ROCKING_AXIS
-                and self.axis_deg > CERTAIN_SLIP_DEG)  # fmt: skip
+                and self.axis_deg > CERTAIN_SLIP_DEG)
 
     @property
     def inconclusive(self) -> bool:
@@ -90,16 +90,16 @@ class Slip:
         turned = " and ".join(
             f"{what} by {deg:.0f} deg" for what, deg in
             ((f"{self.axis_name} turned", self.axis_deg),
-             ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))  # fmt: skip
+             ("gravity at mid-stance turned", self.gravity_deg)) if np.isfinite(deg))
         mirror = (f", the other leg's by {self.mirror_deg:.0f}" if np.isfinite(self.mirror_deg)
-                  else "")  # fmt: skip
+                  else "")
         seen = (f"in its own frame {turned} between the {self.before} strides before t = "
                 f"{self.time_s:.1f} s and the {self.after} after (limit {SLIP_DEG:g}), the leg's "
                 f"other sensors by {self.others_deg:.0f} at most{mirror}")
         if self.inconclusive and self.pause_s > MAX_STRIDE_S:
             return ("not checked for a slip: " + seen + f", across a pause of "
                     f"{self.pause_s:.0f} s: two walks, which a subject may walk or run "
-                    "differently")  # fmt: skip
+                    "differently")
         if self.inconclusive:
             return ("not checked for a slip: " + seen + ": the movement itself changed (turns, "
                     "shuffles?), and a slip would not be told from it")

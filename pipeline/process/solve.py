@@ -27,7 +27,7 @@ PELVIS_ANGLES = ("pelvis_tilt", "pelvis_list", "pelvis_rotation")
 
 
 def solve(geometry, opts: IKOptions, legs, placements, rotations, cal: CalibrationPose,
-          pelvis: bool) -> tuple[Skeleton, np.ndarray, IKResult]:  # fmt: skip
+          pelvis: bool) -> tuple[Skeleton, np.ndarray, IKResult]:
     """Step 6: the IK of every sensor frame; ``(skeleton, Q, result)`` with Q the spherical-root
     configurations. Each run of frames over which the same sensors are present (a sensor's
     missing samples are NaN, :mod:`pipeline.process.missing`) is solved on its own, started from
@@ -39,9 +39,9 @@ def solve(geometry, opts: IKOptions, legs, placements, rotations, cal: Calibrati
     targets = {f"{seg}_imu": R for seg, R in rotations.items()}
     if pelvis:
         sk = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements,
-                            root="spherical")  # fmt: skip
+                            root="spherical")
         result = _by_runs(sk.model, targets, opts, lambda first: _pose_q(
-            sk, _held_pose(opts), _pelvis_at(rotations, placements, first)))  # fmt: skip
+            sk, _held_pose(opts), _pelvis_at(rotations, placements, first)))
         return sk, result.q, result
     fixed = Skeleton.build(geometry, knee=opts.knee, legs=legs, imu_placements=placements)
     remove_limits(fixed.model, [f"{s}_hip_{a}" for s in legs for a in "ZXY"])
@@ -70,12 +70,12 @@ def _by_runs(model, targets, opts: IKOptions, start, root=None) -> IKResult:
     ``start(its first frame)``, the results put back in one."""
     parts = [solve_ik(model, {k: R[run] for k, R in targets.items()}, q0=start(run.start),
                       root=root, limits=opts.joint_limits)
-             for run in same_sensor_runs(targets)]  # fmt: skip
+             for run in same_sensor_runs(targets)]
     if len(parts) == 1:
         return parts[0]
     return IKResult(*(np.concatenate([getattr(p, f) for p in parts]) for f in
                       ("q", "residual_rms", "iterations", "converged", "task_errors")),
-                    parts[0].tasks)  # fmt: skip
+                    parts[0].tasks)
 
 
 def joint_angles_of(sk, Q, sensors: SensorSet, rotations, placements, H) -> dict[str, np.ndarray]:

@@ -29,7 +29,7 @@ from pipeline.io.recording import Recording, SensorSignals
 from pipeline.rotations import log3, matrix_from_quat
 
 __all__ = ["CUTOFF_HZ", "MIN_WINDOW_S", "STILL_ACC_M_S2", "STILL_GYR_RAD_S", "StillWindow",
-           "resting", "still_windows"]  # fmt: skip
+           "resting", "still_windows"]
 
 #: Eq (1)'s thresholds: angular speed (rad/s) and the specific force's distance from 1 g (m/s^2).
 STILL_GYR_RAD_S = 0.1
@@ -101,4 +101,4 @@ def still_windows(rec: Recording, sensors=None) -> list[StillWindow]:
         return []
     least = MIN_WINDOW_S * rec.rate_hz
     return [StillWindow(a, b, float(rec.time[a]), float(rec.time[b - 1]))
-            for a, b in true_runs(still) if b - a >= least]  # fmt: skip
+            for a, b in true_runs(still) if b - a >= least]

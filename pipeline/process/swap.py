@@ -68,7 +68,7 @@ from pipeline.io.recording import Recording, SensorSignals
 from pipeline.io.sensor_names import SEGMENT_SENSOR
 
 __all__ = ["CUTOFF_HZ", "MIN_GAIN", "MIN_RESIDUAL", "MIN_THIGH_GAIN", "RHYTHM_BAND_HZ", "STEP",
-           "SWAP_RATIO", "Crossing", "Swap", "crossing_evidence", "swap_evidence"]  # fmt: skip
+           "SWAP_RATIO", "Crossing", "Swap", "crossing_evidence", "swap_evidence"]
 
 #: The worse fit must leave this many times the better's residual (eq 1).
 SWAP_RATIO = 1.5
@@ -102,12 +102,12 @@ class Swap:
     def swapped(self) -> bool:
         """Eq (1)."""
         return (self.thigh_residual * SWAP_RATIO < self.shank_residual
-                and self.shank_residual >= MIN_RESIDUAL)  # fmt: skip
+                and self.shank_residual >= MIN_RESIDUAL)
 
     def read_back(self, rec: Recording) -> Recording:
         """``rec`` with the thigh's and the shank's sensors exchanged."""
         return rec.with_sensors({**rec.sensors, self.thigh: rec.sensors[self.shank],
-                                 self.shank: rec.sensors[self.thigh]})  # fmt: skip
+                                 self.shank: rec.sensors[self.thigh]})
 
     def evidence(self) -> str:
         return (f"the foot's sensor {self.foot} fits an ankle with {self.thigh} (residual "
@@ -161,7 +161,7 @@ class Crossing:
         """The sensors exchanged (the right leg's), or all four where eq (3) does not tell."""
         segments = _PARTS if self.exchanged is None else (self.exchanged,)
         return [SEGMENT_SENSOR[f"{side}_{seg}"] for seg in segments
-                for side in (("right",) if self.exchanged else ("right", "left"))]  # fmt: skip
+                for side in (("right",) if self.exchanged else ("right", "left"))]
 
     def read_back(self, rec: Recording) -> Recording:
         """``rec`` with the :attr:`exchanged` segment's sensors exchanged between the legs, or
@@ -170,7 +170,7 @@ class Crossing:
             return rec.with_sensors({n: s for n, s in rec.sensors.items() if n not in self.sensors})
         right, left = (SEGMENT_SENSOR[f"{side}_{self.exchanged}"] for side in ("right", "left"))
         return rec.with_sensors({**rec.sensors, right: rec.sensors[left],
-                                 left: rec.sensors[right]})  # fmt: skip
+                                 left: rec.sensors[right]})
 
     def evidence(self) -> str:
         said = (f"each leg's shank and foot sensors swing in a stride's rhythm with the other "
@@ -194,7 +194,7 @@ def crossing_evidence(ctx, faulty: Collection[str] = ()) -> Crossing | None:
 
     rec = ctx.rec
     names = {(side[0], seg): SEGMENT_SENSOR[f"{side}_{seg}"]
-             for side in ("right", "left") for seg in ("femur", *_PARTS)}  # fmt: skip
+             for side in ("right", "left") for seg in ("femur", *_PARTS)}
     sensors = {k: rec.sensors.get(n) for k, n in names.items()}
     if any(n in faulty for n in names.values()) or any(
             s is None or s.gyr is None or not np.isfinite(s.gyr).all() for s in sensors.values()):

@@ -90,7 +90,7 @@ def _centre(trial: Recording, rotations, prox: str, dist: str) -> JointCentre | 
         return None
     s1, s2 = (trial.sensors[SEGMENT_SENSOR[s]] for s in (prox, dist))
     return joint_centre(trial.time, s1.gyr, s1.acc, rotations[prox], s2.gyr, s2.acc,
-                        rotations[dist])  # fmt: skip
+                        rotations[dist])
 
 
 def _walking_rows(trial: Recording, strides) -> np.ndarray:
@@ -141,7 +141,7 @@ def _long_axis(line: np.ndarray | None, length: float, fallback: np.ndarray, wha
 
 
 def walking_frames(trial: Recording, rotations: dict[str, np.ndarray], gait, geometry,
-                   legs: tuple[str, ...]) -> WalkingFrames:  # fmt: skip
+                   legs: tuple[str, ...]) -> WalkingFrames:
     """The module docstring's frames of every segment in ``rotations`` (segment -> (N, 3, 3)
     sensor orientations, one y-up world: headings shared or aligned) from ``trial``'s raw
     signals and its ``gait`` (:class:`~pipeline.process.gait.Gait`: strides and the feet's
@@ -150,13 +150,13 @@ def walking_frames(trial: Recording, rotations: dict[str, np.ndarray], gait, geo
     rows = _walking_rows(trial, gait.strides)
     if rows.size < 2 * trial.rate_hz:
         raise InputError("no walk to calibrate from: fewer than 2 s of strides",
-                         field="calibration_pose")  # fmt: skip
+                         field="calibration_pose")
     frames, how, assumed, axes = {}, {}, [], {}
     for side in legs:
         femur, tibia, foot = (f"{side}_{s}" for s in ("femur", "tibia", "foot"))
         if not (_has_signals(trial, femur, rotations) and _has_signals(trial, tibia, rotations)):
             raise InputError(f"the {side} thigh's and shank's raw signals are needed to calibrate "
-                             "from the walk", field="calibration_pose")  # fmt: skip
+                             "from the walk", field="calibration_pose")
         axes.update(_leg_axes(trial, rotations, side))
         knee = _centre(trial, rotations, femur, tibia)
         hip = _centre(trial, rotations, "pelvis", femur) if "pelvis" in rotations else None
@@ -165,7 +165,7 @@ def walking_frames(trial: Recording, rotations: dict[str, np.ndarray], gait, geo
         lines = {femur: (None if hip is None else hip.o_2 - knee.o_1, geo.thigh_length,
                          "its knee and hip centres"),
                  tibia: (None if ankle is None else knee.o_2 - ankle.o_1, geo.shank_length,
-                         "its ankle and knee centres")}  # fmt: skip
+                         "its ankle and knee centres")}
         for seg, (line, length, what) in lines.items():
             y, how[seg], guess = _long_axis(line, length, _mean_vertical(trial, seg, rows), what)
             frames[seg] = _frame(axes[seg], y)
@@ -195,10 +195,10 @@ def _pelvis_frame(trial, rotations, axes, rows, legs) -> tuple[np.ndarray, str]:
     flexion axes carried into its sensor's frame."""
     R_p = rotations["pelvis"][rows]
     lines = [np.einsum("nji,njk,k->i", R_p, rotations[f"{s}_femur"][rows], axes[f"{s}_femur"])
-             for s in legs if f"{s}_femur" in axes]  # fmt: skip
+             for s in legs if f"{s}_femur" in axes]
     if not lines:
         raise InputError("the pelvis's medio-lateral axis needs a thigh's flexion axis",
-                         field="calibration_pose")  # fmt: skip
+                         field="calibration_pose")
     z = normalize(np.sum(lines, axis=0))
     return _frame(z, _mean_vertical(trial, "pelvis", rows), upright=True), (
         f"its mean vertical over the strides, the thighs' flexion axes ({len(lines)})")

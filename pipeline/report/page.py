@@ -32,7 +32,7 @@ PARAMETERS = {"stride_time_s": ("stride time (s)", 1.0, 2),
               "stride_length_m": ("stride length (m)", 1.0, 2),
               "speed_m_s": ("speed (m/s)", 1.0, 2),
               "cadence_steps_min": ("cadence (steps/min)", 1.0, 1),
-              "clearance_m": ("foot clearance (cm)", 100.0, 1)}  # fmt: skip
+              "clearance_m": ("foot clearance (cm)", 100.0, 1)}
 
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1100px;margin:1.5em auto;color:#222}
 h1{font-size:1.5em;margin-bottom:.2em}h2{font-size:1.15em;border-bottom:1px solid #ccc;
@@ -51,20 +51,20 @@ def symmetry_index(right: float, left: float) -> float:
 
 def _img(png: bytes, alt: str) -> str:
     return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,' \
-           f'{base64.b64encode(png).decode("ascii")}">'  # fmt: skip
+           f'{base64.b64encode(png).decode("ascii")}">'
 
 
 def _table(header: list[str], rows: list[list[object]]) -> str:
     head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>"
-                   for r in rows)  # fmt: skip
+                   for r in rows)
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
 def _page(title: str, sections: list[str]) -> str:
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>'
             f"{html.escape(title)}</title><style>{_STYLE}</style></head><body>\n"
-            + "\n".join(sections) + "\n</body></html>\n")  # fmt: skip
+            + "\n".join(sections) + "\n</body></html>\n")
 
 
 def _cell(mean: float, sd: float, n: int, scale: float, digits: int) -> str:
@@ -83,7 +83,7 @@ def _stride_rows(run: IKRun) -> list[list[object]]:
         si = symmetry_index(r[0], left[0])
         rows.append([label, _cell(*r, scale, digits), _cell(*left, scale, digits),
                      "" if not np.isfinite(si) else f"{si:+.1f}",
-                     _cell(*summary["both"][col], scale, digits)])  # fmt: skip
+                     _cell(*summary["both"][col], scale, digits)])
     counts = {side: summary[side]["stride_time_s"][2] for side in ("right", "left")}
     rows.append(["strides in the means", counts["right"], counts["left"], "", sum(counts.values())])
     return rows
@@ -95,7 +95,7 @@ def _left_out_words(run: IKRun) -> str:
     return (f"{total} strides found; the means are over the straight, steady ones: left out "
             f"{out['turning']} turning, {out['starting or stopping']} starting or stopping a "
             f"walk, {out['merged']} longer than 1.5 times their side's median (a missed "
-            "contact).")  # fmt: skip
+            "contact).")
 
 
 def _still_points(run: IKRun) -> tuple[dict[str, np.ndarray], str]:
@@ -130,7 +130,7 @@ def _sensor_rows(run: IKRun) -> list[list[object]]:
     for sensor, fs in sorted(found.items()):
         used = "no: excluded" if any(f.action == "excluded" for f in fs) else "yes"
         rows.append([sensor, "; ".join(f"{f.check}: {f.evidence} ({f.action})" for f in fs),
-                     used])  # fmt: skip
+                     used])
     return rows
 
 
@@ -160,7 +160,7 @@ def report_parts(run: IKRun, name: str) -> ReportParts:
             f'<p class="muted">subject: sex {m.sex}, height {m.height_m:.2f} m; '
             f"{run.time[-1] - run.time[0]:.1f} s, {len(run.time)} frames; joints: "
             f"{html.escape(', '.join(run.sensors.joints))}; calibration: "
-            f"{html.escape(str(run.calibration))}</p>"]  # fmt: skip
+            f"{html.escape(str(run.calibration))}</p>"]
     if run.flags:
         items = "".join(f"<li>{html.escape(f)}</li>" for f in run.flags)
         head.append(f'<div class="warn"><b>Warnings</b><ul>{items}</ul></div>')
@@ -174,20 +174,20 @@ def report_parts(run: IKRun, name: str) -> ReportParts:
                   _table(["parameter", "right", "left", "symmetry index (%)", "both"],
                          _stride_rows(run)),
                   '<p class="muted">Symmetry index 100 (R - L) / (0.5 (R + L)): 0 is symmetric '
-                  "(Robinson et al. 1987).</p>"]  # fmt: skip
+                  "(Robinson et al. 1987).</p>"]
     else:
         middle.append("<p>No strides: " + html.escape("; ".join(
             n for n in run.notes if n.startswith("no strides")) or "none found") + "</p>")
     points, when = _still_points(run)
     rows = _sensor_rows(run)
     tail = ["<h2>Sensor checks</h2>", _table(["sensor", "what the checks found", "used"], rows)
-            if rows else "<p>Every sensor passed every check.</p>"]  # fmt: skip
+            if rows else "<p>Every sensor passed every check.</p>"]
     if run.notes:
         tail += ["<h2>Notes</h2><ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in run.notes)
-                 + "</ul>"]  # fmt: skip
+                 + "</ul>"]
     return ReportParts(f"Gait report: {name}", head, means,
                        {side: summary[side]["stance_share"][0] for side in ("right", "left")},
-                       middle, points, when, tail)  # fmt: skip
+                       middle, points, when, tail)
 
 
 def render_report(parts: ReportParts) -> str:
@@ -195,7 +195,7 @@ def render_report(parts: ReportParts) -> str:
     body = list(parts.head)
     if parts.means is not None:
         body.append(_img(plots.cycle_figure(parts.means, parts.foot_off),
-                         "joint angles over the gait cycle"))  # fmt: skip
+                         "joint angles over the gait cycle"))
     body += parts.middle
     if parts.points:
         body += ["<h2>The skeleton</h2>",
@@ -228,7 +228,7 @@ class GroupTrial:
 GROUP_PARAMETERS = {"strides": ("strides", 0), "stride_time_s": ("stride time (s)", 2),
                     "stride_length_m": ("stride length (m)", 2), "speed_m_s": ("speed (m/s)", 2),
                     "cadence_steps_min": ("cadence (steps/min)", 1),
-                    "stance_share": ("stance share", 3)}  # fmt: skip
+                    "stance_share": ("stance share", 3)}
 
 
 def group_report_html(trials: list[GroupTrial], title: str = "batch") -> str:
@@ -242,17 +242,17 @@ def group_report_html(trials: list[GroupTrial], title: str = "batch") -> str:
             v = fig.get(key)
             cells.append("" if v is None else f"{v:.{digits}f}")
         cells.append("no figures (failed or not run)" if t.figures is None
-                     else str(len(fig.get("flags", []))))  # fmt: skip
+                     else str(len(fig.get("flags", []))))
         rows.append(cells)
     header = ["subject", "recording", *(lbl for lbl, _ in GROUP_PARAMETERS.values()), "flags"]
     with_curves = [(f"{t.subject} / {t.name}", t.figures["cycles"]) for t in trials
-                   if t.figures and any(t.figures.get("cycles", {}).values())]  # fmt: skip
+                   if t.figures and any(t.figures.get("cycles", {}).values())]
     sections = [f"<h1>Group report: {html.escape(title)}</h1>",
                 f'<p class="muted">{len(trials)} trials; means over each trial\'s straight, '
                 "steady strides (both sides).</p>", "<h2>Parameters</h2>",
-                _table(header, rows)]  # fmt: skip
+                _table(header, rows)]
     if with_curves:
         sections += ["<h2>Sagittal joint angles over the gait cycle, one row per trial</h2>",
                      _img(plots.group_figure(with_curves), "curves per trial"),
-                     '<p class="muted">Right green, left red: mean ± SD.</p>']  # fmt: skip
+                     '<p class="muted">Right green, left red: mean ± SD.</p>']
     return _page(f"Group report: {title}", sections)

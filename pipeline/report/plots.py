@@ -37,7 +37,7 @@ PANELS = {
     "ankle": (("ankle_angle", "ankle dorsiflexion (+) / plantarflexion"),
               ("subtalar_angle", "ankle inversion (+) / eversion"),
               (None, "ankle rotation: not in the model")),
-}  # fmt: skip
+}
 
 
 def _pyplot():
@@ -92,7 +92,7 @@ def _panel(ax, means: dict, column: str | None, title: str, foot_off: dict) -> N
         drawn = True
     if not drawn:
         ax.text(50, 0.5, "not measured", ha="center", va="center", fontsize=8, color="0.5",
-                transform=ax.get_xaxis_transform())  # fmt: skip
+                transform=ax.get_xaxis_transform())
         ax.set_yticks([])
 
 
@@ -116,7 +116,7 @@ def cycle_figure(means: dict, foot_off: dict[str, float]) -> bytes:
 
 #: The lines of the skeleton's still: landmark pairs (without the side), and across the pelvis.
 BONES = (("HJC", "KJC"), ("KJC", "AJC"), ("AJC", "HEE"), ("HEE", "MT5"), ("MT5", "TOE"),
-         ("TOE", "MT1"), ("MT1", "HEE"), ("EFM", "EFL"), ("MM", "LM"))  # fmt: skip
+         ("TOE", "MT1"), ("MT1", "HEE"), ("EFM", "EFL"), ("MM", "LM"))
 
 
 def skeleton_figure(points: dict[str, np.ndarray], title: str) -> bytes:
@@ -133,7 +133,7 @@ def skeleton_figure(points: dict[str, np.ndarray], title: str) -> bytes:
                 if pa is None or pb is None:
                     continue
                 ax.plot([sign * pa[horizontal], sign * pb[horizontal]], [pa[1], pb[1]],
-                        color=COLOURS[leg], lw=2)  # fmt: skip
+                        color=COLOURS[leg], lw=2)
         hips = [points.get(f"{leg}_HJC") for leg in ("right", "left")]
         if all(h is not None for h in hips):
             ax.plot([sign * h[horizontal] for h in hips], [h[1] for h in hips], color="0.3", lw=3)
@@ -148,7 +148,7 @@ def skeleton_figure(points: dict[str, np.ndarray], title: str) -> bytes:
 
 #: The group report's curves: the sagittal plane of hip, knee and ankle.
 GROUP_COLUMNS = (("hip_flexion", "hip flexion"), ("knee_angle", "knee flexion"),
-                 ("ankle_angle", "ankle dorsiflexion"))  # fmt: skip
+                 ("ankle_angle", "ankle dorsiflexion"))
 
 
 def group_figure(trials: list[tuple[str, dict]]) -> bytes:
@@ -157,7 +157,7 @@ def group_figure(trials: list[tuple[str, dict]]) -> bytes:
     plt = _pyplot()
     rows = max(len(trials), 1)
     fig, axes = plt.subplots(rows, 3, figsize=(9.0, 1.9 * rows + 0.4), sharex=True,
-                             sharey="col", squeeze=False)  # fmt: skip
+                             sharey="col", squeeze=False)
     for row, (name, means) in zip(axes, trials, strict=False):
         for ax, (column, title) in zip(row, GROUP_COLUMNS, strict=True):
             _panel(ax, means, column, title, {})
@@ -165,5 +165,5 @@ def group_figure(trials: list[tuple[str, dict]]) -> bytes:
     for ax in axes[-1]:
         ax.set_xlabel("gait cycle (%)", fontsize=8)
     fig.subplots_adjust(left=0.12, right=0.98, bottom=0.4 / (1.9 * rows + 0.4) + 0.05,
-                        top=0.97, wspace=0.25, hspace=0.25)  # fmt: skip
+                        top=0.97, wspace=0.25, hspace=0.25)
     return png_bytes(fig)

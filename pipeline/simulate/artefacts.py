@@ -39,7 +39,7 @@ import numpy as np
 from pipeline.rotations import exp3, skew
 
 __all__ = ["SEGMENT_SCALE", "WOBBLE_HZ", "Artefacts", "floor_field", "soft_tissue_motion",
-           "with_soft_tissue"]  # fmt: skip
+           "with_soft_tissue"]
 
 #: Soft-tissue sizes of each segment relative to the thigh's.
 SEGMENT_SCALE = {"pelvis": 0.3, "femur": 1.0, "tibia": 0.5, "foot": 0.4}
@@ -120,7 +120,7 @@ def with_soft_tissue(R, W, AW, A, delta, d) -> tuple[np.ndarray, np.ndarray, np.
     E = exp3(dl)
     W_s = np.einsum("nji,nj->ni", E, W) + np.einsum("nij,nj->ni", _right_jacobian(dl), ddl)
     A_loc = (A + ddd0 + 2 * np.cross(W, dd0) + np.cross(AW, d0)
-             + np.cross(W, np.cross(W, d0)))  # fmt: skip
+             + np.cross(W, np.cross(W, d0)))
     return R @ E, W_s, A_loc
 
 
@@ -128,6 +128,6 @@ def floor_field(P: np.ndarray, rng: np.random.Generator, b0_ut: float, decay_m: 
     """The floor's field (N, 3) uT in the world at positions ``P`` (N, 3) (module docstring)."""
     k, ph = 2 * np.pi / 1.5, rng.uniform(0, 2 * np.pi, 2)
     u = np.stack([np.cos(k * P[:, 0] + ph[0]), np.sin(k * P[:, 1] + ph[1]),
-                  np.full(len(P), 0.6)], axis=1)  # fmt: skip
+                  np.full(len(P), 0.6)], axis=1)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     return b0_ut * np.exp(-np.clip(P[:, 2], 0.0, None) / decay_m)[:, None] * u

@@ -54,7 +54,7 @@ class Pace:
         passes over the foot), which the swing turns back."""
         half = 0.5 * (LOBES[1][1] - LOBES[1][0])
         lobes = ((0.0, self.loading, LOBES[0][2]), (self.fc - half, self.fc + half, LOBES[1][2]),
-                 (self.fc + half, 1.0, LOBES[2][2] - self.roll_deg))  # fmt: skip
+                 (self.fc + half, 1.0, LOBES[2][2] - self.roll_deg))
         return lobes + (((0.0, self.fc, self.roll_deg),) if self.roll_deg else ())
 
     @staticmethod
@@ -75,7 +75,7 @@ class Pace:
         T = 120.0 / (64.8 + 37.4 * speed_m_s)
         fast = max(0.0, speed_m_s - 1.4)
         return cls(T, speed_m_s * T, 0.1 + 0.2 * fast, 0.66 - 0.045 * speed_m_s,
-                   -ROLL_DEG_PER_M_S * fast)  # fmt: skip
+                   -ROLL_DEG_PER_M_S * fast)
 
 
 @dataclass(frozen=True)
@@ -144,7 +144,7 @@ def _impacts(time: np.ndarray, ic: np.ndarray, speed_m_s: float) -> np.ndarray:
 
 def foot_walk(strides: int = 8, pace: Pace = Pace(), clearance_m: float = 0.12,
               turns_deg: tuple[float, ...] = (), rate_hz: float = 100.0, standing_s: float = 2.0,
-              seed: int = 0) -> FootWalk:  # fmt: skip
+              seed: int = 0) -> FootWalk:
     """A walk of ``strides`` strides at ``pace`` (module docstring); ``turns_deg[k]`` turns
     stride ``k``."""
     rng = np.random.default_rng(seed)
@@ -178,7 +178,7 @@ def foot_walk(strides: int = 8, pace: Pace = Pace(), clearance_m: float = 0.12,
         acc_w[:, :2] += np.where(swing[:, None], xdd[:, None] * step / d**2, 0.0)
         pos[:, 2] += np.where(swing, clearance_m * np.sin(np.pi * s) ** 2, 0.0)
         acc_w[:, 2] += np.where(swing, clearance_m * 2 * (np.pi / d) ** 2 * np.cos(2 * np.pi * s),
-                                0.0)  # fmt: skip
+                                0.0)
         yaw_rate += yaw * _bump(s) / d
         yaw_angle += yaw * bump_integral(s)
         heading += yaw
@@ -192,4 +192,4 @@ def foot_walk(strides: int = 8, pace: Pace = Pace(), clearance_m: float = 0.12,
     acc_w[:, 2] += _impacts(time, ic[1:], pace.length_m / T)
     acc = np.einsum("nji,nj->ni", R, acc_w + [0.0, 0.0, G]) + rng.normal(0, 0.05, (n, 3))
     return FootWalk(time, rate_hz, gyr, acc, ic, ic[:-1] + pace.fc * T, pos,
-                    np.full(strides, length_m), turns)  # fmt: skip
+                    np.full(strides, length_m), turns)

@@ -73,7 +73,7 @@ class Knee:
             return np.zeros((np.size(theta), 2))
         a_x, phi_x, a_y, phi_y = self.stride
         return ramp[:, None] ** 2 * np.stack([a_x * np.sin(theta + phi_x),
-                                               a_y * np.sin(theta + phi_y)], axis=1)  # fmt: skip
+                                               a_y * np.sin(theta + phi_y)], axis=1)
 
     def set(self, q: np.ndarray, k: float, extra: np.ndarray | None = None) -> None:
         """Put flexion ``k`` and the angles (1) couples to it (plus ``extra``, the stride's
@@ -98,7 +98,7 @@ def draw_knee(skeleton: Skeleton, side: str, rng: np.random.Generator) -> Knee:
                        coupling=(c_x, r["rotation"], np.deg2rad(r["screw_home_deg"])),
                        stride=(np.deg2rad(r["stride_adduction_deg"]), rng.uniform(0, 2 * np.pi),
                                np.deg2rad(r["stride_rotation_deg"]),
-                               rng.uniform(0, 2 * np.pi)))  # fmt: skip
+                               rng.uniform(0, 2 * np.pi)))
     q = skeleton.neutral()
     k = 0.0025 * np.arange(-20, 1258)  # -0.05 .. pi rad, the straight knee on the grid
     d2 = []
@@ -109,7 +109,7 @@ def draw_knee(skeleton: Skeleton, side: str, rng: np.random.Generator) -> Knee:
     top = np.concatenate([k[[0, -1]], reach.derivative().solve(0.0, extrapolate=False)])
     straight = float(top[np.argmax(reach(top))])
     sides = tuple((a, b, float(reach(a)), float(reach(b)))
-                  for a, b in ((max(k[0], 0.0), straight), (straight, k[-1])))  # fmt: skip
+                  for a, b in ((max(k[0], 0.0), straight), (straight, k[-1])))
     return replace(knee, reach=reach, straight=straight, sides=sides)
 
 
@@ -123,7 +123,7 @@ def hip_ankle_distance_sq(skeleton: Skeleton, q: np.ndarray, side: str) -> float
 
 def flexion_reaching(
     skeleton: Skeleton, knee: Knee, q: np.ndarray, d2: float, extra: np.ndarray, side: str,
-) -> None:  # fmt: skip
+) -> None:
     """Set the knee in ``q`` (flexion >= 0 and the angles (1) couples to it, ``extra`` the
     stride's terms) so that the ankle centre lies ``sqrt(d2)`` from the hip's: the root on the
     last sample's side of the straightest knee (the other side's if this one has none; the
@@ -132,7 +132,7 @@ def flexion_reaching(
     rising, falling = knee.sides
     if d2 > rising[3] * (1 + 1e-9):
         raise InputError(f"the {side} leg cannot reach its foot's pose in the simulated walk",
-                         field="motion")  # fmt: skip
+                         field="motion")
     k = max(straight, 0.0)
     for a, b, fa, fb in (falling, rising) if last >= straight else (rising, falling):
         if a < b and (fa - d2) * (fb - d2) <= 0:
@@ -174,4 +174,4 @@ def _secant(skeleton: Skeleton, knee: Knee, q: np.ndarray, d2: float, extra, sid
         k0, k1, g0 = k1, k1 - g1 * (k1 - k0) / (g1 - g0), g1
         k1 = max(k1, 0.0)
     raise InputError(f"the {side} leg's knee did not converge in the simulated walk",
-                     field="motion")  # fmt: skip
+                     field="motion")

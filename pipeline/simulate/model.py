@@ -154,7 +154,7 @@ class SimulatedTrial:
         keep = ("gyr", "acc", "mag") if magnetometers else ("gyr", "acc")
         rec = self.recording
         sensors = {MODEL_FRAME_NAMES[name]: SensorSignals(**{k: getattr(sig, k) for k in keep})
-                   for name, sig in rec.sensors.items()}  # fmt: skip
+                   for name, sig in rec.sensors.items()}
         return Recording(self.time, rec.rate_hz, sensors)
 
     def hinge_truth(self, side: str = "right") -> dict[str, np.ndarray]:
@@ -229,13 +229,13 @@ def _real_world(skeleton, imus, placements, q, v, a, t, standing_s, R, P, W, AW,
         names = {"pelvis": [f"{x}_hip_Z" for x in skeleton.legs],
                  "femur": [f"{side}_hip_Z", f"{side}_{knee}"],
                  "tibia": [f"{side}_{knee}", f"{side}_ankle_Z"],
-                 "foot": [f"{side}_ankle_Z", f"{side}_ankle_X"]}[part]  # fmt: skip
+                 "foot": [f"{side}_ankle_Z", f"{side}_ankle_X"]}[part]
         scale = SEGMENT_SCALE[part]
         long_axis = placements[imu][0].T @ np.array([0.0, 1.0, 0.0])  # segment y, sensor frame
         wobble = (np.deg2rad(art.wobble_deg), t, s) if part == "femur" else None
         delta, d = soft_tissue_motion(rng, drive(names), long_axis,
                                       np.deg2rad(art.soft_tissue_deg) * scale,
-                                      art.soft_tissue_m * scale, wobble)  # fmt: skip
+                                      art.soft_tissue_m * scale, wobble)
         R_i = R[i]
         P[i] = P[i] + np.einsum("nij,nj->ni", R_i, d[0])
         R[i], W[i], A_loc = with_soft_tissue(R_i, W[i], AW[i], A[i], delta, d)
@@ -338,7 +338,7 @@ def simulate_trial(
             L[i, k] = pin.updateFramePlacement(model, data, fid).translation
     if artefacts is not None:
         R, P, W, A = _real_world(skeleton, imus, placements, q, v, a, t, standing_s, R, P, W, AW,
-                                 A, artefacts, r_real)  # fmt: skip
+                                 A, artefacts, r_real)
     F = A - np.einsum("knji,j->kni", R, GRAVITY)  # specific force, sensor frame
 
     out_imus = {}
@@ -353,13 +353,13 @@ def simulate_trial(
             gyr = gyr + np.cumsum(walk, axis=0)
             acc = acc + r_real.normal(0.0, artefacts.acc_bias_sd, 3)
             field = field + floor_field(P[i], r_real, artefacts.floor_field_ut,
-                                        artefacts.floor_decay_m)  # fmt: skip
+                                        artefacts.floor_decay_m)
         R_meas = R[i]
         if noise.orientation_sd_deg > 0:
             R_meas = R[i] @ exp3(r_noise.normal(0.0, np.deg2rad(noise.orientation_sd_deg), (n, 3)))
         mag = np.einsum("nji,nj->ni", R[i], field) + r_mag.normal(0.0, noise.mag_sd, (n, 3))
         rec = Recording.single(imu, t, gyr=gyr, acc=acc, mag=mag, quat=quat_from_matrix(R_meas),
-                               rate_hz=rate_hz)  # fmt: skip
+                               rate_hz=rate_hz)
         out_imus[imu] = SimulatedImu(
             frame=imu,
             segment=_segment_of(imu),

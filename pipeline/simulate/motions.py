@@ -166,7 +166,7 @@ def _grow(fn: Callable, clock: _Clock | None, start: float = 0.0) -> Callable:
 def _pelvis(
     motion: str, t: np.ndarray, rng: np.random.Generator, height: float, f: float,
     clock: _Clock | None = None,
-):  # fmt: skip
+):
     """Pelvis ``R (N,3,3)``, body ``w``, ``dw``, world ``p``, ``dp``, ``ddp`` (N,3).
 
     With a ``clock`` (:func:`standing_start`) the heading and the path follow the motion clock
@@ -227,7 +227,7 @@ def _trajectories(
     motion = motion_name(motion)
     if motion not in SINUSOIDAL:
         raise InputError(f"motion {motion!r} is pipeline.simulate.walk.walk_trajectories's",
-                         field="motion")  # fmt: skip
+                         field="motion")
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     t = np.asarray(time, dtype=float)
     model = skeleton.model
@@ -284,6 +284,6 @@ def standing_start(
     ``g'' -> s'' g + 3 s s' g' + s^3 g''``); the pelvis chain composes them exactly
     (:func:`pipeline.simulate.chain.chain_kinematics`). Standing upright, not leaning with the
     gait's pelvis tilt: the posture a standing calibration asks of the subject.
-    """  # fmt: skip
+    """
     t = np.asarray(time, dtype=float)
     return _trajectories(skeleton, motion, t, seed, ramp(t, float(standing_s)), posture)

@@ -38,11 +38,11 @@ ANKLE_TURN_PER_INVERSION = (0.53, 0.83)
 
 
 def ankle_turns(skeleton: Skeleton, inversion: dict[str, np.ndarray],
-                rng: np.random.Generator) -> list[tuple[int, np.ndarray]]:  # fmt: skip
+                rng: np.random.Generator) -> list[tuple[int, np.ndarray]]:
     """Each leg's ``(q index of its ankle_Y, c per sample)`` by (1), ``inversion``: leg -> the
     foot's inversion in the world (rad, per sample); none for the model's two-axis ankle (and no
     draw from ``rng``)."""
     if skeleton.ankle != "free":
         return []
     return [(skeleton.q_index(f"{x}_ankle_Y"), rng.uniform(*ANKLE_TURN_PER_INVERSION)
-             * inversion[x]) for x in skeleton.legs]  # fmt: skip
+             * inversion[x]) for x in skeleton.legs]

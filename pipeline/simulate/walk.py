@@ -148,13 +148,13 @@ def _solve_leg(
     if np.linalg.norm(err) < 1e-7:  # the straight knee's rounding
         return q
     raise InputError(f"the {side} leg did not converge to its foot's pose in the simulated walk",
-                     field="motion")  # fmt: skip
+                     field="motion")
 
 
 def walk_trajectories(
     skeleton: Skeleton, time: np.ndarray, standing_s: float, rng: np.random.Generator,
     posture: dict[str, float] | None = None,
-):  # fmt: skip
+):
     """``q, v, a`` (as :func:`pipeline.simulate.motions.joint_trajectories`) and the
     :class:`WalkPlan` of a walk after ``standing_s`` s standing in ``posture`` (module
     docstring)."""
@@ -172,7 +172,7 @@ def walk_trajectories(
         q0[skeleton.q_index(name)] = angle
     skeleton.forward(q0)
     feet = {x: skeleton.data.oMf[skeleton.frame_id(f"{x}_foot")].translation.copy()
-            for x in skeleton.legs}  # fmt: skip
+            for x in skeleton.legs}
     plan = walk_plan(skeleton, float(tf[-1] - standing_s), rng, feet)
     foot_len = 0.31 * leg_length(skeleton)  # foot 0.152, leg 0.485 of the height
     heel = np.array([-0.25 * foot_len, -ANKLE_HEIGHT_M, 0.0])
@@ -181,17 +181,17 @@ def walk_trajectories(
     R = rot_z(plan.heading(sp)) @ UPRIGHT @ _pelvis_turns(tau / plan.T, s, rng)
     knee = {x: draw_knee(skeleton, x, rng) for x in skeleton.legs}
     inversion = {x: np.deg2rad([rng.uniform(*r) for r in FOOT_INVERSION_DEG])
-                 for x in skeleton.legs}  # fmt: skip
+                 for x in skeleton.legs}
     poses = {x: foot_poses(plan, x, tau, heel, toe, inversion[x]) for x in skeleton.legs}
     p = np.concatenate([plan.path(sp) + s[:, None] ** 2 * _sway(plan, tau, sp),
-                        np.full((tf.size, 1), z0)], axis=1)  # fmt: skip
+                        np.full((tf.size, 1), z0)], axis=1)
     p[:, 2] -= _pelvis_drop(skeleton, p, R, poses, s, dt)
     extra = {x: knee[x].stride_angles(2 * np.pi * tau / plan.T, s) for x in skeleton.legs}
     # solved: the hip's three and the ankle's flexion and inversion (chain order Z, X); a free
     # ankle's third angle is set, as the knee's coupled ones
     free = {x: [model.joints[model.getJointId(n)].idx_v for n in (
         *skeleton.leg_joints(x, "hip"), *skeleton.leg_joints(x, "ankle")[:2])]
-        for x in skeleton.legs}  # fmt: skip
+        for x in skeleton.legs}
     subtalar = ankle_turns(skeleton, {x: poses[x][2] for x in skeleton.legs}, rng)
     Q = np.empty((tf.size, model.nq))
     qk = q0.copy()
@@ -265,7 +265,7 @@ def _derivatives(Q: np.ndarray, p: np.ndarray, R: np.ndarray, dt: float):
     dR = _five_point(R, dt)
     W = np.einsum("nji,njk->nik", R, dR)
     w = 0.5 * np.stack([W[:, 2, 1] - W[:, 1, 2], W[:, 0, 2] - W[:, 2, 0],
-                        W[:, 1, 0] - W[:, 0, 1]], axis=1)  # fmt: skip
+                        W[:, 1, 0] - W[:, 0, 1]], axis=1)
     dw = _five_point(w, dt)
     vl = np.einsum("nji,nj->ni", R, dp)
     v[:, :3], v[:, 3:6] = vl, w

@@ -79,7 +79,7 @@ def leg_length(skeleton: Skeleton) -> float:
 
 
 def walk_plan(skeleton: Skeleton, duration_s: float, rng: np.random.Generator,
-              standing_feet: dict[str, np.ndarray]) -> WalkPlan:  # fmt: skip
+              standing_feet: dict[str, np.ndarray]) -> WalkPlan:
     """Draw a walk (stride ``T ~ U(1.0, 1.15)`` s, length ``~U(1.25, 1.4)`` leg lengths, a turn of
     ``+-U(60, 120)`` deg after two strides) and place its footprints (module docstring)."""
     leg = leg_length(skeleton)
@@ -122,7 +122,7 @@ def _ramps(tau: np.ndarray, windows, shape) -> np.ndarray:
 
 
 def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe: np.ndarray,
-               inversion: tuple[float, float] = (0.0, 0.0)):  # fmt: skip
+               inversion: tuple[float, float] = (0.0, 0.0)):
     """The foot frame's world rotation (N, 3, 3), origin (N, 3) and inversion (N,) (rad, the sole
     turned medially on either side) at clock times ``tau`` (non-decreasing); ``inversion`` (rad)
     the foot's at initial contact and at the end of push-off (module docstring)."""
@@ -141,12 +141,12 @@ def foot_poses(plan: WalkPlan, side: str, tau: np.ndarray, heel: np.ndarray, toe
     steps = po[: len(F) - 1]
     swings = [(p + (FC_SHARE - PUSH_OFF) * T, p + (1 - PUSH_OFF) * T) for p in steps]
     psi = _ramps(tau, [(fc, nxt, H[j + 1] - H[j]) for j, (fc, nxt) in enumerate(swings)],
-                 lambda u: min_jerk(u)[0])  # fmt: skip
+                 lambda u: min_jerk(u)[0])
     pos = np.repeat(F[:1], tau.size, axis=0)
     for j, p in enumerate(steps):  # each stride's samples: up to the next push-off
         k = slice(*np.searchsorted(tau, [p, steps[j + 1] if j + 1 < len(steps) else np.inf]))
         pos[k] = _stride_positions(tau[k], (phi[k], roll[k]), (F[j], F[j + 1]),
-                                   (H[j], H[j + 1]), swings[j], (heel, toe), T)  # fmt: skip
+                                   (H[j], H[j + 1]), swings[j], (heel, toe), T)
     return _foot_frame(psi, phi, roll), pos, inverted
 
 
@@ -162,6 +162,6 @@ def _stride_positions(tau, pitch_roll, prints, heads, swing_span, heel_toe, T) -
     b = f1 + _foot_frame(h1, 0.0) @ heel - _foot_frame(np.full_like(tau, h1), phi, roll) @ heel
     lift = 64 * CLEARANCE_M * np.clip(u, 0, 1) ** 3 * (1 - np.clip(u, 0, 1)) ** 3
     pos = np.where((tau < fc)[:, None], a, (1 - m)[:, None] * a + m[:, None] * b
-                   + lift[:, None] * [0.0, 0.0, 1.0])  # fmt: skip
+                   + lift[:, None] * [0.0, 0.0, 1.0])
     pos = np.where((tau >= nxt)[:, None], b, pos)
     return np.where((tau >= nxt + FLAT * T)[:, None], f1, pos)

@@ -138,7 +138,7 @@ class BackgroundRecording:
         if not ready:
             self.close()
             raise RecordingError(f"the rerun recording did not finish within {timeout_s:g} s "
-                                 "(its writer was stopped)")  # fmt: skip
+                                 "(its writer was stopped)")
         status = _read_all(self._status_fd)
         if self._feeder is not None:
             self._feeder.join()
@@ -153,7 +153,7 @@ class BackgroundRecording:
             if code == -signal.SIGTERM:
                 raise Terminated
             why = (f"its writer was killed (signal {-code})" if code < 0
-                   else f"its writer exited with code {code}")  # fmt: skip
+                   else f"its writer exited with code {code}")
             raise RecordingError(f"the rerun recording failed: {status.decode() or why}")
 
     def close(self) -> None:

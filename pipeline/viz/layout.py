@@ -45,12 +45,12 @@ def default_layout(
     up = [0.0, 0.0, 0.0]
     up[up_axis_index(up_axis)] = 1.0
     views = tuple((str(title), what if isinstance(what, str) else tuple(map(str, what)))
-                  for title, what in plots)  # fmt: skip
+                  for title, what in plots)
     cam = None
     if camera is not None:
         cam = tuple(tuple(float(x) for x in np.asarray(v, dtype=float)) for v in camera)
     return Layout(views, 2 if len(views) > 1 else 1, tuple(up), cam,
-                  None if ground is None else float(ground))  # fmt: skip
+                  None if ground is None else float(ground))
 
 
 def default_blueprint(

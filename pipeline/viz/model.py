@@ -53,7 +53,7 @@ from pipeline.viz.scene import (
 )
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "motion_scene",
-           "segment_meshes"]  # fmt: skip
+           "segment_meshes"]
 
 #: Longer recordings show their 3D content (model, landmarks, IMU frames) at a stride that keeps
 #: at most this many samples (36,000: 10 Hz over an hour), the joint angles at the full rate: the
@@ -154,7 +154,7 @@ def motion_scene(
 def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames, joint_angles,
            bones, meshes, reference_landmarks, reference_angles, error_arrows, extra_scalars,
            up_axis, recording_name, app_id, imu_axis_length, point_radius,
-           root_path=None):  # fmt: skip
+           root_path=None):
     """``(scene, poses)``: the scene (its poses over every shown sample if ``precompute``) and
     ``poses(start, stop)``, the forward kinematics of ``shown[start:stop]``."""
     t = check_time(time, min_samples=1)
@@ -214,7 +214,7 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
         joint, angle = key.rsplit("_", 1)
         if angle not in ANGLE_COLORS:
             raise InputError(f"expected an ISB angle name like right_knee_flexion, got {key!r}",
-                             field="reference_angles")  # fmt: skip
+                             field="reference_angles")
         truth[f"plots/{joint}/{angle}_truth"] = check_series(y, n, (), key)
     reference = {k: check_series(v, n, (3,), k) for k, v in (reference_landmarks or {}).items()}
     scene = MotionScene(
@@ -222,5 +222,5 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
         lm_names, imu_names, bone_legs, view, every,
         angles, truth, scalars, reference, bool(meshes), bool(error_arrows), up_axis, vertical,
         recording_name, app_id, float(imu_axis_length), float(point_radius),
-    )  # fmt: skip
+    )
     return scene, poses

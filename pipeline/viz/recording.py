@@ -122,7 +122,7 @@ def _env(name: str, value: str):
 def open_recording(
     path: Path, app_id: str, recording_name: str | None, up_axis: str,
     layout: Layout | None = None,
-):  # fmt: skip
+):
     """An offline recording (:class:`~pipeline.viz.rrd.RrdWriter`) to ``path`` with view
     coordinates on ``world`` and ``layout`` as its default blueprint; deleted on failure."""
     _check_up_axis(up_axis)
@@ -140,7 +140,7 @@ def open_recording(
 
 
 def send_columns(rec: RrdWriter, entity: str, t: np.ndarray, mask: np.ndarray, archetype: str,
-                 **columns: np.ndarray) -> None:  # fmt: skip
+                 **columns: np.ndarray) -> None:
     """One columns chunk: the rows of ``t`` (and of each column) selected by ``mask`` on the
     timeline ``time``."""
     rec.send_columns(entity, t[mask], archetype, **{k: v[mask] for k, v in columns.items()})
@@ -156,7 +156,7 @@ def _log_points(
         ok = _finite(xyz)
         entity = f"world/{group}/{name}"
         rec.log(entity, "Points3D", radii=[radius], colors=pack_colors([color]), labels=[name],
-                show_labels=[False])  # fmt: skip
+                show_labels=[False])
         if ok.any():
             send_columns(rec, entity, t, ok, "Points3D", positions=xyz)
         out[name] = xyz
@@ -173,7 +173,7 @@ def _log_error_arrows(
         rec.log(entity, "Arrows3D", colors=pack_colors([ERROR_COLOR]))
         if ok.any():
             send_columns(rec, entity, t, ok, "Arrows3D", origins=ref[name],
-                         vectors=est[name] - ref[name])  # fmt: skip
+                         vectors=est[name] - ref[name])
 
 
 def log_landmarks(
@@ -277,7 +277,7 @@ def _log_urdf(rec: RrdWriter, urdf_path: Path, urdf_root, package_paths) -> None
     R, p = (rot_x(np.pi / 2), np.zeros(3)) if urdf_root is None else urdf_root
     rec.log("world/model_root", "Transform3D", translation=[np.asarray(p, dtype=float)],
             mat3x3=[np.asarray(R, dtype=float)], parent_frame=["tf#/world"],
-            child_frame=[root_link])  # fmt: skip
+            child_frame=[root_link])
     folders = [str(Path(f)) for f in (package_paths or _default_package_paths(urdf_path))]
     existing = os.environ.get("ROS_PACKAGE_PATH")
     if existing:

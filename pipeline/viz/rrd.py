@@ -86,10 +86,10 @@ _FIELDS = {
     ("TimePanelBlueprint", "play_state"): ("rerun.blueprint.components.PlayState", "u8"),
 }
 _BLUEPRINT = {"ViewContents", "ViewBlueprint", "LineGrid3D", "EyeControls3D", "ContainerBlueprint",
-              "ViewportBlueprint", "PanelBlueprint", "TimePanelBlueprint"}  # fmt: skip
+              "ViewportBlueprint", "PanelBlueprint", "TimePanelBlueprint"}
 #: rerun's enum values used by the layout
 _ENUMS = {"tabs": 1, "horizontal": 2, "grid": 4, "orbital": 2, "collapsed": 2, "loop_all": 3,
-          "playing": 2}  # fmt: skip
+          "playing": 2}
 #: ViewCoordinates of a right-handed world with y or z up (x right ... as rerun encodes them)
 VIEW_COORDINATES = {"y": (3, 1, 6), "z": (3, 5, 1)}
 
@@ -106,7 +106,7 @@ def check_version() -> None:
     found = words[1] if len(words) > 1 else "?"
     if not found.startswith(RERUN_VERSION + "."):
         raise RuntimeError(f"recordings are written for rerun-sdk {RERUN_VERSION}.x, found "
-                           f"{found}: pip install 'rerun-sdk=={RERUN_VERSION}.*'")  # fmt: skip
+                           f"{found}: pip install 'rerun-sdk=={RERUN_VERSION}.*'")
 
 
 def pack_colors(colors: Sequence[Sequence[int]]) -> np.ndarray:
@@ -143,9 +143,9 @@ def _arrow(kind: str, value) -> object:
 
 #: fixed-size lists: kind -> (NumPy item type, size)
 _FIXED = {_VEC3: ("float32", 3), _VEC4: ("float32", 4), _MAT3: ("float32", 9),
-          "u32x3": ("uint32", 3), "u8x3": ("uint8", 3), "uuid": ("uint8", 16)}  # fmt: skip
+          "u32x3": ("uint32", 3), "u8x3": ("uint8", 3), "uuid": ("uint8", 16)}
 _SCALARS = {"f32": "float32", "f64": "float64", "u8": "uint8", "u32": "uint32", "rgba": "uint32",
-            "bool": "bool"}  # fmt: skip
+            "bool": "bool"}
 
 
 def _fixed(value, item: str, n: int):
@@ -176,7 +176,7 @@ def _components(archetype: str, fields: dict, columns: bool) -> dict:
             offsets = pa.array(np.arange(len(arr) + 1, dtype=np.int32))
             arr = pa.ListArray.from_arrays(offsets, arr)
         desc = rb.ComponentDescriptor(f"{archetype}:{name}", archetype=prefix + archetype,
-                                      component_type=ctype)  # fmt: skip
+                                      component_type=ctype)
         out[desc] = arr
     return out
 
@@ -201,13 +201,13 @@ def _log_blueprint(rec, layout: Layout) -> None:
 
     def log(entity, archetype, static=False, **fields):
         rb.log_arrow_msg(entity, components=_components(archetype, fields, False),
-                         static_=static, recording=rec)  # fmt: skip
+                         static_=static, recording=rec)
 
     def view(cls, title, origin, query, **properties) -> str:
         path = f"view/{uuid.uuid4()}"
         log(f"{path}/ViewContents", "ViewContents", query=query)
         log(path, "ViewBlueprint", class_identifier=[cls], display_name=[title],
-            space_origin=[origin])  # fmt: skip
+            space_origin=[origin])
         for archetype, fields in properties.items():
             log(f"{path}/{archetype}", archetype, **fields)
         return path
@@ -215,11 +215,11 @@ def _log_blueprint(rec, layout: Layout) -> None:
     props = {}
     if layout.ground is not None:  # rerun's plane: {P : n . P - d = 0}
         props["LineGrid3D"] = dict(visible=[True], spacing=[0.5],
-                                   plane=[[*layout.up, float(layout.ground)]])  # fmt: skip
+                                   plane=[[*layout.up, float(layout.ground)]])
     if layout.camera is not None:
         eye, target = layout.camera
         props["EyeControls3D"] = dict(kind=[_ENUMS["orbital"]], position=[eye],
-                                      look_target=[target], eye_up=[layout.up])  # fmt: skip
+                                      look_target=[target], eye_up=[layout.up])
     view3d = view("3D", "3D", "/world", ["$origin/**"], **props)
     paths = []
     for title, what in layout.views:
@@ -231,7 +231,7 @@ def _log_blueprint(rec, layout: Layout) -> None:
     def container(kind, contents, **fields) -> uuid.UUID:
         cid = uuid.uuid4()
         log(f"container/{cid}", "ContainerBlueprint", container_kind=[_ENUMS[kind]],
-            contents=contents, **fields)  # fmt: skip
+            contents=contents, **fields)
         return cid
 
     if paths:
@@ -254,45 +254,45 @@ class RrdWriter:
     """
 
     def __init__(self, path: str | Path, app_id: str, recording_name: str | None = None,
-                 layout: Layout | None = None) -> None:  # fmt: skip
+                 layout: Layout | None = None) -> None:
         check_version()
         rb = _bindings()
         self.path = Path(path)
         self._rec = rb.new_recording(application_id=app_id, recording_id=uuid.uuid4().hex,
                                      make_default=False, make_thread_default=False,
                                      default_enabled=True, send_properties=True,
-                                     batcher_config=None)  # fmt: skip
+                                     batcher_config=None)
         storage = None
         if layout is not None:
             bp = rb.new_blueprint(application_id=app_id, make_default=False,
-                                  make_thread_default=False, default_enabled=True)  # fmt: skip
+                                  make_thread_default=False, default_enabled=True)
             rb.set_time_sequence("blueprint", 0, recording=bp)
             _log_blueprint(bp, layout)
             storage = rb.memory_recording(recording=bp)
             rb.flush(timeout_sec=0.0, recording=bp)
         rb.save(path=str(self.path), default_blueprint=storage, recording=self._rec,
-                write_footer=True)  # fmt: skip
+                write_footer=True)
         if recording_name:
             rb.send_recording_name(recording_name, recording=self._rec)
 
     def log(self, entity: str, archetype: str, **fields) -> None:
         _bindings().log_arrow_msg(entity, components=_components(archetype, fields, False),
-                                  static_=True, recording=self._rec)  # fmt: skip
+                                  static_=True, recording=self._rec)
 
     def send_columns(self, entity: str, t: np.ndarray, archetype: str, **fields) -> None:
         import pyarrow as pa
 
         times = pa.array((np.asarray(t, dtype=float) * 1e9).astype("timedelta64[ns]"),
-                         pa.duration("ns"))  # fmt: skip
+                         pa.duration("ns"))
         _bindings().send_arrow_chunk(entity, timelines={"time": times},
                                      components=_components(archetype, fields, True),
-                                     recording=self._rec)  # fmt: skip
+                                     recording=self._rec)
 
     def log_file_from_path(self, path: str | Path, entity_path_prefix: str) -> None:
         """A file rerun's importers read (e.g. a URDF and its meshes), static."""
         rb = _bindings()
         rb.log_file_from_path(Path(path), entity_path_prefix=entity_path_prefix, static_=True,
-                              recording=self._rec)  # fmt: skip
+                              recording=self._rec)
         rb.flush(timeout_sec=1e38, recording=self._rec)
 
     def close(self) -> None:
@@ -311,10 +311,10 @@ def warm() -> None:
     check_version()
     rb = _bindings()
     bp = rb.new_blueprint(application_id="warm", make_default=False, make_thread_default=False,
-                          default_enabled=True)  # fmt: skip
+                          default_enabled=True)
     rb.set_time_sequence("blueprint", 0, recording=bp)
     _log_blueprint(bp, Layout((("v", "/plots/v"),), 1, (0.0, 1.0, 0.0),
-                              ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0)), 0.0))  # fmt: skip
+                              ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0)), 0.0))
     for (archetype, _), (_, kind) in _FIELDS.items():
         if archetype not in _BLUEPRINT:
             size = _FIXED.get(kind, ("", 1))[1]

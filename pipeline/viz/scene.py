@@ -33,7 +33,7 @@ from pipeline.viz.recording import (
 from pipeline.viz.rrd import pack_colors
 
 __all__ = ["ANGLE_COLORS", "BONE_COLOR", "CHUNK_SAMPLES", "MotionScene", "SegmentMesh",
-           "log_scene", "meshes_from_urdf", "preload_meshes", "warm_recording"]  # fmt: skip
+           "log_scene", "meshes_from_urdf", "preload_meshes", "warm_recording"]
 
 BONE_COLOR = (227, 218, 201, 150)
 BONE_LINE_COLOR = (90, 90, 90)
@@ -41,7 +41,7 @@ _CHUNK_FRAMES = 4096  # frames per block of the ground search (memory: frames x 
 #: Samples logged per chunk (memory stays bounded whatever the length).
 CHUNK_SAMPLES = 10_000
 ANGLE_COLORS = {"flexion": (40, 100, 230), "adduction": (220, 50, 50), "inversion": (220, 50, 50),
-                "rotation": (30, 160, 70)}  # fmt: skip
+                "rotation": (30, 160, 70)}
 
 #: name -> (R (n, 3, 3), p (n, 3)) world poses of model frames over some samples (R None for
 #: frames drawn as points: landmarks, bone ends)
@@ -117,7 +117,7 @@ def preload_meshes(urdf: str, source: Path | None = None) -> None:
 
 
 def meshes_from_urdf(urdf: str, source: Path | None, segments: Mapping[str, str]
-                     ) -> dict[str, SegmentMesh]:  # fmt: skip
+                     ) -> dict[str, SegmentMesh]:
     """Segment -> its URDF visual meshes merged, in the segment (link) frame, in metres.
 
     ``segments``: segment -> link name. A vertex ``v`` of a mesh file becomes ``R_o (s * v) +
@@ -209,7 +209,7 @@ ROOM_DISTANCE = 1.1
 
 
 def _pelvis_walk(traj: Mapping[str, tuple[np.ndarray, np.ndarray]], segments: Mapping[str, str],
-                 axis: int) -> np.ndarray | None:  # fmt: skip
+                 axis: int) -> np.ndarray | None:
     """The pelvis's positions (finite rows) when they span more than :data:`WALKS_M`
     horizontally, else None."""
     frame = segments.get("pelvis")
@@ -223,7 +223,7 @@ def _pelvis_walk(traj: Mapping[str, tuple[np.ndarray, np.ndarray]], segments: Ma
 
 
 def _room_camera(walk: np.ndarray, traj, frames: Sequence[str], ground: float | None,
-                 axis: int) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+                 axis: int) -> tuple[np.ndarray, np.ndarray] | None:
     """Eye and target framing the whole walk from its side: aimed at the middle of the pelvis's
     path (at the body's mid-height, as :func:`_camera`), from the horizontal direction across the
     path's main direction (its principal axis), raised by :data:`ROOM_ELEVATION_DEG`, at
@@ -248,19 +248,19 @@ def _room_camera(walk: np.ndarray, traj, frames: Sequence[str], ground: float | 
 
 
 def _log_walk(rec, walk: np.ndarray, reference: Mapping[str, np.ndarray], ground: float | None,
-              axis: int) -> None:  # fmt: skip
+              axis: int) -> None:
     """Static: the pelvis's path on the floor (``world/walk/path``) and each foot's footprints
     (``world/walk/<side>_footprints``: the rests of ``reference``'s ``<side>_footprint``)."""
     path = walk.copy()
     path[:, axis] = ground if ground is not None else float(walk[:, axis].min())
     rec.log("world/walk/path", "LineStrips3D", strips=[path], radii=[0.008],
-            colors=pack_colors([PATH_COLOR]))  # fmt: skip
+            colors=pack_colors([PATH_COLOR]))
     for name, xyz in reference.items():
         if name.endswith("_footprint"):
             prints = np.unique(xyz[np.all(np.isfinite(xyz), axis=1)], axis=0)
             if len(prints):
                 rec.log(f"world/walk/{name}s", "Points3D", positions=prints, radii=[0.03],
-                        colors=pack_colors([PATH_COLOR]))  # fmt: skip
+                        colors=pack_colors([PATH_COLOR]))
 
 
 @dataclass(frozen=True)
@@ -302,7 +302,7 @@ class MotionScene:
 
 
 def log_scene(path: str | Path, scene: MotionScene,
-              poses: Callable[[int, int], Poses] | None = None) -> Path:  # fmt: skip
+              poses: Callable[[int, int], Poses] | None = None) -> Path:
     """Write ``scene`` to ``path`` (.rrd); ``poses(start, stop)``: the poses of the shown samples
     ``shown[start:stop]`` when ``scene.poses`` is None (e.g. forward kinematics per chunk)."""
     path = Path(path)
@@ -312,13 +312,13 @@ def log_scene(path: str | Path, scene: MotionScene,
 
         def poses(start: int, stop: int) -> Poses:
             return {k: (None if R is None else R[start:stop], p[start:stop])
-                    for k, (R, p) in scene.poses.items()}  # fmt: skip
+                    for k, (R, p) in scene.poses.items()}
 
     t, ok, view, segments = scene.time, scene.ok, scene.view, scene.segments
     lm_names, imu_names, bone_legs = scene.landmark_names, scene.imu_names, scene.bone_legs
     mesh_data = meshes_from_urdf(scene.urdf, scene.source, segments) if scene.meshes else {}
     ground = _lowest_height(view, segments, mesh_data, [view[m][1] for m in lm_names],
-                            scene.vertical)  # fmt: skip
+                            scene.vertical)
     walk = _pelvis_walk(view, segments, scene.vertical)
     if walk is None:
         camera = _camera(view, list(segments.values()), ground, scene.vertical)
@@ -336,11 +336,11 @@ def log_scene(path: str | Path, scene: MotionScene,
     layout = _layout(plots, scene.up_axis, camera=camera, ground=ground)
 
     with open_recording(path, scene.app_id, scene.recording_name, scene.up_axis,
-                        layout) as rec:  # fmt: skip
+                        layout) as rec:
         for seg, mesh in mesh_data.items():
             rec.log(f"world/model/{seg}/mesh", "Mesh3D", vertex_positions=mesh.vertices,
                     triangle_indices=mesh.triangles, vertex_normals=mesh.normals,
-                    albedo_factor=pack_colors([BONE_COLOR]))  # fmt: skip
+                    albedo_factor=pack_colors([BONE_COLOR]))
         if walk is not None:
             _log_walk(rec, walk, scene.reference, ground, scene.vertical)
         shown = scene.shown
@@ -352,24 +352,24 @@ def log_scene(path: str | Path, scene: MotionScene,
             ref = {k: v[rows] for k, v in scene.reference.items()} or None
             log_landmarks(rec, tc, points, ref, scene.error_arrows, scene.point_radius)
             log_poses(rec, tc, "world/imus", {m: traj[m] for m in imu_names},
-                      scene.imu_axis_length)  # fmt: skip
+                      scene.imu_axis_length)
             for side in bone_legs:
                 strip = np.stack([traj[f"{side}_{j}"][1] for j in ("HJC", "KJC", "AJC")], axis=1)
                 entity = f"world/bones/{side}"
                 rec.log(entity, "LineStrips3D", radii=[0.006],
-                        colors=pack_colors([BONE_LINE_COLOR]))  # fmt: skip
+                        colors=pack_colors([BONE_LINE_COLOR]))
                 if okc.any():
                     send_columns(rec, entity, tc, okc, "LineStrips3D", strips=strip)
         for entity in scene.angles:
             angle = entity.rsplit("/", 1)[1]
             rec.log(entity, "SeriesLines", colors=pack_colors([ANGLE_COLORS[angle]]),
-                    names=[angle])  # fmt: skip
+                    names=[angle])
         log_scalars(rec, t, scene.angles, scale=float(np.degrees(1.0)))
         for entity in scene.truth:
             angle = entity.rsplit("/", 1)[1].removesuffix("_truth")
             light = tuple(int(c + 0.55 * (255 - c)) for c in ANGLE_COLORS[angle])
             rec.log(entity, "SeriesLines", colors=pack_colors([light]),
-                    names=[f"{angle} (truth)"], widths=[1.0])  # fmt: skip
+                    names=[f"{angle} (truth)"], widths=[1.0])
         log_scalars(rec, t, scene.truth, scale=float(np.degrees(1.0)))
         log_scalars(rec, t, scene.scalars)
     return path

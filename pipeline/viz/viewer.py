@@ -79,10 +79,10 @@ def view(path: str | Path, web: bool = False, web_port: int = 9090, grpc_port: i
         raise InputError("no such recording", file=path)
     if not web and not has_display():
         raise InputError("no display for the native viewer here; use --web to serve the web "
-                         "viewer on 127.0.0.1", file=path)  # fmt: skip
+                         "viewer on 127.0.0.1", file=path)
     if web:
         for port, what, flag in ((web_port, "web viewer", "--port"),
-                                 (grpc_port, "data (gRPC)", "--grpc-port")):  # fmt: skip
+                                 (grpc_port, "data (gRPC)", "--grpc-port")):
             if port_in_use(port):
                 raise InputError(f"port {port} ({what}) is already in use on 127.0.0.1; choose "
                                  f"another with {flag}", field=flag[2:].replace("-", "_"))

@@ -21,7 +21,7 @@ def imc_discussion(stage: ImcStage) -> str:
         for lm in ("MM", "LM"):
             vals = {c: _group_mean(rows, tibia_input=tibia_input, positions="regression",
                                    correction=c, landmark=lm)
-                    for c in stage.corrections}  # fmt: skip
+                    for c in stage.corrections}
             lines.append(
                 f"- {tibia_input} tibia, regression positions, {lm}: "
                 + ", ".join(f"{c} {v:.1f} mm" for c, v in vals.items())
@@ -30,7 +30,7 @@ def imc_discussion(stage: ImcStage) -> str:
 
     def g(c: str, lm: str) -> float:
         return _group_mean(rows, tibia_input="uncorrected", positions="regression",
-                           correction=c, landmark=lm)  # fmt: skip
+                           correction=c, landmark=lm)
 
     if "hinge_ik" in stage.corrections and "ipopt" in stage.corrections:
         lines += [

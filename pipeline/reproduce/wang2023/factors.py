@@ -63,14 +63,14 @@ FACTORS = (
 FACTOR_COLUMNS = ("subject_id", "sex", "factor", "MM_mm", "LM_mm")
 #: Table IV, average AoR, regression positions: (MM, LM) means
 PAPER_MALLEOLI = {s: tuple(paper_mean(c) for c in PAPER_TABLE_IV[("regression", "average", s)][2:])
-                  for s in ("m", "f")}  # fmt: skip
+                  for s in ("m", "f")}
 
 
 def _first_sample_measures(subject, r, measures: Measures) -> Measures:
     lm, v = subject.omc.landmarks, int(np.flatnonzero(r.valid)[0])
     d = lambda a, b: float(np.linalg.norm(lm[a][v] - lm[b][v]))  # noqa: E731
     return Measures(measures.sex, measures.height_m, d("EFL", "LM"), d("EFM", "MM"),
-                    d("EFM", "EFL"), d("MM", "LM"))  # fmt: skip
+                    d("EFM", "EFL"), d("MM", "LM"))
 
 
 def lm_y_quirk(measures: Measures, table) -> float:
@@ -93,7 +93,7 @@ class _Pairing:
     table: object
 
     def errors(self, lag: int, m: Measures, quirk: bool = False, t_frac: float = 0.0,
-               through_hip: bool = True) -> tuple[float, float]:  # fmt: skip
+               through_hip: bool = True) -> tuple[float, float]:
         """MM and LM RMS errors (mm) of the regression-position trajectories (eq 15-20)."""
         omc_F, _ = align(self.omc_femur, self.imc_femur, lag)
         omc_paired = {n: align(v, self.imc_femur, lag)[0] for n, v in self.omc_paths.items()}
@@ -108,7 +108,7 @@ class _Pairing:
         while not (np.all(np.isfinite(omc_F[t])) and np.all(np.isfinite(eF_p[t]))):
             t += -1 if t_frac == 1.0 else 1
         comp, _, _ = unified_comparison(eF_p, eT_p, dict(p.femur), tibia, omc_paired, omc_F, t,
-                                        through_hip)  # fmt: skip
+                                        through_hip)
         return 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
 
 
@@ -149,7 +149,7 @@ def factors_section(rows: list[dict]) -> str:
     table = []
     for sex in ("m", "f"):
         base = {k: np.mean([r[f"{k}_mm"] for r in rows if r["sex"] == sex
-                            and r["factor"] == "ours"]) for k in ("MM", "LM")}  # fmt: skip
+                            and r["factor"] == "ours"]) for k in ("MM", "LM")}
         for factor in FACTORS:
             sel = [r for r in rows if r["sex"] == sex and r["factor"] == factor]
             cells = []
@@ -162,7 +162,7 @@ def factors_section(rows: list[dict]) -> str:
     males = [r for r in rows if r["sex"] == "m" and r["factor"] == "ours"]
     worst = sorted(males, key=lambda r: -r["LM_mm"])[:2]
     moved = {f: np.mean([r["LM_mm"] for r in rows if r["sex"] == "m" and r["factor"] == f])
-             for f in FACTORS}  # fmt: skip
+             for f in FACTORS}
     closest = min(FACTORS[1:], key=lambda f: abs(moved[f] - PAPER_MALLEOLI["m"][1]))
     return "\n".join([
         "## Table IV male LM: the reference's choices one at a time",

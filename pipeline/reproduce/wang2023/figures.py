@@ -26,7 +26,7 @@ from pipeline.reproduce.wang2023.imc_report import PAPER_TABLE_IV, paper_mean
 __all__ = ["FIGURES", "imc_figures"]
 
 FIGURES = ("fig_table4.png", "fig_malleoli_per_subject.png", "fig_trajectories.png",
-           "fig_bland_altman.png")  # fmt: skip
+           "fig_bland_altman.png")
 
 
 def _png(fig) -> bytes:
@@ -53,11 +53,11 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
     for ax, tibia_input in zip(axes, ("stored", "uncorrected"), strict=True):
         for k, method in enumerate(methods):
             vals = [rms_values(rows, tibia_input=tibia_input, positions="regression",
-                               correction=method, landmark=n) for n in LANDMARKS]  # fmt: skip
+                               correction=method, landmark=n) for n in LANDMARKS]
             mean = [np.nanmean(v) for v in vals]
             sd = [np.nanstd(v, ddof=1) if np.isfinite(v).sum() > 1 else 0.0 for v in vals]
             ax.bar(x + (k - (len(methods) - 1) / 2) * width, mean, width, yerr=sd, capsize=2,
-                   label=method)  # fmt: skip
+                   label=method)
         if tibia_input == "stored":
             for k, method in enumerate(methods):
                 for sex, marker in (("m", "v"), ("f", "^")):
@@ -66,7 +66,7 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
                         continue
                     means = [paper_mean(c) for c in paper]
                     ax.plot(x + (k - (len(methods) - 1) / 2) * width, means, marker, color="k",
-                            ms=4, label=f"paper ({sex})" if k == 0 else None)  # fmt: skip
+                            ms=4, label=f"paper ({sex})" if k == 0 else None)
         ax.set_xticks(x, LANDMARKS)
         ax.set_title(f"tibia input: {tibia_input} (regression positions)")
         ax.grid(axis="y", alpha=0.3)
@@ -82,7 +82,7 @@ def imc_figures(stage: ImcStage) -> dict[str, bytes]:
         for sid in subjects:
             v = np.concatenate([rms_values(rows, tibia_input="uncorrected", positions="regression",
                                            correction=method, landmark=n, subject_id=sid)
-                                for n in ("MM", "LM")])  # fmt: skip
+                                for n in ("MM", "LM")])
             per.append(np.nanmean(v) if v.size else np.nan)
         ax.plot(range(len(subjects)), per, "o-", ms=4, lw=1, label=method)
     ax.set_xticks(range(len(subjects)), [str(s) for s in subjects])
@@ -111,14 +111,14 @@ def _example_figures(plt, ex: dict) -> dict[str, bytes]:
         ax.set_ylabel(f"LM {axis} (mm)")
         ax.grid(alpha=0.3)
     axes[0].set_title(f"subject {ex['subject_id']}: lateral malleolus, hip-centred, optical frame "
-                      "(uncorrected tibia, regression positions)")  # fmt: skip
+                      "(uncorrected tibia, regression positions)")
     axes[0].legend(fontsize=8, ncol=3)
     axes[-1].set_xlabel("time (s)")
     out["fig_trajectories.png"] = _png(fig)
     plt.close(fig)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, method, title in zip(axes, ("none", "average"), ("no correction",
-                                 "closed-form AoR correction"), strict=True):  # fmt: skip
+                                 "closed-form AoR correction"), strict=True):
         a = np.concatenate([imc[method][n] for n in ("MM", "LM")]).ravel()
         b = np.concatenate([omc[n] for n in ("MM", "LM")]).ravel()
         ok = np.isfinite(a) & np.isfinite(b)
@@ -128,7 +128,7 @@ def _example_figures(plt, ex: dict) -> dict[str, bytes]:
         for y, style in ((bias, "-"), (bias + 1.96 * sd, "--"), (bias - 1.96 * sd, "--")):
             ax.axhline(y, color="k", ls=style, lw=1)
         ax.set_title(f"{title}: bias {bias:.1f} mm, 95 % limits {bias - 1.96 * sd:.1f} to "
-                     f"{bias + 1.96 * sd:.1f} mm", fontsize=9)  # fmt: skip
+                     f"{bias + 1.96 * sd:.1f} mm", fontsize=9)
         ax.set_xlabel("mean of IMU and optical (mm; MM, LM coordinates, all samples)")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("IMU minus optical (mm)")

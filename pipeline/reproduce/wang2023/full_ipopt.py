@@ -23,7 +23,7 @@ FULL_CORRECTION_COLUMNS = (
     "subject_id", "sex", "tibia_input", "status", "iterations", "seconds", "hinge_rms_deg",
     "rest_closed_form_deg", "rest_deg", "plane_closed_form_mm", "plane_mm", "femur_deg",
     "tibia_deg",
-)  # fmt: skip
+)
 
 
 def knee_trial(subject, r) -> KneeTrial:
@@ -31,7 +31,7 @@ def knee_trial(subject, r) -> KneeTrial:
     hip-centred knee and ankle centres)."""
     paths = hip_centred_paths(subject, r)
     return KneeTrial(r.femur_R, r.tibia_R, r.knee_aor, paths["KJC"],
-                     0.5 * (paths["MM"] + paths["LM"]))  # fmt: skip
+                     0.5 * (paths["MM"] + paths["LM"]))
 
 
 def loso_priors(trials: dict[int, tuple[str, KneeTrial]], subject_id: int) -> CorrectionPriors:
@@ -42,7 +42,7 @@ def loso_priors(trials: dict[int, tuple[str, KneeTrial]], subject_id: int) -> Co
     same = [t for sid, (sx, t) in trials.items() if sid != subject_id and sx == sex]
     p, ps = correction_priors(others), correction_priors(same)
     return replace(p, femur_axis=ps.femur_axis, tibia_axis=ps.tibia_axis,
-                   sd_femur_axis=ps.sd_femur_axis, sd_tibia_axis=ps.sd_tibia_axis)  # fmt: skip
+                   sd_femur_axis=ps.sd_femur_axis, sd_tibia_axis=ps.sd_tibia_axis)
 
 
 def full_corrected(F: np.ndarray, T: np.ndarray, measures: Measures, priors: CorrectionPriors):
@@ -70,4 +70,4 @@ def full_rows(stage) -> list[dict]:
             tibia_deg=angle(c.R_start_tibia, c.R_co_tibia),
         )
         for (sid, tibia_input), c in stage.full_corrections.items()
-    ]  # fmt: skip
+    ]

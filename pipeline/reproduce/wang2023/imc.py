@@ -84,9 +84,9 @@ POSITIONS = ("regression", "omc")
 TRAJECTORY_COLUMNS = (
     "subject_id", "sex", "tibia_input", "positions", "correction", "landmark", "rms_mm",
     "r_x", "r_y", "r_z", "icc_x", "icc_y", "icc_z", "n_frames",
-)  # fmt: skip
+)
 ORIENTATION_COLUMNS = ("subject_id", "tibia_input", "correction", "segment", "z_deg", "y_deg",
-                       "x_deg", "error_frame")  # fmt: skip
+                       "x_deg", "error_frame")
 MAX_LAG = 250  # samples; the reference offsets reach 169
 
 
@@ -144,7 +144,7 @@ def user_path_options(correction: str, sex_aor, own_aor, female_aor) -> IKOption
         knee_axis_femur=tuple(aor.femur_axis), knee_axis_tibia=tuple(aor.tibia_axis),
         segment_orientations=True, calibration_pose="supine",
         sensor_to_model=IMC_SENSOR_TO_MODEL, joint_limits=False,
-    )  # fmt: skip
+    )
 
 
 def imc_recording(femur_R: np.ndarray, tibia_R: np.ndarray, rate_hz: float = 100.0) -> Recording:
@@ -161,7 +161,7 @@ def corrected_orientations(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Femur and tibia orientations (IMC world) after ``correction``, by the user's path
     (:func:`user_path_options`): the solved model's segment frames, rotated back from the model's
-    y-up world."""  # fmt: skip
+    y-up world."""
     options = user_path_options(correction, sex_aor, own_aor, female_aor)
     run = process_recording(imc_recording(F, T), measures, options)
     seg = run.segment_orientations(["right_femur", "right_tibia"])
@@ -198,7 +198,7 @@ def run_imc_stage(
     if "full_ipopt" in corrections:
         trials = {s.omc.subject_id: (omc_stage.result(s.omc.subject_id).sex,
                                      knee_trial(s, omc_stage.result(s.omc.subject_id)))
-                  for s in omc_stage.subjects}  # fmt: skip
+                  for s in omc_stage.subjects}
     imc_subjects = [s for s in omc_stage.subjects if s.imc is not None]
     if not imc_subjects:
         raise InputError("no subject with IMC data (imcData) in the dataset")
@@ -232,7 +232,7 @@ def run_imc_stage(
                     full_corrections[sid, tibia_input] = c
                 else:
                     eF, eT = corrected_orientations(correction, F, T, measures, pop[r.sex],
-                                                    r.knee_aor, pop["f"])  # fmt: skip
+                                                    r.knee_aor, pop["f"])
                 if (tibia_input, correction) == ("stored", "reference"):
                     reference_orientations[sid] = (eF, eT)
                 _, eF_p = align(r.femur_R, eF, lag)
@@ -244,7 +244,7 @@ def run_imc_stage(
                     if positions == "regression":
                         R_unify = R
                     if (positions == "regression" and tibia_input == "uncorrected"
-                            and (not example or example["subject_id"] == sid)):  # fmt: skip
+                            and (not example or example["subject_id"] == sid)):
                         example.setdefault("subject_id", sid)
                         example["rate_hz"] = subject.omc.rate_hz
                         example["omc"] = {n: 1e3 * omc_paired[n] for n in LANDMARKS}
@@ -260,7 +260,7 @@ def run_imc_stage(
                                 icc_x=c.icc[0], icc_y=c.icc[1], icc_z=c.icc[2],
                                 n_frames=c.n_frames,
                             )
-                        )  # fmt: skip
+                        )
                 for segment, imc_R, omc_R in (("femur", eF_p, omc_F), ("tibia", eT_p, omc_T)):
                     for error_frame in ("body", "world"):
                         z, y, x = np.degrees(
@@ -272,12 +272,12 @@ def run_imc_stage(
                             dict(subject_id=sid, tibia_input=tibia_input, correction=correction,
                                  segment=segment, z_deg=z, y_deg=y, x_deg=x,
                                  error_frame=error_frame)
-                        )  # fmt: skip
+                        )
         if rerun_dir is not None:
             _log_subject(Path(rerun_dir), subject, r, omc_paired, lag, pop)
     return ImcStage(traj_rows, orient_rows, subjects, corrections, time.perf_counter() - t0, notes,
                     example, reference_orientations=reference_orientations,
-                    full_corrections=full_corrections, priors=priors)  # fmt: skip
+                    full_corrections=full_corrections, priors=priors)
 
 
 def unified_trajectories(
@@ -286,10 +286,10 @@ def unified_trajectories(
 ):
     """The landmark trajectories of the paired IMC femur and tibia (eq 15-17) and the rotation
     unifying their frame with the optical one from frame ``t`` (eq 18-19):
-    ``(R_imc_to_omc, imc_trajectories)``."""  # fmt: skip
+    ``(R_imc_to_omc, imc_trajectories)``."""
     imc = wang_trajectories(femur, tibia, femur_positions, tibia_positions)
     R = unify_frames(frame_from_femur(omc_paths["KJC"], omc_femur, t, through_hip),
-                     frame_from_femur(imc["KJC"], femur, t, through_hip))  # fmt: skip
+                     frame_from_femur(imc["KJC"], femur, t, through_hip))
     return R, imc
 
 
@@ -298,9 +298,9 @@ def unified_comparison(
     omc_femur: np.ndarray, t: int = 0, through_hip: bool = True,
 ):
     """:func:`unified_trajectories` compared with the optical paths (eq 20):
-    ``(comparisons, R_imc_to_omc, imc_trajectories)``."""  # fmt: skip
+    ``(comparisons, R_imc_to_omc, imc_trajectories)``."""
     R, imc = unified_trajectories(femur, tibia, femur_positions, tibia_positions, omc_paths,
-                                  omc_femur, t, through_hip)  # fmt: skip
+                                  omc_femur, t, through_hip)
     return compare_trajectories({n: imc[n] for n in LANDMARKS}, omc_paths, R_imc_to_omc=R), R, imc
 
 
@@ -321,13 +321,13 @@ def subject_motion(
     which the femur points up at the first paired frame. With ``limits=False`` the model's
     landmark frames reproduce eq 15-17 exactly (tested); with limits the knee cannot hyperextend.
     The model is built in memory. Returns ``(skeleton, ik_result)``.
-    """  # fmt: skip
+    """
 
     pf, pt = landmark_positions(positions, subject, r)
     geometry = SubjectGeometry(
         sex=r.sex, height_m=subject.omc.height_m, femur_landmarks=pf, tibia_landmarks=pt,
         knee_axis_femur=r.knee_aor.femur_axis, knee_axis_tibia=r.knee_aor.tibia_axis,
-    )  # fmt: skip
+    )
     sk = Skeleton.build(geometry, knee="free", legs=("right",))
     targets = {"right_femur": G_imc.T @ eF, "right_tibia": G_imc.T @ eT}
     return sk, solve_ik(sk.model, targets, limits=limits)
@@ -341,7 +341,7 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, pop) -> Path:
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     cF, cT = corrected_orientations("average", F, T, subject_measures(subject, r), pop[r.sex],
-                                    r.knee_aor, pop["f"])  # fmt: skip
+                                    r.knee_aor, pop["f"])
     _, eF = align(r.femur_R, cF, lag)
     _, eT = align(r.femur_R, cT, lag)
     pf, pt = landmark_positions("regression", subject, r)

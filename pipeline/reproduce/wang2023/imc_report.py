@@ -49,9 +49,9 @@ def table4_section(stage: ImcStage) -> str:
             for correction in stage.corrections:
                 for sex in ("m", "f"):
                     sel = select_rows(stage.trajectory_rows, tibia_input=tibia_input,
-                                  positions=positions, correction=correction, sex=sex)  # fmt: skip
+                                  positions=positions, correction=correction, sex=sex)
                     ours = [mean_sd([r["rms_mm"] for r in sel if r["landmark"] == n])
-                            for n in LANDMARKS]  # fmt: skip
+                            for n in LANDMARKS]
                     paper = PAPER_TABLE_IV.get((positions, correction, sex), ("",) * 4)
                     rows.append(
                         [tibia_input, positions, correction, sex]
@@ -66,7 +66,7 @@ def table4_section(stage: ImcStage) -> str:
             "",
             markdown_table(
                 ["tibia input", "positions", "correction", "sex", "EFM", "EFL", "MM", "LM"], rows
-            ),  # fmt: skip
+            ),
         ]
     )
 
@@ -80,7 +80,7 @@ def table5_section(stage: ImcStage) -> str:
                 for segment in ("femur", "tibia"):
                     sel = select_rows(stage.orientation_rows, tibia_input=tibia_input,
                                   correction=correction, segment=segment,
-                                  error_frame=error_frame)  # fmt: skip
+                                  error_frame=error_frame)
                     vals += [mean_sd([r[k] for r in sel]) for k in ("z_deg", "y_deg", "x_deg")]
                 paper = None
                 if tibia_input == "stored" and error_frame == "world":
@@ -88,7 +88,7 @@ def table5_section(stage: ImcStage) -> str:
                 cells = [f"{o} ({p})" for o, p in zip(vals, paper, strict=True)] if paper else vals
                 rows.append([error_frame, tibia_input, correction] + cells)
     header = ["error frame", "tibia input", "correction", "femur Z", "femur Y", "femur X",
-              "tibia Z", "tibia Y", "tibia X"]  # fmt: skip
+              "tibia Z", "tibia Y", "tibia X"]
     return "\n".join(
         [
             "## Table V: RMS orientation errors (deg, ZYX Euler angles, mean±SD over subjects)",
@@ -108,7 +108,7 @@ def table5_section(stage: ImcStage) -> str:
 
 def lag_section(stage: ImcStage) -> str:
     rows = [[s["subject_id"], s["sex"], s["lag"], s["reference_lag"], s["lag"] - s["reference_lag"]]
-            for s in stage.subjects]  # fmt: skip
+            for s in stage.subjects]
     return "\n".join(
         [
             "## Time alignment",
@@ -118,7 +118,7 @@ def lag_section(stage: ImcStage) -> str:
             "",
             markdown_table(
                 ["subject", "sex", "lag (samples)", "reference offset", "difference"], rows
-            ),  # fmt: skip
+            ),
             "",
             f"IMC stage: {len(stage.subjects)} subjects, {len(stage.trajectory_rows)} trajectory "
             f"rows in {stage.seconds:.1f} s.",

@@ -74,12 +74,12 @@ def limit_rows(omc_stage: OmcStage, imc_stage: ImcStage) -> list[dict]:
         c = imc_stage.full_corrections.get((sid, "uncorrected"))
         if subject.imc is not None and c is not None:
             rows += _subject_rows(subject, omc_stage.result(sid), lags[sid], c,
-                                  imc_stage.priors[sid])  # fmt: skip
+                                  imc_stage.priors[sid])
     return rows
 
 
 def _subject_rows(subject, r, lag: int, c: FullCorrection, priors: CorrectionPriors
-                  ) -> list[dict]:  # fmt: skip
+                  ) -> list[dict]:
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     paths = hip_centred_paths(subject, r)
     omc_F, Fp = align(r.femur_R, F, lag)
@@ -95,7 +95,7 @@ def _subject_rows(subject, r, lag: int, c: FullCorrection, priors: CorrectionPri
         return 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
 
     own = replace(priors, femur_axis=r.knee_aor.femur_axis, tibia_axis=r.knee_aor.tibia_axis,
-                  rest_knee=rest_rotation(r.femur_R, r.tibia_R, REST_SAMPLES))  # fmt: skip
+                  rest_knee=rest_rotation(r.femur_R, r.tibia_R, REST_SAMPLES))
     _, _, o = full_corrected(F, T, measures, own)
     best = _best_constant(Fp, Tp, c.R_co_femur, c.R_co_tibia, pf, pt, omc_paths, omc_F)
     results = {
@@ -106,7 +106,7 @@ def _subject_rows(subject, r, lag: int, c: FullCorrection, priors: CorrectionPri
     comp, _, _ = unified_comparison(omc_F, omc_T, pf, pt, omc_paths, omc_F)
     results["optical orientations"] = 1e3 * comp["MM"].rms, 1e3 * comp["LM"].rms
     return [dict(subject_id=subject.omc.subject_id, sex=r.sex, method=m, MM_mm=mm, LM_mm=lm,
-                 malleoli_mm=0.5 * (mm + lm)) for m, (mm, lm) in results.items()]  # fmt: skip
+                 malleoli_mm=0.5 * (mm + lm)) for m, (mm, lm) in results.items()]
 
 
 def limits_section(rows: list[dict]) -> str:
@@ -114,7 +114,7 @@ def limits_section(rows: list[dict]) -> str:
     if not rows:
         return ""
     mean = {m: {k: float(np.mean([r[k] for r in rows if r["method"] == m]))
-                for k in ("MM_mm", "LM_mm", "malleoli_mm")} for m in LIMITS}  # fmt: skip
+                for k in ("MM_mm", "LM_mm", "malleoli_mm")} for m in LIMITS}
     n = len({r["subject_id"] for r in rows})
     what = {
         "full_ipopt": "IMU only: priors from the other subjects",
@@ -123,7 +123,7 @@ def limits_section(rows: list[dict]) -> str:
         "optical orientations": "optical femur and tibia orientations, regression positions",
     }
     table = [[m, f"{mean[m]['MM_mm']:.1f}", f"{mean[m]['LM_mm']:.1f}",
-              f"{mean[m]['malleoli_mm']:.1f}", what[m]] for m in LIMITS]  # fmt: skip
+              f"{mean[m]['malleoli_mm']:.1f}", what[m]] for m in LIMITS]
     g = {m: mean[m]["malleoli_mm"] for m in LIMITS}
     reached = g["full_ipopt"] <= GOAL_MM
     lines = [
@@ -145,7 +145,7 @@ def limits_section(rows: list[dict]) -> str:
         f"{g['optical orientations']:.1f} mm remain with perfect (optical) orientations "
         "(positions, frame unification, the knee's non-hinge motion) and the rest is the IMC "
         "orientations' time-varying error, which no constant correction removes.",
-    ]  # fmt: skip
+    ]
     return "\n".join(lines) + "\n"
 
 

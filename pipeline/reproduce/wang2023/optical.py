@@ -30,15 +30,15 @@ __all__ = ["OmcStage", "hip_centred_paths", "omc_tables", "run_omc_stage", "subj
 SUBJECT_COLUMNS = (
     "subject_id", "sex", "height_mm", "shank_lateral_mm", "shank_medial_mm", "knee_width_mm",
     "ankle_width_mm", "hip_fit_rms_mm", "n_frames",
-)  # fmt: skip
+)
 LANDMARK_COLUMNS = ("subject_id", "landmark", "frame", "x_mm", "y_mm", "z_mm")
 AOR_COLUMNS = (
     "subject_id", "sex", "femur_x", "femur_y", "femur_z", "tibia_x", "tibia_y", "tibia_z",
     "n_pairs", "sd_angle_femur_deg", "sd_angle_tibia_deg",
-)  # fmt: skip
+)
 REGRESSION_COLUMNS = (
     "sex", "equation", "landmark", "axis", "b0", "b1", "b2", "r2", "p", "cv_mean_mm", "cv_sd_mm",
-)  # fmt: skip
+)
 
 
 @dataclass
@@ -106,12 +106,12 @@ def omc_tables(stage: OmcStage) -> dict[str, str]:
                 knee_width_mm=1e3 * d.k, ankle_width_mm=1e3 * d.a,
                 hip_fit_rms_mm=1e3 * r.hip_fit_rms_m, n_frames=r.n_frames,
             )
-        )  # fmt: skip
+        )
         for frame, landmarks in (("femur", r.landmarks_femur), ("tibia", r.landmarks_tibia)):
             for name, p in landmarks.items():
                 x, y, z = 1e3 * np.asarray(p)
                 lms.append(dict(subject_id=r.subject_id, landmark=name, frame=frame,
-                                x_mm=x, y_mm=y, z_mm=z))  # fmt: skip
+                                x_mm=x, y_mm=y, z_mm=z))
         a = r.knee_aor
         aor.append(
             dict(
@@ -121,7 +121,7 @@ def omc_tables(stage: OmcStage) -> dict[str, str]:
                 n_pairs=a.n_pairs, sd_angle_femur_deg=float(np.degrees(a.sd_angle_femur)),
                 sd_angle_tibia_deg=float(np.degrees(a.sd_angle_tibia)),
             )
-        )  # fmt: skip
+        )
     return {
         "subjects.csv": csv_text(subj, SUBJECT_COLUMNS),
         "landmarks_in_segments.csv": csv_text(lms, LANDMARK_COLUMNS),

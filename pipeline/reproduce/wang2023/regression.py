@@ -95,7 +95,7 @@ class SubjectSample:
 
     def measures(self) -> Measures:
         return Measures(self.sex, self.height_m, self.shank_lateral_m, self.shank_medial_m,
-                        self.knee_width_m, self.ankle_width_m)  # fmt: skip
+                        self.knee_width_m, self.ankle_width_m)
 
     def coordinate_mm(self, landmark: str, axis: str) -> float:
         return 1000.0 * float(getattr(self, landmark.lower())[AXES.index(axis)])
@@ -163,7 +163,7 @@ def _fit_one(x: np.ndarray, y: np.ndarray, folds: list[np.ndarray]) -> dict:
     b0, b1, b2 = (float(v) for v in pad.mean(axis=0))
     return dict(b0=b0, b1=b1, b2=b2, r2=r2, p=p, cv_mean_mm=float(e.mean()),
                 cv_sd_mm=float(e.std(ddof=1)), coef_full_mm=tuple(float(v) for v in full),
-                coef_folds_mm=pad)  # fmt: skip
+                coef_folds_mm=pad)
 
 
 def fit_table(
@@ -208,7 +208,7 @@ def fit_table(
                 fit = _fit_one(x, y, folds)
                 results.append(
                     FitResult(group, equation, landmark, axis, **fit, source="fit", n=n,
-                              k_folds=k_folds)  # fmt: skip
+                              k_folds=k_folds)
                 )
     return results
 

@@ -85,7 +85,7 @@ def first_sample_samples(stage: OmcStage) -> list[SubjectSample]:
                 s.subject_id, s.sex, s.height_m, s.shank_lateral_m, s.shank_medial_m,
                 s.knee_width_m, s.ankle_width_m, f["EFM"], f["EFL"], t["MM"], t["LM"],
             )
-        )  # fmt: skip
+        )
     return out
 
 
@@ -113,7 +113,7 @@ def table1_section(stage: OmcStage) -> str:
                 f"{e.r2:.3f} / {f.r2:.3f}", f"{e.cv_sd_mm:.1f} / {f.cv_sd_mm:.1f}",
                 f"{ablation[key].cv_sd_mm:.1f}", f"{d:+.1f}", cause,
             ]
-        )  # fmt: skip
+        )
     big = [(k, d, sd) for k, d, sd in deltas if abs(d) > max(sd, 2.0)]
     text = [
         "## Table I: regression equations of landmark positions in segment frames",
@@ -138,7 +138,7 @@ def table1_section(stage: OmcStage) -> str:
                 "cause",
             ],
             rows,
-        ),  # fmt: skip
+        ),
         "",
         f"{len(big)} of {len(deltas)} rows differ at the mean inputs by more than "
         "max(our CV SD, 2 mm): "
@@ -169,7 +169,7 @@ def table3_section(stage: OmcStage) -> str:
                 "(" + ", ".join(f"{v:.3f}" for v in p.tibia_axis) + ")",
                 f"{np.degrees(p.sd_tibia_transverse):.1f} / {np.degrees(p.sd_tibia_frontal):.1f}",
             ]
-        )  # fmt: skip
+        )
     sd_f = [np.degrees(r.knee_aor.sd_angle_femur) for r in stage.results]
     return "\n".join(
         [
@@ -188,7 +188,7 @@ def table3_section(stage: OmcStage) -> str:
                     "tibia SD transverse / frontal (deg)",
                 ],
                 rows,
-            ),  # fmt: skip
+            ),
             "",
             "The paper's Table III values are printed as an image that the text we have does not "
             "contain, so no number-by-number comparison is possible; the paper's text confirms "
@@ -216,7 +216,7 @@ def subjects_section(stage: OmcStage) -> str:
                 mean_sd([1e3 * r.dims.k for _, r in rs]), mean_sd([1e3 * r.dims.a for _, r in rs]),
                 mean_sd([1e3 * r.dims.s_L for _, r in rs]),
             ]
-        )  # fmt: skip
+        )
     return "\n".join(
         [
             "## Subjects",
@@ -233,7 +233,7 @@ def subjects_section(stage: OmcStage) -> str:
                     "s_L mm",
                 ],
                 rows,
-            ),  # fmt: skip
+            ),
             "",
             f"Optical stage: {len(stage.results)} subjects in {stage.seconds:.1f} s.",
         ]

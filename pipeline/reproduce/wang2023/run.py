@@ -41,7 +41,7 @@ def reproduce_wang2023(
     if not data_dir.exists():
         raise InputError("dataset directory not found: the published data (raw/, xsens/) are at "
                          "github.com/wangzhengtao1993/AnatomicalLandmarkTrajectoriesBasedonIMUData",
-                         file=data_dir)  # fmt: skip
+                         file=data_dir)
     stage = run_omc_stage(data_dir, progress=progress)
     files = omc_tables(stage)
     imc_stage = None

@@ -30,7 +30,7 @@ def table4_agreement(stage: ImcStage) -> list[tuple[str, str, str, str, float, f
             continue
         for name, cell in zip(LANDMARKS, paper, strict=True):
             rms = rms_values(stage.trajectory_rows, tibia_input="stored", positions=positions,
-                             correction=correction, sex=sex, landmark=name)  # fmt: skip
+                             correction=correction, sex=sex, landmark=name)
             ours = _mean(rms)
             out.append((positions, correction, sex, name, ours, paper_mean(cell)))
     return out
@@ -39,14 +39,14 @@ def table4_agreement(stage: ImcStage) -> list[tuple[str, str, str, str, float, f
 def _malleoli(stage: ImcStage, tibia_input: str, correction: str) -> tuple[float, float]:
     return tuple(
         _mean(rms_values(stage.trajectory_rows, tibia_input=tibia_input, positions="regression",
-                         correction=correction, landmark=name))  # fmt: skip
+                         correction=correction, landmark=name))
         for name in ("MM", "LM")
     )
 
 
 def _tibia_z(stage: ImcStage, correction: str) -> float:
     rows = select_rows(stage.orientation_rows, tibia_input="stored", correction=correction,
-                       segment="tibia", error_frame="world")  # fmt: skip
+                       segment="tibia", error_frame="world")
     return _mean(float(r["z_deg"]) for r in rows)
 
 
@@ -55,7 +55,7 @@ def _factors_text(imc_stage: ImcStage) -> str:
     if not rows:
         return ""
     lm = {f: np.mean([r["LM_mm"] for r in rows if r["sex"] == "m" and r["factor"] == f])
-          for f in dict.fromkeys(r["factor"] for r in rows)}  # fmt: skip
+          for f in dict.fromkeys(r["factor"] for r in rows)}
     paper = paper_mean(PAPER_TABLE_IV[("regression", "average", "m")][3])
     others = {f: v for f, v in lm.items() if f != "ours"}
     closest = min(others, key=lambda f: abs(others[f] - paper))
@@ -81,7 +81,7 @@ def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
     cells = table4_agreement(imc_stage)
     close = [c for c in cells if abs(c[4] - c[5]) <= TOLERANCE_MM]
     far = sorted((c for c in cells if abs(c[4] - c[5]) > TOLERANCE_MM),
-                 key=lambda c: -abs(c[4] - c[5]))  # fmt: skip
+                 key=lambda c: -abs(c[4] - c[5]))
     far_text = "; ".join(f"{p}/{c}/{s} {n} {o:.1f} vs {q:.1f}" for p, c, s, n, o, q in far[:6])
     n_subjects = len({r["subject_id"] for r in imc_stage.trajectory_rows})
     lines.append(
@@ -93,7 +93,7 @@ def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
            "paper, mm); the appendix's discussion quantifies the known factors (the reference "
            "code's female AoR for everyone: the `reference` rows)." if far else "")
         + _factors_text(imc_stage)
-    )  # fmt: skip
+    )
     if {"none", "average"} <= set(imc_stage.corrections):
         z0, z1 = _tibia_z(imc_stage, "none"), _tibia_z(imc_stage, "average")
         p0, p1 = (paper_mean(PAPER_TABLE_V[c][3]) for c in ("none", "average"))
@@ -119,7 +119,7 @@ def verdict_section(stage: OmcStage, imc_stage: ImcStage | None) -> str:
                "priors fitted on the other subjects)" if best == "full_ipopt" else "")
             + ". The 42 mm goal and what limits it: appendix, 'What limits the IMU-only "
             "calibration'."
-        )  # fmt: skip
+        )
     lines.append(
         "- **Time lag:** estimated from the signals (the reference code hand-set it); see the "
         "appendix for the comparison."
