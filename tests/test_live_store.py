@@ -39,3 +39,15 @@ def test_named_columns_a_block_lacks_are_nan():
     out = spool.read()
     np.testing.assert_array_equal(out["a"][:2], [1.0, 2.0])
     assert np.isnan(out["b"]).all() and np.isnan(out["a"][2])
+
+
+def test_the_last_rows_read_back_alone():
+    from pipeline.live.store import Spool
+
+    spool = Spool(2)
+    spool.append(np.arange(20.0).reshape(10, 2))
+    assert np.array_equal(spool.read(3), np.arange(14.0, 20.0).reshape(3, 2))
+    assert np.array_equal(spool.read(50), np.arange(20.0).reshape(10, 2))  # fewer than asked
+    spool.append(np.array([[20.0, 21.0]]))  # still appends at the end after a partial read
+    assert spool.read(1).tolist() == [[20.0, 21.0]] and spool.n == 11
+    spool.close()

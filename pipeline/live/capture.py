@@ -24,9 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pipeline.errors import InputError
 from pipeline.io.recording import Recording
 from pipeline.live.aligner import Aligner, Block
 from pipeline.live.calibration import LiveCalibration, calibrate_capture
+from pipeline.live.gait import LiveGait
 from pipeline.live.orientation import LiveOrientations
 from pipeline.live.store import CaptureStore, ColumnSpool
 from pipeline.live.tracker import Tracker
@@ -55,15 +57,17 @@ LOOK_S = 0.5
 class CaptureResult:
     """What a capture gave: the ``recording`` captured (our sensor names, on its grid), the live
     ``angles`` (name -> (N,), rad; NaN before the first calibration), each frame's processing
-    time (``frame_s``, s: from its block's arrival to its angles, a calibration made in line not
-    counted), the calibrations (``calibrations``: at what time of the capture, how, final), and
-    what it said (``notes``)."""
+    time (``frame_s``, s: from its block's arrival to its angles, a calibration or a look for
+    strides made in line not counted: live, they run beside the frames), the calibrations
+    (``calibrations``: at what time of the capture, how, final), what it said (``notes``) and
+    the strides it found as each completed (``strides``, :mod:`pipeline.live.gait`)."""
 
     recording: Recording
     angles: dict[str, np.ndarray]
     frame_s: np.ndarray
     calibrations: list[tuple[float, str, bool]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    strides: list = field(default_factory=list)
 
 
 class LiveCapture:
@@ -73,6 +77,10 @@ class LiveCapture:
     def __init__(self, source, measures: Measures, opts: IKOptions, *, viewer=None,
                  duration_s: float | None = None, in_line: bool = False,
                  say: Callable[[str], None] = print) -> None:
+        if opts.filter not in (None, "vqf"):
+            raise InputError(f"--filter {opts.filter} runs offline only (pipeline ik); live, raw "
+                             "signals go through VQF (--filter vqf) or the streams' own "
+                             "orientations are used (no --filter)", field="filter")
         self.source, self.measures, self.opts = source, measures, opts
         self.viewer, self.duration_s, self.in_line, self.say = viewer, duration_s, in_line, say
         self.header = dict(getattr(source, "header", {}) or {})
@@ -83,6 +91,8 @@ class LiveCapture:
         self.state = ""
         self._pending: threading.Thread | None = None
         self._fresh: LiveCalibration | None = None
+        self.gait = LiveGait()
+        self._gait_pending: threading.Thread | None = None
         self._next_look = STILL_S
         self._angles = ColumnSpool(ANGLE_COLUMNS)
         self._frame_s = ColumnSpool(["s"])
@@ -105,8 +115,9 @@ class LiveCapture:
                     break
         finally:
             self.source.close()
-            if self._pending is not None:
-                self._pending.join()
+            for pending in (self._pending, self._gait_pending):
+                if pending is not None:
+                    pending.join()
         return self._result()
 
     def _frames(self, block: Block, arrived: float) -> bool:
@@ -128,12 +139,13 @@ class LiveCapture:
         self.store.add(block, kinds)
         began = time.perf_counter()
         self._calibrate_if_due(float(block.time[-1]))
+        self._strides_if_due(float(block.time[-1]))
         calibrating = time.perf_counter() - began  # in line: not the frames' own time
         angles = {}
         if self.tracker is not None:
-            _, angles, poses = self.tracker.solve(rotations)
+            Q, angles, poses = self.tracker.solve(rotations)
             if self.viewer is not None:
-                self.viewer.log(block.time, poses, angles, self.tracker.cal)
+                self.viewer.log(block.time, poses, angles, self.tracker.cal, Q[-1])
         self._angles.append(angles, m)
         self._frame_s.append({"s": np.full(m, (time.perf_counter() - arrived - calibrating) / m)},
                              m)
@@ -164,6 +176,30 @@ class LiveCapture:
         elif now_s < self.cal.at_s + RECALIBRATE_S:
             return
         self._start_calibration()
+
+    def _strides_if_due(self, now_s: float) -> None:
+        """The strides completed since the last look (:mod:`pipeline.live.gait`), every
+        :data:`~pipeline.live.gait.GAIT_S`: beside the frames, or in line as a calibration."""
+        if self._gait_pending is not None or self.cal is None or now_s < self.gait.due:
+            return
+        window = self.store.recording(self.source.rate_hz, self.header,
+                                      last=self.gait.window_frames(self.source.rate_hz))
+
+        def work() -> None:
+            try:
+                new = self.gait.update(window)
+                self.result.strides += new
+                if new and self.viewer is not None:
+                    self.viewer.strides(new)
+            finally:
+                self._gait_pending = None
+
+        if self.in_line:
+            work()
+            return
+        self.gait.due = now_s + 1e9  # until the look ends
+        self._gait_pending = threading.Thread(target=work, name="live-gait", daemon=True)
+        self._gait_pending.start()
 
     def _start_calibration(self) -> None:
         rec = self.store.recording(self.source.rate_hz, self.header)

@@ -33,12 +33,14 @@ class Spool:
         self._file.write(rows.tobytes())
         self.n += len(rows)
 
-    def read(self) -> np.ndarray:
+    def read(self, last: int | None = None) -> np.ndarray:
+        """Every row, or the ``last`` rows."""
+        first = 0 if last is None else max(self.n - int(last), 0)
         self._file.flush()
-        self._file.seek(0)
-        out = np.fromfile(self._file, dtype=np.float64, count=self.n * self.width)
+        self._file.seek(first * self.width * 8)
+        out = np.fromfile(self._file, dtype=np.float64, count=(self.n - first) * self.width)
         self._file.seek(0, 2)
-        return out.reshape(self.n, self.width)
+        return out.reshape(self.n - first, self.width)
 
     def close(self) -> None:
         self._file.close()
@@ -97,11 +99,12 @@ class CaptureStore:
                 for name, R in rotations.items():
                     self._rotations.setdefault((kind, name), []).append(R)
 
-    def recording(self, rate_hz: float, header: dict) -> Recording:
-        """Every frame so far as one recording (read back from the disk)."""
+    def recording(self, rate_hz: float, header: dict, last: int | None = None) -> Recording:
+        """Every frame so far, or the ``last`` frames, as one recording (read back from the
+        disk)."""
         if self._spool is None:
             return Recording(np.zeros(0), rate_hz, {}, dict(header))
-        data, k = self._spool.read(), 1
+        data, k = self._spool.read(last), 1
         sensors: dict[str, dict[str, np.ndarray]] = {}
         for n, g, w in self._layout:
             sensors.setdefault(n, {})[g] = data[:, k:k + w]

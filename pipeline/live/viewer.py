@@ -2,8 +2,10 @@
 
 :class:`LiveViewer` logs with the rerun SDK what the offline recording shows, under the same
 entities (:mod:`pipeline.viz.scene`): each segment's pose (``world/model/<segment>``, its mesh
-once per calibration), the joint angles in degrees (``plots/<side>_<joint>/<angle>``), and the
-capture's state (``state``: stand still, calibrated). The capture hands it each block
+once per calibration), the landmarks (``world/landmarks/<name>``), the joint angles in degrees
+(``plots/<side>_<joint>/<angle>``); and the capture's state (``state``: stand still, calibrated)
+and each stride as it completes (``gait/<side>``: its contacts, time, length and speed; the
+stride parameters as plots, ``gait/<side>/<parameter>``). The capture hands it each block
 (:meth:`LiveViewer.log`), which only puts the block's last frame in a small queue, at most
 :data:`MAX_HZ` a second; a thread logs from the queue. A viewer that is slow or closed fills the
 queue and the frames it cannot take are dropped, the capture's own data never: the capture goes
@@ -52,17 +54,23 @@ class LiveViewer:
     def state(self, text: str) -> None:
         self._put(("state", text))
 
-    def log(self, time: np.ndarray, poses: dict, angles: dict[str, np.ndarray], cal) -> None:
-        """A block: its last frame's segment ``poses`` (segment -> (R (m, 3, 3), p (m, 3))) and
-        ``angles`` at ``time`` (m,), if :data:`MAX_HZ` allows."""
+    def log(self, time: np.ndarray, poses: dict, angles: dict[str, np.ndarray], cal,
+            q: np.ndarray | None = None) -> None:
+        """A block: its last frame's segment ``poses`` (segment -> (R (m, 3, 3), p (m, 3))),
+        ``angles`` and configuration ``q`` (the landmarks') at ``time`` (m,), if :data:`MAX_HZ`
+        allows."""
         t = float(time[-1])
         if t - self._last < 1.0 / MAX_HZ:
             return
         self._last = t
         frame = {seg: (R[-1], p[-1]) for seg, (R, p) in poses.items()}
         self._put(("frame", t, frame, {k: float(v[-1]) for k, v in angles.items()},
-                   cal if cal is not self._cal else None))
+                   cal if cal is not self._cal else None, cal, q))
         self._cal = cal
+
+    def strides(self, strides: list) -> None:
+        """Strides that just completed (:class:`~pipeline.analysis.strides.Stride`)."""
+        self._put(("strides", list(strides)))
 
     def _put(self, item) -> None:
         try:
@@ -82,10 +90,15 @@ class LiveViewer:
         if item[0] == "state":
             s.log("state", rr.TextLog(item[1]))
             return
-        _, t, frame, angles, cal = item
+        if item[0] == "strides":
+            self._strides(item[1])
+            return
+        _, t, frame, angles, fresh, cal, q = item
         s.set_time("time", duration=t)
-        if cal is not None:
-            self._meshes(cal)
+        if fresh is not None:
+            self._meshes(fresh)
+        if q is not None:
+            self._landmarks(cal, q)
         for seg, (R, p) in frame.items():
             if np.all(np.isfinite(R)):
                 s.log(f"world/model/{seg}", rr.Transform3D(translation=p, mat3x3=R))
@@ -95,6 +108,34 @@ class LiveViewer:
                 f"plots/{key}"
             if np.isfinite(value):
                 s.log(entity, rr.Scalars(np.degrees(value)))
+
+    def _landmarks(self, cal, q: np.ndarray) -> None:
+        import pinocchio as pin
+
+        sk = cal.skeleton
+        if getattr(self, "_lm_model", None) is not sk.model:
+            self._lm_model, self._lm_data = sk.model, sk.model.createData()
+            self._lm_ids = {n: sk.frame_id(n) for n in sk.landmark_frames}
+        pin.framesForwardKinematics(self._lm_model, self._lm_data, q)
+        for name, fid in self._lm_ids.items():
+            p = self._lm_data.oMf[fid].translation
+            self.stream.log(f"world/landmarks/{name}", self.rr.Points3D([p], radii=0.01))
+
+    def _strides(self, strides: list) -> None:
+        rr, s = self.rr, self.stream
+        for st in strides:
+            s.set_time("time", duration=st.start_s)
+            s.log(f"gait/{st.side}", rr.TextLog(f"{st.side} initial contact"))
+            s.set_time("time", duration=st.end_s)
+            length = "" if not np.isfinite(st.stride_length_m) else \
+                f", {st.stride_length_m:.2f} m, {st.speed_m_s:.2f} m/s"
+            s.log(f"gait/{st.side}", rr.TextLog(
+                f"{st.side} stride {st.stride_time_s:.2f} s{length}, stance "
+                f"{st.stance_share:.2f}"))
+            for name in ("stride_time_s", "stride_length_m", "stance_share"):
+                v = getattr(st, name)
+                if np.isfinite(v):
+                    s.log(f"gait/{st.side}/{name}", rr.Scalars(v))
 
     def _meshes(self, cal) -> None:
         from pipeline.viz.model import segment_meshes
