@@ -30,7 +30,8 @@ from pipeline.live.aligner import Aligner, Block
 from pipeline.live.calibration import LiveCalibration, calibrate_capture
 from pipeline.live.gait import LiveGait
 from pipeline.live.orientation import LiveOrientations
-from pipeline.live.store import CaptureStore, ColumnSpool
+from pipeline.live.path import LivePath
+from pipeline.live.store import CaptureStore, ColumnSpool, Spool
 from pipeline.live.tracker import Tracker
 from pipeline.model.measures import Measures
 from pipeline.process.options import IKOptions
@@ -91,8 +92,9 @@ class LiveCapture:
         self.state = ""
         self._pending: threading.Thread | None = None
         self._fresh: LiveCalibration | None = None
-        self.gait = LiveGait()
+        self.gait, self.path = LiveGait(), LivePath()
         self._gait_pending: threading.Thread | None = None
+        self._q: Spool | None = None  # each frame's configuration, for the pelvis's path
         self._next_look = STILL_S
         self._angles = ColumnSpool(ANGLE_COLUMNS)
         self._frame_s = ColumnSpool(["s"])
@@ -139,17 +141,28 @@ class LiveCapture:
         self.store.add(block, kinds)
         began = time.perf_counter()
         self._calibrate_if_due(float(block.time[-1]))
-        self._strides_if_due(float(block.time[-1]))
         calibrating = time.perf_counter() - began  # in line: not the frames' own time
-        angles = {}
+        angles, Q = {}, None
         if self.tracker is not None:
             Q, angles, poses = self.tracker.solve(rotations)
             if self.viewer is not None:
-                self.viewer.log(block.time, poses, angles, self.tracker.cal, Q[-1])
+                self.viewer.log(block.time, poses, angles, self.tracker.cal, Q[-1],
+                                self.path.at(float(block.time[-1])))
+        self._keep_configurations(Q, m)
         self._angles.append(angles, m)
         self._frame_s.append({"s": np.full(m, (time.perf_counter() - arrived - calibrating) / m)},
                              m)
+        self._strides_if_due(float(block.time[-1]))  # in line: after the frames' own time
         return self.duration_s is not None and block.time[-1] >= self.duration_s - 1e-9
+
+    def _keep_configurations(self, Q: np.ndarray | None, m: int) -> None:
+        """The block's configurations (NaN before the first calibration) on disk."""
+        if self._q is None:
+            if Q is None:
+                return
+            self._q = Spool(Q.shape[1])
+            self._q.append(np.full((self.store.n - m, Q.shape[1]), np.nan))
+        self._q.append(np.full((m, self._q.width), np.nan) if Q is None else Q)
 
     def _world(self, own: bool, block: Block) -> np.ndarray | None:
         """The model's world for the streams' own orientations (offline's rule)."""
@@ -182,15 +195,18 @@ class LiveCapture:
         :data:`~pipeline.live.gait.GAIT_S`: beside the frames, or in line as a calibration."""
         if self._gait_pending is not None or self.cal is None or now_s < self.gait.due:
             return
-        window = self.store.recording(self.source.rate_hz, self.header,
-                                      last=self.gait.window_frames(self.source.rate_hz))
+        rows = self.gait.window_frames(self.source.rate_hz)
+        window = self.store.recording(self.source.rate_hz, self.header, last=rows)
+        Q = self._q.read(rows) if self._q is not None else None
+        skeleton = self.tracker.cal.skeleton if self.tracker is not None else None
 
         def work() -> None:
             try:
                 new = self.gait.update(window)
                 self.result.strides += new
-                if new and self.viewer is not None:
-                    self.viewer.strides(new)
+                grew = Q is not None and self.path.update(self.gait.last, window, skeleton, Q)
+                if self.viewer is not None and (new or grew):
+                    self.viewer.strides(new, self.path.position if grew else None)
             finally:
                 self._gait_pending = None
 
@@ -237,8 +253,9 @@ class LiveCapture:
         self.result.recording = self.store.recording(self.source.rate_hz, self.header)
         self.result.angles = {k: v for k, v in self._angles.read().items() if np.isfinite(v).any()}
         self.result.frame_s = self._frame_s.read()["s"]
-        for spool in (self.store, self._angles, self._frame_s):
-            spool.close()
+        for spool in (self.store, self._angles, self._frame_s, self._q):
+            if spool is not None:
+                spool.close()
         return self.result
 
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from pipeline.analysis.strides import MAX_STRIDE_S, Stride
 from pipeline.io.recording import Recording
-from pipeline.process.gait import gait_of
+from pipeline.process.gait import Gait, gait_of
 
 __all__ = ["GAIT_S", "SAME_S", "SETTLE_S", "WINDOW_S", "LiveGait"]
 
@@ -38,10 +38,12 @@ SAME_S = 0.25
 @dataclass
 class LiveGait:
     """The strides a capture has completed so far (module docstring), in the order they were
-    found; ``due``: the capture time (s) of the next look."""
+    found; ``due``: the capture time (s) of the next look; ``last``: the last look's gait (its
+    window's events, paths and strides)."""
 
     strides: list[Stride] = field(default_factory=list)
     due: float = GAIT_S
+    last: Gait | None = None
     _until: dict[str, float] = field(default_factory=lambda: {"right": -np.inf,
                                                                "left": -np.inf})
 
@@ -55,7 +57,8 @@ class LiveGait:
             return []
         end = float(window.time[-1])
         self.due = end + GAIT_S
-        found = gait_of(window, []).strides
+        self.last = gait_of(window, [])
+        found = self.last.strides
         new = [s for s in found if s.end_s > self._until[s.side] + SAME_S
                and s.end_s <= end - SETTLE_S and s.start_s >= float(window.time[0])]
         for s in new:

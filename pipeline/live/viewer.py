@@ -5,11 +5,12 @@ entities (:mod:`pipeline.viz.scene`): each segment's pose (``world/model/<segmen
 once per calibration), the landmarks (``world/landmarks/<name>``), the joint angles in degrees
 (``plots/<side>_<joint>/<angle>``); and the capture's state (``state``: stand still, calibrated)
 and each stride as it completes (``gait/<side>``: its contacts, time, length and speed; the
-stride parameters as plots, ``gait/<side>/<parameter>``). The capture hands it each block
-(:meth:`LiveViewer.log`), which only puts the block's last frame in a small queue, at most
-:data:`MAX_HZ` a second; a thread logs from the queue. A viewer that is slow or closed fills the
-queue and the frames it cannot take are dropped, the capture's own data never: the capture goes
-on at its pace whatever the viewer does.
+stride parameters as plots, ``gait/<side>/<parameter>``); the body where the stance foot carried
+it (:mod:`pipeline.live.path`), its settled path on the floor (``world/walk/path``). The capture
+hands it each block (:meth:`LiveViewer.log`), which only puts the block's last frame in a small
+queue, at most :data:`MAX_HZ` a second; a thread logs from the queue. A viewer that is slow or
+closed fills the queue and the frames it cannot take are dropped, the capture's own data never:
+the capture goes on at its pace whatever the viewer does.
 """
 
 from __future__ import annotations
@@ -55,22 +56,25 @@ class LiveViewer:
         self._put(("state", text))
 
     def log(self, time: np.ndarray, poses: dict, angles: dict[str, np.ndarray], cal,
-            q: np.ndarray | None = None) -> None:
+            q: np.ndarray | None = None, root: np.ndarray | None = None) -> None:
         """A block: its last frame's segment ``poses`` (segment -> (R (m, 3, 3), p (m, 3))),
-        ``angles`` and configuration ``q`` (the landmarks') at ``time`` (m,), if :data:`MAX_HZ`
-        allows."""
+        ``angles`` and configuration ``q`` (the landmarks') at ``time`` (m,), the body at
+        ``root`` (the pelvis's place in the room, :mod:`pipeline.live.path`; None: at the
+        origin), if :data:`MAX_HZ` allows."""
         t = float(time[-1])
         if t - self._last < 1.0 / MAX_HZ:
             return
         self._last = t
         frame = {seg: (R[-1], p[-1]) for seg, (R, p) in poses.items()}
         self._put(("frame", t, frame, {k: float(v[-1]) for k, v in angles.items()},
-                   cal if cal is not self._cal else None, cal, q))
+                   cal if cal is not self._cal else None, cal, q,
+                   np.zeros(3) if root is None else np.asarray(root, float)))
         self._cal = cal
 
-    def strides(self, strides: list) -> None:
-        """Strides that just completed (:class:`~pipeline.analysis.strides.Stride`)."""
-        self._put(("strides", list(strides)))
+    def strides(self, strides: list, path: np.ndarray | None = None) -> None:
+        """Strides that just completed (:class:`~pipeline.analysis.strides.Stride`) and the
+        pelvis's settled path so far ((n, 3), or None: unchanged)."""
+        self._put(("strides", list(strides), path))
 
     def _put(self, item) -> None:
         try:
@@ -92,16 +96,18 @@ class LiveViewer:
             return
         if item[0] == "strides":
             self._strides(item[1])
+            if item[2] is not None:
+                self._path(item[2])
             return
-        _, t, frame, angles, fresh, cal, q = item
+        _, t, frame, angles, fresh, cal, q, root = item
         s.set_time("time", duration=t)
         if fresh is not None:
             self._meshes(fresh)
         if q is not None:
-            self._landmarks(cal, q)
+            self._landmarks(cal, q, root)
         for seg, (R, p) in frame.items():
             if np.all(np.isfinite(R)):
-                s.log(f"world/model/{seg}", rr.Transform3D(translation=p, mat3x3=R))
+                s.log(f"world/model/{seg}", rr.Transform3D(translation=p + root, mat3x3=R))
         for key, value in angles.items():
             side, joint, angle = key.split("_", 2) if key.count("_") >= 2 else ("", "", key)
             entity = f"plots/{side}_{joint}/{angle}" if side in ("right", "left") else \
@@ -109,7 +115,13 @@ class LiveViewer:
             if np.isfinite(value):
                 s.log(entity, rr.Scalars(np.degrees(value)))
 
-    def _landmarks(self, cal, q: np.ndarray) -> None:
+    def _path(self, path: np.ndarray) -> None:
+        """The pelvis's settled path on the floor (``world/walk/path``, as offline)."""
+        floor = path.copy()
+        floor[:, 1] = 0.0
+        self.stream.log("world/walk/path", self.rr.LineStrips3D([floor], radii=0.008))
+
+    def _landmarks(self, cal, q: np.ndarray, root: np.ndarray) -> None:
         import pinocchio as pin
 
         sk = cal.skeleton
@@ -118,7 +130,7 @@ class LiveViewer:
             self._lm_ids = {n: sk.frame_id(n) for n in sk.landmark_frames}
         pin.framesForwardKinematics(self._lm_model, self._lm_data, q)
         for name, fid in self._lm_ids.items():
-            p = self._lm_data.oMf[fid].translation
+            p = self._lm_data.oMf[fid].translation + root
             self.stream.log(f"world/landmarks/{name}", self.rr.Points3D([p], radii=0.01))
 
     def _strides(self, strides: list) -> None:
