@@ -64,7 +64,8 @@ def _serve(recording: str, sensor_map) -> int:
 
     rec = load_orientations(recording, sensor_map)
     print(f"serving {len(rec.sensor_names)} LSL streams of type IMU ({', '.join(rec.sensor_names)})"
-          f" at {rec.rate_hz:.4g} Hz for {rec.time[-1]:.1f} s; Ctrl-C stops", file=sys.stderr)
+          f" at {rec.rate_hz:.4g} Hz for {rec.time[-1]:.1f} s once a pipeline live --lsl reads "
+          "them all; Ctrl-C stops", file=sys.stderr)
     pushed = serve_outlets(rec)
     print(f"served {pushed} samples", file=sys.stderr)
     return 0

@@ -61,7 +61,7 @@ def capture(rec: Recording, opts: IKOptions, watch=None):
 def against_offline(result, opts: IKOptions) -> dict[str, float]:
     """RMS (deg) of each live angle against the offline pipeline's, from the final calibration."""
     offline = process_recording(result.recording, SUBJECT, opts)
-    at = next((t for t, _, final in result.calibrations if final), None)
+    at = next((c.from_s for c in result.calibrations if c.final), None)
     if at is None:
         return {}
     k = int(np.searchsorted(result.recording.time, at))
@@ -144,7 +144,7 @@ def latency_section(rec: Recording) -> tuple[list[str], float]:
             if factor == 1 and label == "vendor":
                 p99_100 = p99
             rms = against_offline(result, opts) if factor == 1 else {}
-            final = next((t for t, _, f in result.calibrations if f), float("nan"))
+            final = next((c.at_s for c in result.calibrations if c.final), float("nan"))
             sag = max((v for k, v in rms.items() if "flexion" in k), default=float("nan"))
             worst = max(rms, key=rms.get) if rms else "-"
             lines.append(f"| {label} | {r.rate_hz:.0f} | {p50:.2f} | {p99:.2f} | "

@@ -1,6 +1,7 @@
 """pipeline.live.capture: a recording replayed as if live, frame by frame, calibrated as it
 goes; live equals offline once calibrated; a stream dropping out shown missing, not frozen."""
 
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,7 @@ def _capture(rec, opts, subject):
 
 def _after_final(result, offline) -> dict[str, float]:
     """RMS (deg) of each live angle against the offline one from the final calibration on."""
-    at = next(at for at, _, final in result.calibrations if final)
+    at = next(c.from_s for c in result.calibrations if c.final)
     k = int(np.searchsorted(result.recording.time, at))
     out = {}
     for name, y in offline.joint_angles.items():
@@ -49,9 +50,9 @@ def test_the_shipped_walk_replayed_is_calibrated_as_it_goes_and_equals_offline()
     result, said = _capture(read_recording("example:ximu3_lower_body"), IKOptions(), subject)
     assert said == ["live: stand still", "live: calibrated: walk a few steps to finish",
                     "live: calibrated"]
-    times = [at for at, _, _ in result.calibrations]
+    times = [c.at_s for c in result.calibrations]
     assert times[0] == pytest.approx(1.0, abs=0.05) and np.allclose(np.diff(times), 2.0, atol=0.05)
-    assert [final for *_, final in result.calibrations][-1] and result.recording.n_samples == 929
+    assert [c.final for c in result.calibrations][-1] and result.recording.n_samples == 929
     first = int(1.0 * result.recording.rate_hz)  # before the first calibration: blank
     assert np.isnan(result.angles["right_knee_flexion"][:first]).all()
     offline = process_recording(result.recording, subject)
@@ -95,3 +96,52 @@ def test_s02_replayed_live_equals_offline_once_calibrated(path):
     rms = _after_final(result, process_recording(result.recording, subject, opts))
     assert max(v for k, v in rms.items() if "flexion" in k) < 1.0, rms
     assert np.median(list(rms.values())) < 1.0, rms
+
+
+def _capture_over_lsl(rec, opts, subject, speed, prefix):
+    """``rec`` served as LSL outlets (``serve_outlets``, at ``speed`` times real time) and
+    captured from the streams by ``LslSource``, the calibrations beside the frames."""
+    pytest.importorskip("pylsl")
+    from pipeline.live.sources import LslSource, serve_outlets
+
+    done = threading.Event()
+    server = threading.Thread(target=serve_outlets, args=(rec, speed),
+                              kwargs={"prefix": prefix, "stop": done.is_set}, daemon=True)
+    server.start()
+    try:
+        source = LslSource(resolve_s=5.0, prefix=prefix)
+        source.header = dict(rec.header)
+        span = rec.time[-1] - rec.time[0] - 0.5  # the streams end: a duration stops the capture
+        return LiveCapture(source, subject, opts, duration_s=span, say=lambda line: None).run()
+    finally:
+        done.set()
+        server.join(timeout=10)
+
+
+@pytest.mark.slow
+def test_the_shipped_walk_over_lsl_equals_offline_once_calibrated():
+    """The x-IMU3 example served as LSL outlets in real time and captured from the
+    streams (LSL's time stamps): every sensor, every sample, and once final the live sagittal
+    angles equal the offline pipeline's on the captured recording within 1 deg RMS."""
+    rec, subject = read_recording("example:ximu3_lower_body"), Measures("m", 1.8)
+    result = _capture_over_lsl(rec, IKOptions(), subject, 1.0, "test-walk/")
+    assert sorted(result.recording.sensor_names) == sorted(rec.sensor_names)
+    assert all(np.isfinite(s.gyr).all() for s in result.recording.sensors.values())
+    rms = _after_final(result, process_recording(result.recording, subject))
+    assert max(v for k, v in rms.items() if "flexion" in k) < 1.0, rms
+
+
+@pytest.mark.dataset
+@pytest.mark.slow
+def test_s02_over_lsl_equals_offline_once_calibrated():
+    """S02's seven Xsens MTw served as LSL outlets in real time (the vendor orientations), the
+    calibrations beside the frames: every sample captured and, once final (about 18 s in), every
+    sagittal angle within 1 deg RMS of the offline pipeline's on the capture."""
+    if not (DATA / "gaittoolbox_s02").exists():
+        pytest.skip("../shared/data/gaittoolbox_s02 not present")
+    rec = read_recording(DATA / "gaittoolbox_s02" / "imu", S02_MAP)
+    opts, subject = IKOptions(sensor_to_model=(-np.pi / 2, 0.0, 0.0)), Measures("m", 1.72)
+    result = _capture_over_lsl(rec, opts, subject, 1.0, "test-s02/")
+    assert all(np.isfinite(s.gyr).all() for s in result.recording.sensors.values())
+    rms = _after_final(result, process_recording(result.recording, subject, opts))
+    assert max(v for k, v in rms.items() if "flexion" in k) < 1.0, rms

@@ -25,7 +25,7 @@ def test_a_simulated_walk_live_equals_its_truth_once_calibrated():
                                         for f, i in trial.imus.items()})
     result = LiveCapture(ReplaySource(rec, np.inf), subject, IKOptions(), in_line=True,
                          say=lambda s: None).run()
-    at = next(t for t, _, final in result.calibrations if final)
+    at = next(c.from_s for c in result.calibrations if c.final)
     assert at < 12.0  # the walk starts at 3 s: three strides a leg
     k = int(np.searchsorted(result.recording.time, at))
     truth = joint_angles(sk, trial.q)

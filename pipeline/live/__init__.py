@@ -11,6 +11,7 @@ from pipeline._lazy import lazy_exports
 
 _EXPORTS = {
     "Aligner": "aligner",
+    "CalibrationUsed": "capture",
     "CaptureResult": "capture",
     "Chunk": "sources",
     "LiveCalibration": "calibration",

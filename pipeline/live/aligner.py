@@ -9,12 +9,16 @@ normalised linear interpolation between sign-aligned neighbours), missing (NaN) 
 stream's own samples around a grid time are more than a short gap apart
 (:data:`~pipeline.io.gaps.DEFAULT_MAX_GAP_S`: dropped samples, never bridged). A grid time is
 given out once every stream that is not stalled has a sample at or after it; a stream whose
-newest sample is :data:`STALL_S` behind the newest of all is stalled: its frames are given out
-missing meanwhile, not held, and it is back with its next sample.
+newest sample is :data:`STALL_S` behind the newest of all, and from which nothing arrived for
+:data:`STALL_S` (by the clock), is stalled: its frames are given out missing meanwhile, not
+held, and it is back with its next sample. A stream that delivers a backlog (its samples late
+but arriving: a reader catching up, a network burst) is waited for, not cut.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,8 +45,10 @@ class Aligner:
     """Streams ``names`` (each pushed with its own time stamps) onto one grid at ``rate_hz``
     (module docstring)."""
 
-    def __init__(self, names, rate_hz: float, stall_s: float = STALL_S) -> None:
+    def __init__(self, names, rate_hz: float, stall_s: float = STALL_S,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         self.names, self.rate, self.stall = list(names), float(rate_hz), float(stall_s)
+        self.clock, self._heard = clock, {}  # when each stream's last samples arrived
         self._t: dict[str, np.ndarray] = {n: np.zeros(0) for n in self.names}
         self._x: dict[str, dict[str, np.ndarray]] = {n: {} for n in self.names}
         self.t0: float | None = None
@@ -58,6 +64,7 @@ class Aligner:
         keep &= np.concatenate([[True], np.diff(t) > 0]) if t.size else keep
         if not keep.any():
             return
+        self._heard[name] = self.clock()
         self._first = min(self._first, float(t[keep][0]))
         self._t[name] = np.concatenate([self._t[name], t[keep]])
         for signal, v in signals.items():
@@ -76,7 +83,9 @@ class Aligner:
         newest = max(last.values())
         if self.t0 is None and not self._start(last, newest):
             return None
-        live = [n for n in last if last[n] >= newest - self.stall]
+        now = self.clock()
+        live = [n for n in last if last[n] >= newest - self.stall
+                or now - self._heard[n] < self.stall]
         stop = int(np.floor((min(last[n] for n in live) - self.t0) * self.rate + 1e-9)) + 1
         if stop <= self._next:
             return None
@@ -88,8 +97,11 @@ class Aligner:
         return Block(tau - self.t0, sensors)
 
     def _start(self, last: dict[str, float], newest: float) -> bool:
-        """Set ``t0`` once every stream has started, or :data:`STALL_S` after the first did."""
-        if len(last) < len(self.names) and newest < self._first + self.stall:
+        """Set ``t0`` once every stream has started, or once the first started :data:`STALL_S`
+        ago, by its time stamps and by the clock (a reader's first bursts come in any order)."""
+        waited = self.clock() - min(self._heard.values())
+        if len(last) < len(self.names) and (newest < self._first + self.stall
+                                            or waited < self.stall):
             return False
         latest = max(self._t[n][0] for n in last)
         self.t0 = latest - np.floor((latest - self._first) * self.rate + 1e-9) / self.rate

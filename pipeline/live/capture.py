@@ -21,6 +21,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -37,7 +38,8 @@ from pipeline.model.measures import Measures
 from pipeline.process.options import IKOptions
 from pipeline.process.still import still_windows
 
-__all__ = ["ANGLE_COLUMNS", "RECALIBRATE_S", "STILL_S", "CaptureResult", "LiveCapture"]
+__all__ = ["ANGLE_COLUMNS", "RECALIBRATE_S", "STILL_S", "CalibrationUsed", "CaptureResult",
+           "LiveCapture"]
 
 #: The live angles kept (every joint angle the model gives and the pelvis's).
 ANGLE_COLUMNS = [f"{side}_{joint}_{angle}" for side in ("right", "left")
@@ -54,19 +56,29 @@ RECALIBRATE_S = 2.0
 LOOK_S = 0.5
 
 
+class CalibrationUsed(NamedTuple):
+    """A calibration of the capture: made on its first ``at_s`` seconds, ``how``, ``final``,
+    and in use from ``from_s`` (later than ``at_s`` when it ran beside the frames)."""
+
+    at_s: float
+    how: str
+    final: bool
+    from_s: float
+
+
 @dataclass
 class CaptureResult:
     """What a capture gave: the ``recording`` captured (our sensor names, on its grid), the live
     ``angles`` (name -> (N,), rad; NaN before the first calibration), each frame's processing
     time (``frame_s``, s: from its block's arrival to its angles, a calibration or a look for
     strides made in line not counted: live, they run beside the frames), the calibrations
-    (``calibrations``: at what time of the capture, how, final), what it said (``notes``) and
+    (``calibrations``: :class:`CalibrationUsed`), what it said (``notes``) and
     the strides it found as each completed (``strides``, :mod:`pipeline.live.gait`)."""
 
     recording: Recording
     angles: dict[str, np.ndarray]
     frame_s: np.ndarray
-    calibrations: list[tuple[float, str, bool]] = field(default_factory=list)
+    calibrations: list[CalibrationUsed] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     strides: list = field(default_factory=list)
 
@@ -96,6 +108,7 @@ class LiveCapture:
         self._gait_pending: threading.Thread | None = None
         self._q: Spool | None = None  # each frame's configuration, for the pelvis's path
         self._next_look = STILL_S
+        self._refused = ""  # why the last calibration was refused, said once
         self._angles = ColumnSpool(ANGLE_COLUMNS)
         self._frame_s = ColumnSpool(["s"])
         self.result = CaptureResult(Recording(np.zeros(0), 1.0, {}), {}, np.zeros(0))
@@ -175,7 +188,7 @@ class LiveCapture:
 
     def _calibrate_if_due(self, now_s: float) -> None:
         if self._fresh is not None:  # a calibration finished beside the frames
-            self._use(self._fresh)
+            self._use(self._fresh, now_s)
             self._fresh = None
         if self._pending is not None or (self.cal is not None and self.cal.final):
             return
@@ -186,9 +199,10 @@ class LiveCapture:
             rec = self.store.recording(self.source.rate_hz, self.header)
             if not any(w.t1 - w.t0 >= STILL_S for w in still_windows(rec)):
                 return
-        elif now_s < self.cal.at_s + RECALIBRATE_S:
+        elif now_s < max(self.cal.at_s + RECALIBRATE_S, self._next_look):
             return
-        self._start_calibration()
+        self._next_look = now_s + RECALIBRATE_S  # a refused calibration is tried again then
+        self._start_calibration(now_s)
 
     def _strides_if_due(self, now_s: float) -> None:
         """The strides completed since the last look (:mod:`pipeline.live.gait`), every
@@ -217,29 +231,41 @@ class LiveCapture:
         self._gait_pending = threading.Thread(target=work, name="live-gait", daemon=True)
         self._gait_pending.start()
 
-    def _start_calibration(self) -> None:
+    def _start_calibration(self, now_s: float) -> None:
         rec = self.store.recording(self.source.rate_hz, self.header)
         live = self.store.live_rotations()
         if self.in_line:
-            self._use(calibrate_capture(rec, self.measures, self.opts, live))
+            if (cal := self._calibration_of(rec, live)) is not None:
+                self._use(cal, now_s)
             return
 
         def work() -> None:
             try:
-                self._fresh = calibrate_capture(rec, self.measures, self.opts, live)
+                self._fresh = self._calibration_of(rec, live)
             finally:
                 self._pending = None
 
         self._pending = threading.Thread(target=work, name="live-calibration", daemon=True)
         self._pending.start()
 
-    def _use(self, cal: LiveCalibration) -> None:
+    def _calibration_of(self, rec: Recording, live) -> LiveCalibration | None:
+        """The capture's calibration, or None (said once per reason) where the capture so far
+        cannot give one: tried again at the next look."""
+        try:
+            return calibrate_capture(rec, self.measures, self.opts, live)
+        except InputError as e:
+            if str(e) != self._refused:
+                self._refused = str(e)
+                self.say(f"live: not calibrated yet: {e}")
+            return None
+
+    def _use(self, cal: LiveCalibration, now_s: float) -> None:
         if self.orient is not None:
             self.orient.nine_d = cal.nine_d
         if cal.final:
             self.store.forget_orientations()
         self.cal, self.tracker = cal, Tracker(cal, self.opts.joint_limits)
-        self.result.calibrations.append((cal.at_s, cal.how, cal.final))
+        self.result.calibrations.append(CalibrationUsed(cal.at_s, cal.how, cal.final, now_s))
         self._set_state("calibrated" if cal.final else "calibrated: walk a few steps to finish")
 
     def _set_state(self, state: str) -> None:

@@ -137,6 +137,7 @@ class LslSource:
             self._inlets[mapped[name]] = inlet
         from pipeline.io.checks import check_same_rate
 
+        _sync_clocks(lsl, self._inlets, resolve_s)
         self.names = list(self._inlets)
         self.rate_hz = float(check_same_rate(rates, file=None))
 
@@ -157,6 +158,23 @@ class LslSource:
     def close(self) -> None:
         for inlet in self._inlets.values():
             inlet.close_stream()
+
+
+def _sync_clocks(lsl, inlets: dict, timeout_s: float) -> None:
+    """Each inlet's first clock offset, all at once (LSL's first takes ~0.6 s a stream; left to
+    the first reads, one after the other, they held a capture's start by 4.5 s)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def offset(item):
+        name, inlet = item
+        try:
+            return inlet.time_correction(timeout=timeout_s)
+        except lsl.util.TimeoutError:
+            raise InputError(f"the LSL stream for {name} gave no clock reply within "
+                             f"{timeout_s:g} s", field="lsl") from None
+
+    with ThreadPoolExecutor(max_workers=len(inlets) or 1) as pool:
+        list(pool.map(offset, inlets.items()))
 
 
 def _resolve(lsl, prefix: str, resolve_s: float) -> list:
@@ -181,10 +199,11 @@ def _layout(info, name: str) -> Layout:
 
 
 def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool] = lambda: False,
-                  prefix: str = "") -> int:
+                  prefix: str = "", wait_s: float | None = None) -> int:
     """``rec``'s sensors as LSL outlets of type ``IMU`` (named ``prefix + sensor``), its samples
-    pushed in real time (``speed``) with LSL time stamps; returns the samples pushed when the
-    recording ends or ``stop()`` says so."""
+    pushed in real time (``speed``) with LSL time stamps once every outlet has a reader (or
+    ``wait_s`` passed: none is lost to a reader still connecting); returns the samples pushed
+    when the recording ends or ``stop()`` says so."""
     from pipeline.optional import need
 
     lsl = need("pylsl", "pipeline live --serve-example")
@@ -199,6 +218,7 @@ def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool
             for label in GROUPS[g]:
                 channels.append_child("channel").append_child_value("label", label)
         outlets[name] = (lsl.StreamOutlet(info), groups)
+    _wait_for_readers([o for o, _ in outlets.values()], stop, wait_s)
     source, base, pushed = ReplaySource(rec, speed), lsl.local_clock(), 0
     while not stop() and (chunks := source.read()) is not None:
         for c in chunks:
@@ -207,3 +227,12 @@ def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool
             outlet.push_chunk(block.tolist(), (base + c.time).tolist())
             pushed += len(c.time)
     return pushed
+
+
+def _wait_for_readers(outlets: list, stop: Callable[[], bool], wait_s: float | None) -> None:
+    """Until every outlet has a reader, ``stop()`` or ``wait_s`` (None: no limit)."""
+    t0 = time.monotonic()
+    while not stop() and not all(o.have_consumers() for o in outlets):
+        if wait_s is not None and time.monotonic() - t0 >= wait_s:
+            return
+        time.sleep(0.01)
