@@ -32,7 +32,17 @@ def _brought(path: str, recording: str, column: str = "median") -> tuple[str, st
 
 
 #: (document, its regex with the figure as group 1, results file, its regex for the same figure)
+_ALARMS = "results/bench_false_alarms.txt"
 FIGURES = [
+    (_RESULTS, rf"slowest neighbour's {NUM} \(", _ALARMS, rf"- moves: {NUM} on"),
+    (_RESULTS, rf"flexion axis alone on its leg {NUM}°", _ALARMS, rf"- slip alone: {NUM} on"),
+    (_RESULTS, rf"at most {NUM}°, below\)", _ALARMS, rf"- slip alone: {NUM} on"),
+    (_RESULTS, rf"saturated samples {NUM} of the", _ALARMS, rf"- saturation: {NUM} on"),
+    (_RESULTS, rf"pairing gain {NUM} at its highest", _ALARMS, rf"- crossed: {NUM} on"),
+    (_RESULTS, rf"residual ratio {NUM} \(", _ALARMS, rf"- swapped: {NUM} on"),
+    (_RESULTS, rf"cosine \+{NUM} at its lowest", _ALARMS, rf"- sides: {NUM} on"),
+    (_RESULTS, rf"\(90° on a foot\) and qmt's walk turning into a run \({NUM}°",
+     _ALARMS, rf"\| qmt's walk and run \|(?: [^|]+ \|){{4}} {NUM} \("),
     ("docs/results.md", rf"contacts\s+within {NUM} ms, stride time", "results/bench_gait.txt",
      rf"largest errors {NUM} ms"),
     ("docs/results.md", rf"stride time within {NUM} ms, length within", "results/bench_gait.txt",

@@ -160,14 +160,15 @@ def _plateau_share(x: np.ndarray, min_peak: float, rate_hz: float) -> tuple[floa
     return float(np.mean(held)), level
 
 
-def _saturation(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
-    rec = ctx.rec
+def saturation(s: SensorSignals, rate_hz: float) -> tuple[float, str] | None:
+    """The largest share of ``s``'s samples beyond a human segment's speed or held at a
+    range's limit, and what it is; None without raw signals or any such sample."""
     if s.gyr is None or s.acc is None:
         return None
     speed = np.linalg.norm(np.nan_to_num(s.gyr), axis=1)
     fast = float(np.mean(speed > np.radians(MAX_HUMAN_GYRO_DPS)))
-    g_share, g_level = _plateau_share(s.gyr, np.radians(250.0), rec.rate_hz)  # smallest range
-    a_share, a_level = _plateau_share(s.acc, 2 * 9.81, rec.rate_hz)  # 2 g: the smallest range
+    g_share, g_level = _plateau_share(s.gyr, np.radians(250.0), rate_hz)  # smallest range
+    a_share, a_level = _plateau_share(s.acc, 2 * 9.81, rate_hz)  # 2 g: the smallest range
     found = []
     if fast > 0:
         found.append((fast, f"gyroscope beyond a human segment's speed ({MAX_HUMAN_GYRO_DPS:.0f} "
@@ -178,9 +179,14 @@ def _saturation(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | Non
     if a_share > 0:
         found.append((a_share, f"accelerometer held at {a_level / 9.81:.1f} g (its range's "
                                "limit?)"))
-    if not found:
+    return max(found) if found else None
+
+
+def _saturation(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    found = saturation(s, ctx.rec.rate_hz)
+    if found is None:
         return None
-    share, what = max(found)
+    share, what = found
     action = Action.EXCLUDED if share > MAX_SATURATED else Action.NOTED
     return Finding(name, "saturation", action, f"{what} in {100 * share:.2f}% of the samples")
 
@@ -210,22 +216,31 @@ def _neighbours(name: str, rec: Recording) -> list[str]:
     return [n for n, g in seg.items() if g in want and rec.sensors[n].gyr is not None]
 
 
-def _moves_with_segment(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
-    rec = ctx.rec
-    if s.gyr is None:
+def speed_ratio(name: str, ctx: CheckContext) -> tuple[float, float, list[str]] | None:
+    """Sensor ``name``'s angular speed (median; a foot's upper quartile) over its slowest
+    neighbour's, that speed and the neighbours; None without a gyroscope or moving neighbours
+    (a still neighbour: a still segment is normal)."""
+    if ctx.rec.sensors[name].gyr is None:
         return None
-    near = _neighbours(name, rec)
+    near = _neighbours(name, ctx.rec)
     speeds = [_speed(ctx.own(n)) for n in near]
-    if not speeds or min(speeds) < MOVING_SPEED:  # a still neighbour: a still segment is normal
+    if not speeds or min(speeds) < MOVING_SPEED:
         return None
     foot = SENSOR_TO_SEGMENT.get(name, "").endswith("foot")
-    mine = _speed(s, FOOT_QUANTILE if foot else 0.5)
-    if mine >= MIN_SPEED_RATIO * min(speeds):
+    mine = _speed(ctx.own(name), FOOT_QUANTILE if foot else 0.5)
+    return mine / min(speeds), min(speeds), near
+
+
+def _moves_with_segment(name: str, s: SensorSignals, ctx: CheckContext) -> Finding | None:
+    found = speed_ratio(name, ctx)
+    if found is None or found[0] >= MIN_SPEED_RATIO:
         return None
+    ratio, slowest, near = found
+    foot = SENSOR_TO_SEGMENT.get(name, "").endswith("foot")
     return Finding(name, "moves with its segment", _action_on_stillness(near),
-                   f"it turns at {np.degrees(mine):.0f} deg/s "
+                   f"it turns at {np.degrees(ratio * slowest):.0f} deg/s "
                    f"({'upper quartile' if foot else 'median'}) while its neighbours "
-                   f"({', '.join(near)}) turn at {np.degrees(min(speeds)):.0f} or more: it does "
+                   f"({', '.join(near)}) turn at {np.degrees(slowest):.0f} or more: it does "
                    "not follow a segment (loose or fallen off?)")
 
 
