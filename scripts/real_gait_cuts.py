@@ -61,10 +61,16 @@ def _as_input(rec: Recording, path: str) -> tuple[Recording, dict]:
     return rec.with_sensors(sensors), {"filter": "pi" if path == "pi6" else "vqf"}
 
 
-def _rmse(ours: np.ndarray, truth: np.ndarray, start: int) -> float:
+def _error(ours: np.ndarray, truth: np.ndarray, start: int) -> np.ndarray:
+    """Ours less the truth (deg) over the walk's samples the cut keeps."""
     a = max(WALK[0], start)
-    e = np.degrees(ours[a - start:WALK[1] - start] - truth[a:WALK[1]])
-    return float(np.sqrt(np.mean(e**2)))
+    return np.degrees(ours[a - start:WALK[1] - start] - truth[a:WALK[1]])
+
+
+def _rmse(ours: np.ndarray, truth: np.ndarray, start: int, centred: bool = False) -> float:
+    """The RMSE (deg) over the walk; ``centred``: with the walk's mean error removed."""
+    e = _error(ours, truth, start)
+    return float(np.sqrt(np.mean((e - e.mean() if centred else e) ** 2)))
 
 
 def _calibration(how: str) -> str:
@@ -76,7 +82,9 @@ def _calibration(how: str) -> str:
 
 def section(data: Path, sensor_map: dict[str, str], subject, inputs, sagittal, refs) -> str:
     """The report's section: per input path and recording, the calibration used, the six
-    sagittal RMSEs against Vicon, their median, the median against the markers, and the flags."""
+    sagittal RMSEs against Vicon, their median, it with the walk's mean error removed, the median
+    against the markers, and the flags; then each joint's mean error against both references
+    (what a calibration without a pose changes: the zeros)."""
     full = read_recording(data / "imu", sensor_map)
     recordings = {f"from {s}" if s else "as recorded": (cut(full, s), s) for s in CUTS}
     recordings["other shanks"] = (other_shanks(data, sensor_map), 0)
@@ -85,9 +93,12 @@ def section(data: Path, sensor_map: dict[str, str], subject, inputs, sagittal, r
              "S02 as recorded, cut to start as the walk starts (sample 1120) or mid-walk (1300, "
              "1500; scored over the walk's samples the cut keeps), and with the other shank "
              "sensors: the calibration each run chose, the sagittal RMSE against Vicon (deg), "
-             "their median, the median against the markers, and the run's flags.", "",
-             f"| input | recording | calibration | {names} | median | markers | flags |",
-             "|---|---|---|" + "---|" * (len(sagittal) + 3)]
+             "their median, the median with each joint's mean error over the walk removed "
+             "(what no choice of the angles' zeros changes), the median against the markers, "
+             "and the run's flags.", "",
+             f"| input | recording | calibration | {names} | median | mean removed | markers "
+             "| flags |", "|---|---|---|" + "---|" * (len(sagittal) + 4)]
+    offsets = []
     for path in inputs:
         for label, (rec, start) in recordings.items():
             recording, options = _as_input(rec, path)
@@ -95,9 +106,16 @@ def section(data: Path, sensor_map: dict[str, str], subject, inputs, sagittal, r
             cols = mot_columns(run)
             rmse = {ref: [_rmse(cols[c], table.columns[c], start) for c in sagittal]
                     for ref, table in refs.items()}
+            centred = [_rmse(cols[c], refs["vicon"].columns[c], start, True) for c in sagittal]
             lines.append(f"| {path} | {label} | {_calibration(run.calibration)} | "
                          + " | ".join(f"{v:.1f}" for v in rmse["vicon"])
-                         + f" | **{np.median(rmse['vicon']):.1f}** | "
+                         + f" | **{np.median(rmse['vicon']):.1f}** | {np.median(centred):.1f} | "
                          f"{np.median(rmse['markers']):.1f} | {len(run.flags)} |")
+            offsets.append(f"| {path} | {label} | " + " | ".join(
+                " / ".join(f"{_error(cols[c], refs[r].columns[c], start).mean():+.1f}"
+                           for r in ("vicon", "markers")) for c in sagittal) + " |")
             print(f"{path:7s} {label:12s} median {np.median(rmse['vicon']):.1f}", flush=True)
+    lines += ["", "Each sagittal angle's mean error over the walk (deg, ours less the reference) "
+              "against Vicon / the markers, per run above:", "",
+              f"| input | recording | {names} |", "|---|---|" + "---|" * len(sagittal), *offsets]
     return "\n".join(lines) + "\n"
