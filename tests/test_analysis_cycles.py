@@ -56,7 +56,8 @@ def test_the_means_are_over_the_straight_steady_strides_only():
         20.0 * ((time > strides[3].start_s) & (time < strides[3].end_s)))  # the turn differs
     means = cycle_means(cycle_angles(time, angles, strides))
     knee = means["right"]["knee_angle"]
-    assert knee.n == 4  # 7 strides: the first, the last and the turning one left out
+    # 7 strides: the first, the last, the turning one and the two beside it left out
+    assert knee.n == 2
     expected = np.radians(30 + 30 * np.sin(2 * np.pi * np.linspace(0, 1, CYCLE_POINTS)))
     assert np.max(np.abs(knee.mean - expected)) < np.radians(0.2)
     assert np.max(knee.sd) < np.radians(0.2) and means["left"] == {}
@@ -82,3 +83,20 @@ def test_the_figures_and_the_table_state_the_same_means():
     assert abs(max(fig["mean_deg"]) - 60.0) < 0.2
     row = next(line for line in cycle_table(cycles) if line.startswith("| knee_angle"))
     assert row.startswith("| knee_angle | 60.0 ± 0.0 | 0.0 ± 0.0 | 60.0 ± 0.0 |")
+
+
+def test_a_side_without_a_steady_stride_is_averaged_over_its_straight_ones_and_says_so():
+    """Two strides: the walk's start and its stop, neither steady; the means are over both,
+    named as such in the figures and the summary, never silently empty nor called steady."""
+    from pipeline.analysis.cycles import STEADY, STRAIGHT_ONLY, cycle_table, cycles_figures
+
+    time, angles, strides = _walk(n_strides=2)
+    assert not any(s.steady for s in strides)
+    cycles = cycle_angles(time, angles, strides)
+    knee = cycle_means(cycles)["right"]["knee_angle"]
+    assert (knee.n, knee.over) == (2, STRAIGHT_ONLY)
+    assert cycles_figures(cycles)["right"]["knee_angle"]["over"] == STRAIGHT_ONLY
+    assert any("right side's means are over its straight strides" in line
+               for line in cycle_table(cycles))
+    time, angles, strides = _walk(n_strides=4)  # two steady strides: the means over them
+    assert cycle_means(cycle_angles(time, angles, strides))["right"]["knee_angle"].over == STEADY

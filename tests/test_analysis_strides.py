@@ -65,17 +65,21 @@ def test_the_csv_has_exactly_the_issues_columns():
 
 
 def test_the_summary_by_side_over_the_straight_steady_strides():
-    """Six strides, the third turning 70 deg: the first and the last start and stop the walk,
-    the turning one is left out: three in the means, each reason counted."""
+    """Six strides, the second turning 70 deg: the first and the last start and stop the walk,
+    the third comes out of the turn (a straight walk's first), the turning one is left out: two
+    in the means, each reason counted."""
     _, left = _strides(strides=7, seed=1, turns_deg=(0, 0, 70))
+    assert [s.straight for s in left] == [True, False, True, True, True, True]
+    assert [s.steady for s in left] == [False, False, False, True, True, False]
     summary = stride_summary(left)
     mean, sd, n = summary["left"]["stride_length_m"]
-    assert n == 3 and abs(mean - 1.3) < 0.02 and sd < 0.01
+    assert n == 2 and abs(mean - 1.3) < 0.02 and sd < 0.01
     assert summary["right"]["stride_length_m"][2] == 0
     text = "\n".join(stride_table(left))
     assert "| stride length (m) |  | 1.30 ± 0.00 | 1.30 ± 0.00 |" in text
     assert "| strides turning 20 deg or more | | | 1 |" in text
-    assert "| strides starting or stopping a walk | | | 2 |" in text
+    assert ("| strides starting or stopping a straight walk (from standing or a turn) | | | 3 |"
+            in text)
 
 
 def test_a_missed_contact_is_left_out_of_the_means():

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.analysis.strides import Stride, in_the_means
+from pipeline.analysis.strides import MERGED_SHARE, Stride, in_the_means
 
-__all__ = ["CYCLE_COLUMNS", "CYCLE_POINTS", "Cycles", "CycleMean", "cycle_angles", "cycle_means",
-           "cycle_table", "cycles_csv", "cycles_figures"]
+__all__ = ["CYCLE_COLUMNS", "CYCLE_POINTS", "STEADY", "STRAIGHT_ONLY", "Cycles", "CycleMean",
+           "averaged", "cycle_angles", "cycle_means", "cycle_table", "cycles_csv", "cycles_figures"]
 
 #: Points per cycle: 0, 1, ..., 100 % of the stride.
 CYCLE_POINTS = 101
@@ -54,11 +54,36 @@ class Cycles:
 @dataclass(frozen=True)
 class CycleMean:
     """One joint's mean curve of one side, its SD across strides (rad, :data:`CYCLE_POINTS`
-    each) and the strides it is over."""
+    each), the strides it is over (``n``) and which (``over``: :data:`STEADY`, or
+    :data:`STRAIGHT_ONLY` where the side has no steady stride)."""
 
     mean: np.ndarray
     sd: np.ndarray
     n: int
+    over: str = "straight, steady"
+
+
+#: What a side's means are over: its straight, steady strides...
+STEADY = "straight, steady"
+#: ... or, where it has none (a short walk, turns on the spot), its straight strides, said so.
+STRAIGHT_ONLY = "straight, none steady"
+
+
+def averaged(strides: list[Stride], side: str) -> tuple[np.ndarray, str]:
+    """Which of ``strides`` a side's means are over (a mask) and what they are: its straight,
+    steady strides, else its straight ones (start, stop and beside a turn included: a walk too
+    short for a steady state still shows its curves, named as such)."""
+    mine = np.array([s.side == side for s in strides], bool)
+    steady = mine & np.array([in_the_means(s) for s in strides], bool)
+    if steady.any() or not mine.any():
+        return steady, STEADY
+    straight = mine & np.array([s.straight and s.stride_time_s <= MERGED_SHARE * _typical(
+        strides, side) for s in strides], bool)
+    return straight, STRAIGHT_ONLY
+
+
+def _typical(strides: list[Stride], side: str) -> float:
+    return float(np.median([s.stride_time_s for s in strides if s.side == side]))
 
 
 def _angle_key(ours: str, side: str) -> str:
@@ -94,11 +119,11 @@ def cycle_angles(time: np.ndarray, joint_angles: dict[str, np.ndarray],
 
 
 def cycle_means(cycles: Cycles) -> dict[str, dict[str, CycleMean]]:
-    """``{side: {column: CycleMean}}`` over the side's straight, steady strides with a curve
-    (sample SD; NaN with fewer than two)."""
+    """``{side: {column: CycleMean}}`` over the side's straight, steady strides with a curve,
+    else its straight ones (:func:`averaged`; sample SD; NaN with fewer than two)."""
     out: dict[str, dict[str, CycleMean]] = {}
     for side in ("right", "left"):
-        chosen = np.array([s.side == side and in_the_means(s) for s in cycles.strides], bool)
+        chosen, over = averaged(cycles.strides, side)
         out[side] = {}
         for column, curves in cycles.angles.items():
             c = curves[chosen] if len(chosen) else curves
@@ -106,7 +131,7 @@ def cycle_means(cycles: Cycles) -> dict[str, dict[str, CycleMean]]:
             if not len(c):
                 continue
             sd = np.std(c, axis=0, ddof=1) if len(c) > 1 else np.full(CYCLE_POINTS, np.nan)
-            out[side][column] = CycleMean(np.mean(c, axis=0), sd, len(c))
+            out[side][column] = CycleMean(np.mean(c, axis=0), sd, len(c), over)
     return out
 
 
@@ -137,13 +162,13 @@ def _bool(v: bool) -> str:
 
 
 def cycles_figures(cycles: Cycles) -> dict[str, dict[str, dict]]:
-    """The means as ``_figures.json`` lists them: ``{side: {column: {'n', 'mean_deg',
+    """The means as ``_figures.json`` lists them: ``{side: {column: {'n', 'over', 'mean_deg',
     'sd_deg'}}}``, :data:`CYCLE_POINTS` values each (2 decimals; ``null`` for an SD of one)."""
     def listed(v: np.ndarray) -> list:
         return [None if not np.isfinite(x) else round(float(x), 2) for x in np.degrees(v)]
 
-    return {side: {col: {"n": m.n, "mean_deg": listed(m.mean), "sd_deg": listed(m.sd)}
-                   for col, m in means.items()}
+    return {side: {col: {"n": m.n, "over": m.over, "mean_deg": listed(m.mean),
+                         "sd_deg": listed(m.sd)} for col, m in means.items()}
             for side, means in cycle_means(cycles).items()}
 
 
@@ -152,18 +177,23 @@ def cycle_table(cycles: Cycles) -> list[str]:
     ± SD across the side's straight, steady strides (deg)."""
     means = cycle_means(cycles)
     counts = {side: max((m.n for m in means[side].values()), default=0) for side in means}
+    overs = {side: next((m.over for m in means[side].values()), STEADY) for side in means}
     lines = ["| angle over the cycle (deg) | right max | right min | right range | left max | "
              "left min | left range |", "|---|---|---|---|---|---|---|"]
     for column, curves in cycles.angles.items():
         cells = []
         for side in ("right", "left"):
-            chosen = [k for k, s in enumerate(cycles.strides) if s.side == side and in_the_means(s)
-                      and np.all(np.isfinite(curves[k]))]
+            mask = averaged(cycles.strides, side)[0]
+            chosen = [k for k in np.flatnonzero(mask) if np.all(np.isfinite(curves[k]))]
             c = np.degrees(curves[chosen]) if chosen else np.zeros((0, CYCLE_POINTS))
             for v in (c.max(axis=1), c.min(axis=1), np.ptp(c, axis=1)) if len(c) else ((),) * 3:
                 cells.append(_mean_sd(np.asarray(v)))
         lines.append(f"| {column} | " + " | ".join(cells) + " |")
     lines.append(f"| strides in the means | {counts['right']} | | | {counts['left']} | | |")
+    for side in ("right", "left"):
+        if overs.get(side) == STRAIGHT_ONLY:
+            lines.append(f"| the {side} side's means are over its straight strides: it has no "
+                         "steady one | | | | | | |")
     return lines
 
 

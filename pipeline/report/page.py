@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.analysis.cycles import cycle_angles, cycles_figures
+from pipeline.analysis.cycles import STRAIGHT_ONLY, cycle_angles, cycles_figures
 from pipeline.analysis.strides import left_out, stride_summary
 from pipeline.calibration.heading import heading_rotation
 from pipeline.process.run import IKRun
@@ -89,12 +89,20 @@ def _stride_rows(run: IKRun) -> list[list[object]]:
     return rows
 
 
+def _fallback_words(means: dict) -> str:
+    """Which side's curves are over its straight strides, for want of a steady one."""
+    sides = [side for side, curves in means.items()
+             if any(c.get("over") == STRAIGHT_ONLY for c in curves.values())]
+    return "".join(f"; the {side} side has no steady stride: its curves are over its straight "
+                   "strides, start, stop and those beside a turn included" for side in sides)
+
+
 def _left_out_words(run: IKRun) -> str:
     out = left_out(run.gait.strides)
     total = len(run.gait.strides)
     return (f"{total} strides found; the means are over the straight, steady ones: left out "
             f"{out['turning']} turning, {out['starting or stopping']} starting or stopping a "
-            f"walk, {out['merged']} longer than 1.5 times their side's median (a missed "
+            f"straight walk, {out['merged']} longer than 1.5 times their side's median (a missed "
             "contact).")
 
 
@@ -169,7 +177,8 @@ def report_parts(run: IKRun, name: str) -> ReportParts:
     if run.gait.strides:
         means = cycles_figures(cycle_angles(run.time, run.joint_angles, run.gait.strides))
         middle = ['<p class="muted">Mean ± SD over each side\'s straight, steady strides (right '
-                  "green, left red; dashed: the mean foot-off). " + _left_out_words(run) + "</p>",
+                  "green, left red; dashed: the mean foot-off" + _fallback_words(means) + "). "
+                  + _left_out_words(run) + "</p>",
                   "<h2>Spatiotemporal parameters</h2>",
                   _table(["parameter", "right", "left", "symmetry index (%)", "both"],
                          _stride_rows(run)),

@@ -1,7 +1,7 @@
 """The report's figures, drawn with matplotlib (the ``report`` extra) into PNG bytes.
 
 Every figure takes the cycles' means as ``_figures.json`` lists them
-(:func:`pipeline.analysis.cycles.cycles_figures`: ``{side: {column: {'n', 'mean_deg',
+(:func:`pipeline.analysis.cycles.cycles_figures`: ``{side: {column: {'n', 'over', 'mean_deg',
 'sd_deg'}}}``), so a trial's report and a group's are drawn from the same numbers. Colours follow
 the gait labs' convention (Vicon's and most clinical reports): right green, left red; a side's
 mean is a line, its SD across strides a band, its mean foot-off a dashed vertical line.
@@ -13,6 +13,7 @@ import io
 
 import numpy as np
 
+from pipeline.analysis.cycles import STRAIGHT_ONLY
 from pipeline.optional import need
 
 __all__ = ["COLOURS", "PANELS", "cycle_figure", "group_figure", "png_bytes", "skeleton_figure",
@@ -86,7 +87,8 @@ def _panel(ax, means: dict, column: str | None, title: str, foot_off: dict) -> N
         curve = means.get(side, {}).get(column) if column else None
         if curve is None:
             continue
-        _band(ax, curve, COLOURS[side], f"{side} (n={curve['n']})")
+        over = f" {STRAIGHT_ONLY}" if curve.get("over") == STRAIGHT_ONLY else ""
+        _band(ax, curve, COLOURS[side], f"{side} (n={curve['n']}{over})")
         if np.isfinite(foot_off.get(side, np.nan)):
             ax.axvline(100 * foot_off[side], color=COLOURS[side], lw=0.8, ls="--")
         drawn = True
