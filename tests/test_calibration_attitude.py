@@ -120,3 +120,21 @@ def test_filter_orientations_refuses_bad_input():
     bad[3, 1] = np.nan
     with pytest.raises(InputError, match="finite"):
         filter_orientations(t, good * 0, bad)
+
+
+def test_the_filter_stepped_block_by_block_is_the_filter_run_at_once():
+    """``PIState.run`` on blocks of 1-7 samples continues where it stopped: the attitudes, bias
+    and error of :func:`mahony_filter` over the whole (a live capture's filter)."""
+    from pipeline.calibration.attitude import TUNED, PIState, upright
+
+    rng = np.random.default_rng(3)
+    n = 800
+    t = np.arange(n) / 100.0
+    gyr, acc = rng.normal(0, 0.4, (n, 3)), rng.normal(0, 1.0, (n, 3)) + [0.0, 0.0, 9.81]
+    whole = mahony_filter(t, gyr, acc, **{**TUNED, "rest_start": False})
+    state = PIState(upright(acc[0]), TUNED["lambda_p"], TUNED["lambda_i"], TUNED["acc_lowpass_s"])
+    cuts = np.cumsum(rng.integers(1, 8, n))
+    blocks = [state.run(gyr[a:b], acc[a:b], np.full(len(gyr[a:b]), 0.01))
+              for a, b in zip(np.r_[0, cuts[:-1]], cuts, strict=True) if a < n]
+    for k, got in enumerate((whole.quat, whole.bias, whole.error)):
+        np.testing.assert_allclose(np.vstack([b[k] for b in blocks]), got, atol=1e-12)

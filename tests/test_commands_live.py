@@ -54,10 +54,6 @@ def test_sigterm_ends_the_capture_and_writes_it(tmp_path):
 def test_a_source_is_needed_and_an_lsl_without_streams_is_one_line(tmp_path, capsys):
     assert main(["live", *ARGS, "--out", str(tmp_path / "a")]) == 2
     assert "give one source: --replay RECORDING or --lsl" in capsys.readouterr().err
-    assert main(["live", "--replay", "example:ximu3_lower_body", *ARGS, "--filter", "pi",
-                 "--out", str(tmp_path / "b")]) == 2  # never VQF in its place, unsaid
-    assert "--filter pi runs offline only (pipeline ik)" in capsys.readouterr().err
-    assert not (tmp_path / "b").exists()
     pytest.importorskip("pylsl")
     from pipeline.errors import InputError
     from pipeline.live.sources import LslSource

@@ -13,7 +13,7 @@ from pipeline.analysis.joint_angles import joint_angles
 from pipeline.errors import InputError
 from pipeline.model import Skeleton, SubjectGeometry
 from pipeline.rotations import matrix_from_quat, rot_z
-from pipeline.viz.model import ANGLE_COLORS, log_motion, segment_meshes
+from pipeline.viz.model import ANGLE_COLORS, SceneOptions, log_motion, segment_meshes
 from pipeline.viz.recording import entity_row_counts, read_entities
 
 N = 3000
@@ -62,15 +62,8 @@ def motion(tmp_path_factory):
     elapsed = []
     for _ in range(2):  # the first call pays rerun's lazy initialisation and loads the STLs
         start = time.perf_counter()
-        log_motion(
-            path,
-            t,
-            sk,
-            Q,
-            reference_landmarks=ref,
-            extra_scalars=extra,
-            recording_name="synthetic gait",
-        )
+        log_motion(path, t, sk, Q, SceneOptions(reference_landmarks=ref, extra_scalars=extra,
+                                                recording_name="synthetic gait"))
         elapsed.append(time.perf_counter() - start)
     print(f"\nlog_motion, {N} frames, two legs: first {elapsed[0]:.3f} s, then {elapsed[1]:.3f} s")
     ok = np.ones(N, dtype=bool)
@@ -108,7 +101,7 @@ def test_up_axis_view_coordinates(motion, tmp_path):
     xyz = _rows(path, "/world", static=True)["ViewCoordinates:xyz"][0][0]
     assert xyz == rr.ViewCoordinates.RIGHT_HAND_Y_UP.as_arrow_array().to_pylist()[0]
     sk, t, Q = motion[1], motion[2][:4], motion[3][:4]
-    z_up = log_motion(tmp_path / "z.rrd", t, sk, Q, up_axis="z", meshes=False)
+    z_up = log_motion(tmp_path / "z.rrd", t, sk, Q, SceneOptions(up_axis="z", meshes=False))
     xyz = _rows(z_up, "/world", static=True)["ViewCoordinates:xyz"][0][0]
     assert xyz == rr.ViewCoordinates.RIGHT_HAND_Z_UP.as_arrow_array().to_pylist()[0]
 
@@ -223,9 +216,10 @@ def test_bad_inputs_are_input_errors(motion, tmp_path):
         log_motion(tmp_path / "a.rrd", t[:10], sk, Q[:9])
     assert not (tmp_path / "a.rrd").exists()
     with pytest.raises(InputError, match="landmarks"):
-        log_motion(tmp_path / "b.rrd", t[:10], sk, Q[:10], landmarks=["right_XYZ"])
+        log_motion(tmp_path / "b.rrd", t[:10], sk, Q[:10], SceneOptions(landmarks=["right_XYZ"]))
     with pytest.raises(InputError, match="up_axis"):
-        log_motion(tmp_path / "c.rrd", t[:10], sk, Q[:10], up_axis="x", meshes=False)
+        log_motion(tmp_path / "c.rrd", t[:10], sk, Q[:10],
+                   SceneOptions(up_axis="x", meshes=False))
     assert not (tmp_path / "c.rrd").exists()
 
 
@@ -300,8 +294,8 @@ def test_a_body_that_walks_through_the_room(motion, tmp_path):
     root[:, 2] = 0.15 * np.sin(2 * t)
     prints = np.full((n, 3), np.nan)
     prints[500:1500], prints[1500:] = [1.0, -0.9, 0.1], [2.5, -0.9, 0.1]
-    path = log_motion(tmp_path / "walk.rrd", t, sk, Q, root_path=root, landmarks=False,
-                      reference_landmarks={"right_footprint": prints})
+    path = log_motion(tmp_path / "walk.rrd", t, sk, Q, SceneOptions(
+        root_path=root, landmarks=False, reference_landmarks={"right_footprint": prints}))
     strip = np.array(_rows(path, "/world/walk/path", static=True)["LineStrips3D:strips"][0][0])
     footprints = np.array(_rows(path, "/world/walk/right_footprints", static=True)[
         "Points3D:positions"][0])

@@ -99,7 +99,7 @@ def _scene(walk: bool = False):
     arrows, IMU axes, bones, angles with truth, an extra scalar (one NaN); ``walk``: carried 2 m
     further through the room, with footprints."""
     from pipeline.simulate.model import simulate_trial
-    from pipeline.viz.model import motion_scene
+    from pipeline.viz.model import SceneOptions, motion_scene
 
     sim = simulate_trial(seed=0, duration_s=2.0)
     t = sim.time
@@ -112,9 +112,9 @@ def _scene(walk: bool = False):
         root = np.zeros((len(t), 3))
         root[:, 0] = t
         ref["left_footprint"] = np.where(t[:, None] < 1.0, [0.2, -0.9, -0.1], [1.3, -0.9, -0.1])
-    return motion_scene(t, sim.skeleton, sim.q, reference_landmarks=ref, reference_angles=truth,
-                        extra_scalars={"residual": extra}, recording_name="sim",
-                        root_path=root)
+    return motion_scene(t, sim.skeleton, sim.q, SceneOptions(
+        reference_landmarks=ref, reference_angles=truth, extra_scalars={"residual": extra},
+        recording_name="sim", root_path=root))
 
 
 @pytest.mark.parametrize("walk", [False, True])

@@ -39,7 +39,7 @@ against offline VQF's 0.37, 0.56 and 0.81 deg.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -51,6 +51,7 @@ __all__ = [
     "MAGNETOMETER_FILTERS",
     "TUNED",
     "AttitudeEstimate",
+    "PIState",
     "filter_orientations",
     "mahony_filter",
     "rest_bias",
@@ -72,6 +73,83 @@ class AttitudeEstimate:
     quat: np.ndarray
     bias: np.ndarray
     error: np.ndarray
+
+
+@dataclass
+class PIState:
+    """The filter's state between samples (eq 44-50): ``q`` the attitude (wxyz), ``integral`` the
+    eq 48 term, ``force`` the low-passed specific force in the world (``acc_lowpass_s``), and its
+    gains: what a live capture steps block by block (:meth:`run`) and :func:`mahony_filter`
+    runs over a whole recording."""
+
+    q: np.ndarray
+    lambda_p: float
+    lambda_i: float
+    tau: float = 0.0
+    integral: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    force: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, _GRAVITY]))
+
+    def run(self, gyr: np.ndarray, acc: np.ndarray, dts: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Eq 45-50 over samples (m, 3) with their steps ``dts`` (m,) s: each sample's attitude
+        (m, 4), bias estimate ``-zeta_I`` (m, 3) and error ``zeta`` (m, 3); the state goes on."""
+        q0_, q1, q2, q3 = (float(v) for v in self.q / np.linalg.norm(self.q))
+        ix, iy, iz = (float(v) for v in self.integral)
+        wx_, wy_, wz_ = (float(v) for v in self.force)
+        lambda_p, lambda_i, tau = self.lambda_p, self.lambda_i, self.tau
+        n = len(dts)
+        out_q, out_b, out_e = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
+        for k in range(n):
+            dt = dts[k]
+            gx, gy, gz = gyr[k]
+            ax, ay, az = acc[k]
+            if tau > 0:  # low-pass in the estimated world frame (module docstring)
+                r00, r01 = 1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0_ * q3)
+                r02, r10 = 2 * (q1 * q3 + q0_ * q2), 2 * (q1 * q2 + q0_ * q3)
+                r11, r12 = 1 - 2 * (q1 * q1 + q3 * q3), 2 * (q2 * q3 - q0_ * q1)
+                r20, r21 = 2 * (q1 * q3 - q0_ * q2), 2 * (q2 * q3 + q0_ * q1)
+                r22 = 1 - 2 * (q1 * q1 + q2 * q2)
+                al = min(1.0, dt / tau)
+                wx_ += al * (r00 * ax + r01 * ay + r02 * az - wx_)
+                wy_ += al * (r10 * ax + r11 * ay + r12 * az - wy_)
+                wz_ += al * (r20 * ax + r21 * ay + r22 * az - wz_)
+                ax = r00 * wx_ + r10 * wy_ + r20 * wz_
+                ay = r01 * wx_ + r11 * wy_ + r21 * wz_
+                az = r02 * wx_ + r12 * wy_ + r22 * wz_
+            na = math.sqrt(ax * ax + ay * ay + az * az)
+            ex = ey = ez = 0.0
+            if na > 0:
+                ax, ay, az = ax / na, ay / na, az / na
+                vx = 2 * (q1 * q3 - q0_ * q2)  # eq 46
+                vy = 2 * (q2 * q3 + q0_ * q1)
+                vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
+                ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # eq 47
+                ix += lambda_i * ex * 0.5 * dt  # eq 48
+                iy += lambda_i * ey * 0.5 * dt
+                iz += lambda_i * ez * 0.5 * dt
+            gx += lambda_p * ex + ix  # eq 49
+            gy += lambda_p * ey + iy
+            gz += lambda_p * ez + iz
+            hx, hy, hz = 0.5 * dt * gx, 0.5 * dt * gy, 0.5 * dt * gz  # eq 50: q (x) [1, w dt/2]
+            q0_, q1, q2, q3 = (
+                q0_ - q1 * hx - q2 * hy - q3 * hz,
+                q1 + q0_ * hx + q2 * hz - q3 * hy,
+                q2 + q0_ * hy - q1 * hz + q3 * hx,
+                q3 + q0_ * hz + q1 * hy - q2 * hx,
+            )
+            nq = math.sqrt(q0_ * q0_ + q1 * q1 + q2 * q2 + q3 * q3)
+            q0_, q1, q2, q3 = q0_ / nq, q1 / nq, q2 / nq, q3 / nq
+            out_q[k] = q0_, q1, q2, q3
+            out_b[k] = -ix, -iy, -iz
+            out_e[k] = ex, ey, ez
+        self.q = np.array([q0_, q1, q2, q3])
+        self.integral, self.force = np.array([ix, iy, iz]), np.array([wx_, wy_, wz_])
+        return out_q, out_b, out_e
+
+
+def upright(acc: np.ndarray) -> np.ndarray:
+    """The attitude (wxyz) whose up is the specific force ``acc`` (3,), heading arbitrary."""
+    return quat_from_matrix(rotation_aligning(acc, [0.0, 0.0, 1.0]))
 
 
 def mahony_filter(
@@ -101,66 +179,17 @@ def mahony_filter(
     if isinstance(q0, str):
         if q0 != "acc":
             raise InputError(f"expected q0 'acc', a quaternion or None, got {q0!r}", field="q0")
-        q = quat_from_matrix(rotation_aligning(acc[0], [0.0, 0.0, 1.0]))
+        q = upright(acc[0])
     else:
         q = np.array([1.0, 0.0, 0.0, 0.0]) if q0 is None else np.asarray(q0, float)  # eq 44
-    ix = iy = iz = 0.0
+    state = PIState(q, lambda_p, lambda_i, float(acc_lowpass_s))
     if rest_start:
         n0 = still_start(gyr, acc)
         if n0 * period >= 0.5:
-            ix, iy, iz = (-float(v) for v in gyr[:n0].mean(axis=0))
-            q = quat_from_matrix(rotation_aligning(acc[:n0].mean(axis=0), [0.0, 0.0, 1.0]))
-    q0_, q1, q2, q3 = (float(v) for v in q / np.linalg.norm(q))
-    tau = float(acc_lowpass_s)
-    wx_, wy_, wz_ = 0.0, 0.0, _GRAVITY  # the low-passed specific force in the world
-    dts = np.diff(t, prepend=t[0] - period)
-    out_q = np.empty((n, 4))
-    out_b = np.empty((n, 3))
-    out_e = np.empty((n, 3))
-    for k in range(n):
-        dt = dts[k]
-        gx, gy, gz = gyr[k]
-        ax, ay, az = acc[k]
-        if tau > 0:  # low-pass in the estimated world frame (module docstring)
-            r00, r01 = 1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0_ * q3)
-            r02, r10 = 2 * (q1 * q3 + q0_ * q2), 2 * (q1 * q2 + q0_ * q3)
-            r11, r12 = 1 - 2 * (q1 * q1 + q3 * q3), 2 * (q2 * q3 - q0_ * q1)
-            r20, r21 = 2 * (q1 * q3 - q0_ * q2), 2 * (q2 * q3 + q0_ * q1)
-            r22 = 1 - 2 * (q1 * q1 + q2 * q2)
-            al = min(1.0, dt / tau)
-            wx_ += al * (r00 * ax + r01 * ay + r02 * az - wx_)
-            wy_ += al * (r10 * ax + r11 * ay + r12 * az - wy_)
-            wz_ += al * (r20 * ax + r21 * ay + r22 * az - wz_)
-            ax = r00 * wx_ + r10 * wy_ + r20 * wz_
-            ay = r01 * wx_ + r11 * wy_ + r21 * wz_
-            az = r02 * wx_ + r12 * wy_ + r22 * wz_
-        na = math.sqrt(ax * ax + ay * ay + az * az)
-        ex = ey = ez = 0.0
-        if na > 0:
-            ax, ay, az = ax / na, ay / na, az / na
-            vx = 2 * (q1 * q3 - q0_ * q2)  # eq 46
-            vy = 2 * (q2 * q3 + q0_ * q1)
-            vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
-            ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # eq 47
-            ix += lambda_i * ex * 0.5 * dt  # eq 48
-            iy += lambda_i * ey * 0.5 * dt
-            iz += lambda_i * ez * 0.5 * dt
-        gx += lambda_p * ex + ix  # eq 49
-        gy += lambda_p * ey + iy
-        gz += lambda_p * ez + iz
-        hx, hy, hz = 0.5 * dt * gx, 0.5 * dt * gy, 0.5 * dt * gz  # eq 50: q (x) [1, w dt/2]
-        q0_, q1, q2, q3 = (
-            q0_ - q1 * hx - q2 * hy - q3 * hz,
-            q1 + q0_ * hx + q2 * hz - q3 * hy,
-            q2 + q0_ * hy - q1 * hz + q3 * hx,
-            q3 + q0_ * hz + q1 * hy - q2 * hx,
-        )
-        nq = math.sqrt(q0_ * q0_ + q1 * q1 + q2 * q2 + q3 * q3)
-        q0_, q1, q2, q3 = q0_ / nq, q1 / nq, q2 / nq, q3 / nq
-        out_q[k] = q0_, q1, q2, q3
-        out_b[k] = -ix, -iy, -iz
-        out_e[k] = ex, ey, ez
-    return AttitudeEstimate(time=t, quat=out_q, bias=out_b, error=out_e)
+            state.integral = -gyr[:n0].mean(axis=0)
+            state.q = upright(acc[:n0].mean(axis=0))
+    quat, bias, error = state.run(gyr, acc, np.diff(t, prepend=t[0] - period))
+    return AttitudeEstimate(time=t, quat=quat, bias=bias, error=error)
 
 
 def tilt_error(quat_est: np.ndarray, quat_true: np.ndarray) -> np.ndarray:

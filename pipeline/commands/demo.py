@@ -42,7 +42,7 @@ from pipeline.process import mot_columns, process_recording
 from pipeline.rotations import angle_between
 from pipeline.simulate.conventions import STANDING_S
 from pipeline.simulate.model import simulate_trial
-from pipeline.viz.model import log_motion
+from pipeline.viz.model import SceneOptions, log_motion
 
 __all__ = ["DEMO_FILES", "SUBJECT", "DemoResult", "demo", "run_demo"]
 
@@ -184,8 +184,8 @@ def demo(out_dir: str | Path = "out/demo", seed: int = 0,
         truth_curves = {k: np.where(np.arange(len(trial.time)) < n0, np.nan, truth_angles[k])
                         for k in run.joint_angles if k in truth_angles}
         log_motion(out.path(out_dir / "demo.rrd"), run.time, run.skeleton, run.q,
-                   reference_angles=truth_curves,
-                   reference_landmarks=reference, recording_name="pipeline demo")
+                   SceneOptions(reference_angles=truth_curves, reference_landmarks=reference,
+                                recording_name="pipeline demo"))
         timings["write"] = time.perf_counter() - t0
         total = time.perf_counter() - t_start
         offset = _knee_neutral_offset(trial.skeleton)

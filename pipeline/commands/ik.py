@@ -334,11 +334,14 @@ def write_landmarks_csv(fh, run: IKRun, chunk: int = 10_000, world: bool = False
 
 
 def _recording_args(run: IKRun, name: str) -> tuple:
+    """``(time, skeleton, Q, SceneOptions)`` of the run's recording."""
+    from pipeline.viz.model import SceneOptions  # rerun only when a recording is asked for
+
     angles = [k for k in run.joint_angles if not k.startswith("pelvis_")]
     path, prints = run.gait.pelvis_path, {}
     if path is not None:  # walking through the room, each foot's last rest marked
         prints = {f"{side}_footprint": _footprints(run, side) for side in run.gait.paths}
-    return (run.time - run.time[0], run.skeleton, run.q), dict(
+    return run.time - run.time[0], run.skeleton, run.q, SceneOptions(
         recording_name=name, landmarks=list(run.landmarks) or False, joint_angles=angles,
         root_path=path, reference_landmarks=prints or None)
 
@@ -364,8 +367,7 @@ def _record_and_report(run: IKRun, rrd: Path | None, name: str, report, worker) 
         if rrd is not None:
             from pipeline.viz.model import log_motion  # rerun only when a recording is asked for
 
-            args, kwargs = _recording_args(run, name)
-            log_motion(rrd, *args, **kwargs)
+            log_motion(rrd, *_recording_args(run, name))
         if report is not None:
             from pipeline.report.page import write_report
 
@@ -375,8 +377,7 @@ def _record_and_report(run: IKRun, rrd: Path | None, name: str, report, worker) 
     if rrd is not None:
         from pipeline.viz.model import motion_scene
 
-        args, kwargs = _recording_args(run, name)
-        scene = motion_scene(*args, **kwargs)
+        scene = motion_scene(*_recording_args(run, name))
     worker.submit(outputs_in_child, None if rrd is None else str(rrd), scene, report)
 
 

@@ -90,10 +90,6 @@ class LiveCapture:
     def __init__(self, source, measures: Measures, opts: IKOptions, *, viewer=None,
                  duration_s: float | None = None, in_line: bool = False,
                  say: Callable[[str], None] = print) -> None:
-        if opts.filter not in (None, "vqf"):
-            raise InputError(f"--filter {opts.filter} runs offline only (pipeline ik); live, raw "
-                             "signals go through VQF (--filter vqf) or the streams' own "
-                             "orientations are used (no --filter)", field="filter")
         self.source, self.measures, self.opts = source, measures, opts
         self.viewer, self.duration_s, self.in_line, self.say = viewer, duration_s, in_line, say
         self.header = dict(getattr(source, "header", {}) or {})
@@ -148,7 +144,7 @@ class LiveCapture:
             own = self.opts.filter is None and all(s.quat is not None
                                                    for s in block.sensors.values())
             self.orient = LiveOrientations(self.source.names, self.source.rate_hz, own,
-                                           self._world(own, block))
+                                           self._world(own, block), self.opts.filter or "vqf")
         kinds = self.orient.update(block.sensors)
         rotations = self.orient.chosen(kinds)
         self.store.add(block, kinds)

@@ -6,8 +6,11 @@ signals go through VQF's online filter (Laidig & Seel 2023, the ``vqf`` package'
 same filter as offline without its backward pass), one per sensor, fed block by block; its 9-D
 output (the magnetometer's heading) is used for the sensors whose magnetometer the calibration
 trusted, its 6-D output for the others, whose heading the joints' alignment turns (the
-calibration's turn held from then on, :mod:`pipeline.live.calibration`). A frame a sensor misses
-gives NaN, and its filter is not fed (it goes on from its last sample when the stream is back).
+calibration's turn held from then on, :mod:`pipeline.live.calibration`). With ``--filter pi``,
+Hu 2021's PI filter (:class:`~pipeline.calibration.attitude.PIState`, the offline filter's
+gains) steps instead, 6-D, seeded as offline by the sensor's still start once it moves
+(:class:`StillStart`). A frame a sensor misses gives NaN, and its
+filter is not fed (it goes on from its last sample when the stream is back).
 """
 
 from __future__ import annotations
@@ -24,15 +27,18 @@ __all__ = ["LiveOrientations"]
 
 class LiveOrientations:
     """Sensor -> (m, 3, 3) orientations of each block (module docstring). ``own``: the streams
-    carry their orientations (used as they are, turned by ``world``); else VQF online at
-    ``rate_hz``."""
+    carry their orientations (used as they are, turned by ``world``); else ``method``'s filter
+    (``'vqf'`` online, or ``'pi'``) at ``rate_hz``."""
 
-    def __init__(self, names, rate_hz: float, own: bool, world: np.ndarray | None = None) -> None:
-        self.names, self.own = list(names), bool(own)
+    def __init__(self, names, rate_hz: float, own: bool, world: np.ndarray | None = None,
+                 method: str = "vqf") -> None:
+        self.names, self.own, self.method = list(names), bool(own), method
         self.world = np.eye(3) if world is None else np.asarray(world, float)
         if not self.own:
             self.world = sensor_to_opensim_matrix(Z_UP_TO_Y_UP)
-        self._filters = {} if self.own else {n: _vqf(rate_hz) for n in self.names}
+        self.period = 1.0 / rate_hz
+        self._filters = {} if self.own or method == "pi" else {n: _vqf(rate_hz)
+                                                               for n in self.names}
         self.nine_d: frozenset[str] = frozenset()  # the sensors whose 9-D output is used
 
     def update(self, sensors: dict[str, SensorSignals]) -> dict[str, dict[str, np.ndarray]]:
@@ -70,6 +76,9 @@ class LiveOrientations:
             return {}
         ok = np.all(np.isfinite(s.gyr), axis=1) & np.all(np.isfinite(s.acc), axis=1)
         six, nine = np.full((len(ok), 4), np.nan), np.full((len(ok), 4), np.nan)
+        if ok.any() and self.method == "pi":
+            six[ok] = self._pi(name, s.gyr[ok], s.acc[ok])
+            return {"6-D": six}
         if ok.any():
             f = self._filters[name]
             gyr, acc = np.ascontiguousarray(s.gyr[ok]), np.ascontiguousarray(s.acc[ok])
@@ -79,6 +88,58 @@ class LiveOrientations:
             if mag is not None:
                 nine[ok] = out["quat9D"]
         return {"6-D": six, **({"9-D": nine} if s.mag is not None else {})}
+
+    def _pi(self, name: str, gyr: np.ndarray, acc: np.ndarray) -> np.ndarray:
+        """The PI filter's attitudes (m, 4) over a sensor's samples, its state kept; seeded by
+        its still start once it moves (:class:`StillStart`)."""
+        from pipeline.calibration.attitude import TUNED, PIState, upright
+
+        if name not in self._filters:
+            self._filters[name] = (PIState(upright(acc[0]), TUNED["lambda_p"], TUNED["lambda_i"],
+                                           TUNED["acc_lowpass_s"]), StillStart(self.period))
+        state, start = self._filters[name]
+        k = start.feed(gyr, acc)  # the block's samples still from the sensor's first one
+        out = np.empty((len(gyr), 4))
+        out[:k] = state.run(gyr[:k], acc[:k], np.full(k, self.period))[0]
+        if k < len(gyr) and not start.moved:
+            start.seed(state)
+        out[k:] = state.run(gyr[k:], acc[k:], np.full(len(gyr) - k, self.period))[0]
+        return out
+
+
+class StillStart:
+    """A sensor's still start, as the offline PI filter's ``rest_start`` reads it
+    (:func:`pipeline.calibration.attitude.still_start`): the mean gyro and specific force of the
+    samples still from its first one; when it first moves, a start of 0.5 s or more seeds the
+    filter (:meth:`seed`): upright by the mean force, its integral minus the mean gyro (the
+    bias, whose vertical part no later sample corrects: unseeded, S02's pelvis turned 7 deg
+    from the offline filter's within 6 s of the calibration)."""
+
+    def __init__(self, period: float) -> None:
+        self.period, self.n, self.moved = period, 0, False
+        self.gyr, self.acc = np.zeros(3), np.zeros(3)
+
+    def feed(self, gyr: np.ndarray, acc: np.ndarray) -> int:
+        """How many of the block's first samples continue the still start."""
+        if self.moved:
+            return 0
+        from pipeline.calibration.attitude import still_start
+
+        k = still_start(gyr, acc)
+        self.gyr, self.acc = self.gyr + gyr[:k].sum(axis=0), self.acc + acc[:k].sum(axis=0)
+        self.n += k
+        return k
+
+    def seed(self, state) -> bool:
+        """At the first movement: the state seeded from a long enough still start."""
+        from pipeline.calibration.attitude import upright
+
+        self.moved = True
+        if self.n * self.period < 0.5:
+            return False
+        state.integral = -self.gyr / self.n
+        state.q = upright(self.acc / self.n)
+        return True
 
 
 def _vqf(rate_hz: float):

@@ -11,6 +11,7 @@ _EXPORTS = {
     "default_blueprint": "layout",
     "default_layout": "layout",
     "RrdWriter": "rrd",
+    "SceneOptions": "model",
     "entity_row_counts": "recording",
     "log_motion": "model",
     "log_trial": "recording",

@@ -31,6 +31,7 @@ per joint ("right hip (deg)", ...) and one for ``extra_scalars``.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -52,8 +53,8 @@ from pipeline.viz.scene import (
     meshes_from_urdf,
 )
 
-__all__ = ["ANGLE_COLORS", "BONE_COLOR", "SegmentMesh", "log_motion", "motion_scene",
-           "segment_meshes"]
+__all__ = ["ANGLE_COLORS", "BONE_COLOR", "SceneOptions", "SegmentMesh", "log_motion",
+           "motion_scene", "segment_meshes"]
 
 #: Longer recordings show their 3D content (model, landmarks, IMU frames) at a stride that keeps
 #: at most this many samples (36,000: 10 Hz over an hour), the joint angles at the full rate: the
@@ -79,102 +80,79 @@ def _names(selection: bool | Sequence[str], default: Sequence[str], what: str) -
     return names
 
 
-def log_motion(
-    path: str | Path,
-    time: np.ndarray,
-    skeleton: Skeleton,
-    Q: np.ndarray,
-    *,
-    landmarks: bool | Sequence[str] = True,
-    imu_frames: bool | Sequence[str] = True,
-    joint_angles: bool | Sequence[str] = True,
-    bones: bool = True,
-    meshes: bool = True,
-    reference_landmarks: Mapping[str, np.ndarray] | None = None,
-    reference_angles: Mapping[str, np.ndarray] | None = None,
-    error_arrows: bool = True,
-    extra_scalars: Mapping[str, np.ndarray] | None = None,
-    up_axis: str = "y",
-    recording_name: str | None = None,
-    app_id: str = "imu_skeleton_pipeline",
-    imu_axis_length: float = 0.06,
-    point_radius: float = 0.008,
-    root_path: np.ndarray | None = None,
-) -> Path:
-    """Write the motion ``Q`` (N, nq) of ``skeleton`` at ``time`` (N,) s to ``path`` (.rrd).
+@dataclass(frozen=True)
+class SceneOptions:
+    """What a motion's recording shows (:func:`log_motion`, :func:`motion_scene`).
 
-    ``landmarks`` / ``imu_frames``: ``True`` for every landmark / IMU frame of the model, or a
-    list of frame names. ``reference_landmarks``: name -> (N, 3) m (e.g. optical markers, keyed
-    like the landmark frames, ``right_EFM``), drawn in another colour with error arrows
-    reference -> estimate for the names drawn in both. ``reference_angles``: ISB angle name ->
-    (N,) rad (keyed like :func:`pipeline.analysis.landmarks.joint_angles`, e.g.
-    ``right_knee_flexion``; NaN where unknown), drawn as thin lighter curves ``<angle> (truth)``
-    in the same plot as the estimate. ``extra_scalars``: entity name under
-    ``plots/`` -> (N,) series, logged unchanged. ``root_path`` (N, 3) m: the model's root moved
-    through the room (every frame drawn shifted by it; e.g. the pelvis's path from the feet).
-    Rows whose configuration is not finite are not logged. Returns ``path``; layout in the
-    module docstring.
-    """
-    return log_scene(path, *_scene(time, skeleton, Q, False, landmarks, imu_frames,
-                                   joint_angles, bones, meshes, reference_landmarks,
-                                   reference_angles, error_arrows, extra_scalars, up_axis,
-                                   recording_name, app_id, imu_axis_length, point_radius,
-                                   root_path))
+    ``landmarks`` / ``imu_frames`` / ``joint_angles``: ``True`` for every landmark / IMU frame /
+    ISB angle of the model, ``False`` for none, or a list of names. ``bones``, ``meshes``: draw
+    the HJC-KJC-AJC lines, the segments' meshes. ``reference_landmarks``: name -> (N, 3) m (e.g.
+    optical markers, keyed like the landmark frames, ``right_EFM``), drawn in another colour
+    with error arrows reference -> estimate (``error_arrows``) for the names drawn in both.
+    ``reference_angles``: ISB angle name -> (N,) rad (keyed like
+    :func:`pipeline.analysis.landmarks.joint_angles`, e.g. ``right_knee_flexion``; NaN where
+    unknown), drawn as thin lighter curves ``<angle> (truth)`` in the same plot as the estimate.
+    ``extra_scalars``: entity name under ``plots/`` -> (N,) series, logged unchanged.
+    ``up_axis``: the view's up (the model is Y-up). ``recording_name``, ``app_id``: the
+    recording's. ``imu_axis_length``, ``point_radius`` (m): the IMU axes' and the landmarks'
+    size. ``root_path`` (N, 3) m: the model's root moved through the room (every frame drawn
+    shifted by it; e.g. the pelvis's path from the feet)."""
+
+    landmarks: bool | Sequence[str] = True
+    imu_frames: bool | Sequence[str] = True
+    joint_angles: bool | Sequence[str] = True
+    bones: bool = True
+    meshes: bool = True
+    reference_landmarks: Mapping[str, np.ndarray] | None = None
+    reference_angles: Mapping[str, np.ndarray] | None = None
+    error_arrows: bool = True
+    extra_scalars: Mapping[str, np.ndarray] | None = None
+    up_axis: str = "y"
+    recording_name: str | None = None
+    app_id: str = "imu_skeleton_pipeline"
+    imu_axis_length: float = 0.06
+    point_radius: float = 0.008
+    root_path: np.ndarray | None = None
 
 
-def motion_scene(
-    time: np.ndarray,
-    skeleton: Skeleton,
-    Q: np.ndarray,
-    *,
-    landmarks: bool | Sequence[str] = True,
-    imu_frames: bool | Sequence[str] = True,
-    joint_angles: bool | Sequence[str] = True,
-    bones: bool = True,
-    meshes: bool = True,
-    reference_landmarks: Mapping[str, np.ndarray] | None = None,
-    reference_angles: Mapping[str, np.ndarray] | None = None,
-    error_arrows: bool = True,
-    extra_scalars: Mapping[str, np.ndarray] | None = None,
-    up_axis: str = "y",
-    recording_name: str | None = None,
-    app_id: str = "imu_skeleton_pipeline",
-    imu_axis_length: float = 0.06,
-    point_radius: float = 0.008,
-    root_path: np.ndarray | None = None,
-) -> MotionScene:
+def log_motion(path: str | Path, time: np.ndarray, skeleton: Skeleton, Q: np.ndarray,
+               options: SceneOptions | None = None) -> Path:
+    """Write the motion ``Q`` (N, nq) of ``skeleton`` at ``time`` (N,) s to ``path`` (.rrd),
+    shown as ``options`` say (:class:`SceneOptions`; default: everything). Rows whose
+    configuration is not finite are not logged. Returns ``path``; layout in the module
+    docstring."""
+    return log_scene(path, *_scene(time, skeleton, Q, False, options or SceneOptions()))
+
+
+def motion_scene(time: np.ndarray, skeleton: Skeleton, Q: np.ndarray,
+                 options: SceneOptions | None = None) -> MotionScene:
     """What :func:`log_motion` writes, as arrays: the forward kinematics of every shown sample
     done here, so that :func:`pipeline.viz.scene.log_scene` (e.g. in a forked child, without
     Pinocchio) writes the same recording. Arguments as :func:`log_motion`'s."""
-    return _scene(time, skeleton, Q, True, landmarks, imu_frames, joint_angles, bones, meshes,
-                  reference_landmarks, reference_angles, error_arrows, extra_scalars, up_axis,
-                  recording_name, app_id, imu_axis_length, point_radius, root_path)[0]
+    return _scene(time, skeleton, Q, True, options or SceneOptions())[0]
 
 
-def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames, joint_angles,
-           bones, meshes, reference_landmarks, reference_angles, error_arrows, extra_scalars,
-           up_axis, recording_name, app_id, imu_axis_length, point_radius,
-           root_path=None):
+def _scene(time, skeleton: Skeleton, Q, precompute: bool, o: SceneOptions):
     """``(scene, poses)``: the scene (its poses over every shown sample if ``precompute``) and
     ``poses(start, stop)``, the forward kinematics of ``shown[start:stop]``."""
     t = check_time(time, min_samples=1)
     n = len(t)
-    vertical = _check_up_axis(up_axis)
+    vertical = _check_up_axis(o.up_axis)
     Q = check_series(Q, n, (skeleton.nq,), "Q")
-    lm_names = _names(landmarks, skeleton.landmark_frames, "landmarks")
-    imu_names = _names(imu_frames, skeleton.imu_frames, "imu_frames")
-    bone_legs = list(skeleton.legs) if bones else []
+    lm_names = _names(o.landmarks, skeleton.landmark_frames, "landmarks")
+    imu_names = _names(o.imu_frames, skeleton.imu_frames, "imu_frames")
+    bone_legs = list(skeleton.legs) if o.bones else []
     bone_names = [f"{s}_{j}" for s in bone_legs for j in ("HJC", "KJC", "AJC")]
     segments = skeleton.segment_frames
     scalars = {}
-    for name, y in (extra_scalars or {}).items():
+    for name, y in (o.extra_scalars or {}).items():
         scalars[f"plots/{name}"] = check_series(y, n, (), name)
 
     ok = np.all(np.isfinite(Q), axis=1)
     Q_fk = np.where(ok[:, None], Q, skeleton.neutral())  # FK on finite rows only
     offset = np.zeros((n, 3))
-    if root_path is not None:  # the body carried through the room
-        offset = np.nan_to_num(check_series(root_path, n, (3,), "root_path"))
+    if o.root_path is not None:  # the body carried through the room
+        offset = np.nan_to_num(check_series(o.root_path, n, (3,), "root_path"))
     names = list(dict.fromkeys([*segments.values(), *lm_names, *imu_names, *bone_names]))
     # the 3D content at most MAX_3D_SAMPLES samples (a stride over long recordings), logged in
     # chunks; the joint angles at the full rate
@@ -202,25 +180,25 @@ def _scene(time, skeleton: Skeleton, Q, precompute: bool, landmarks, imu_frames,
     step = max(1, len(shown) // 2000)  # framing from <= 2000 samples
     view = every if every is not None and step == 1 else trajectories(shown[::step])
     angles = {}
-    if joint_angles:
-        wanted = None if joint_angles is True else set(joint_angles)
+    if o.joint_angles:
+        wanted = None if o.joint_angles is True else set(o.joint_angles)
         for key, y in isb_joint_angles(skeleton, Q_fk).items():
             if wanted is not None and key not in wanted:
                 continue
             joint, angle = key.rsplit("_", 1)
             angles[f"plots/{joint}/{angle}"] = np.where(ok, y, np.nan)
     truth = {}
-    for key, y in (reference_angles or {}).items():
+    for key, y in (o.reference_angles or {}).items():
         joint, angle = key.rsplit("_", 1)
         if angle not in ANGLE_COLORS:
             raise InputError(f"expected an ISB angle name like right_knee_flexion, got {key!r}",
                              field="reference_angles")
         truth[f"plots/{joint}/{angle}_truth"] = check_series(y, n, (), key)
-    reference = {k: check_series(v, n, (3,), k) for k, v in (reference_landmarks or {}).items()}
+    reference = {k: check_series(v, n, (3,), k) for k, v in (o.reference_landmarks or {}).items()}
     scene = MotionScene(
         t, shown, ok, skeleton.urdf, skeleton.source, tuple(skeleton.legs), dict(segments),
-        lm_names, imu_names, bone_legs, view, every,
-        angles, truth, scalars, reference, bool(meshes), bool(error_arrows), up_axis, vertical,
-        recording_name, app_id, float(imu_axis_length), float(point_radius),
+        lm_names, imu_names, bone_legs, view, every, angles, truth, scalars, reference,
+        bool(o.meshes), bool(o.error_arrows), o.up_axis, vertical, o.recording_name, o.app_id,
+        float(o.imu_axis_length), float(o.point_radius),
     )
     return scene, poses

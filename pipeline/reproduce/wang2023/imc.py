@@ -337,7 +337,7 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, pop) -> Path:
     """One .rrd per subject: the moving model (regression geometry, average AoR correction,
     uncorrected tibia), its landmarks beside the optical ones, error arrows and joint angles, all
     in the initial frame of eq 18 (femur up at the first frame)."""
-    from pipeline.viz.model import log_motion  # rerun: only with --rerun
+    from pipeline.viz.model import SceneOptions, log_motion  # rerun: only with --rerun
 
     F, T = subject.imc.femur_R, subject.imc.tibia_R_uncorrected
     cF, cT = corrected_orientations("average", F, T, subject_measures(subject, r), pop[r.sex],
@@ -360,8 +360,8 @@ def _log_subject(rerun_dir: Path, subject, r, omc_paired, lag, pop) -> Path:
         np.arange(n) / subject.omc.rate_hz,
         sk,
         ik.q,
-        reference_landmarks=reference,
-        recording_name=f"wang2023 subject {subject.omc.subject_id}",
+        SceneOptions(reference_landmarks=reference,
+                     recording_name=f"wang2023 subject {subject.omc.subject_id}"),
     )
 
 
