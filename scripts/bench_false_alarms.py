@@ -49,7 +49,7 @@ from pipeline.io.recording import Recording  # noqa: E402
 from pipeline.model.measures import Measures  # noqa: E402
 from pipeline.process import process_recording  # noqa: E402
 from pipeline.process import run as run_module  # noqa: E402
-from pipeline.process import sensor_checks as sc  # noqa: E402
+from pipeline.process import signal_checks as sc  # noqa: E402
 from pipeline.process.check_context import CheckContext  # noqa: E402
 from pipeline.process.options import IKOptions  # noqa: E402
 from pipeline.process.sides import MIN_MARGIN  # noqa: E402
