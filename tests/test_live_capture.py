@@ -147,3 +147,42 @@ def test_s02_over_lsl_equals_offline_once_calibrated():
     assert all(np.isfinite(s.gyr).all() for s in result.recording.sensors.values())
     rms = _after_final(result, process_recording(result.recording, subject, opts))
     assert max(v for k, v in rms.items() if "flexion" in k) < 1.0, rms
+
+
+def test_streams_falling_silent_are_said_once_and_their_return():
+    """Nothing from any stream for the quiet limit is said once (an outlet closed, the sensors
+    off), and again when samples come back; data keep their silence otherwise."""
+    from pipeline.live.capture import Quiet
+
+    q = Quiet(3.0)
+    said = [q.heard(got, t) for got, t in ((True, 0.0), (False, 1.0), (False, 3.5), (False, 9.0),
+                                             (True, 9.5), (False, 10.0), (True, 10.1))]
+    assert said[:2] == [None, None] and said[2].startswith("live: nothing from any stream for 3 s")
+    assert said[3] is None and said[4] == "live: the streams are back" and said[5:] == [None] * 2
+
+
+def test_a_capture_whose_streams_stop_says_so(monkeypatch):
+    """The shipped walk's first second, then nothing (the streams stopped): the capture says
+    so once and goes on until stopped."""
+    import time
+
+    import pipeline.live.capture as capture
+
+    monkeypatch.setattr(capture, "QUIET_S", 0.1)
+    rec = read_recording("example:ximu3_lower_body")
+    replay = ReplaySource(rec, np.inf)
+
+    class Stopping:
+        names, rate_hz, header = replay.names, replay.rate_hz, dict(rec.header)
+
+        def read(self):
+            chunks = replay.read()
+            return [c for c in chunks if c.time[0] < 1.0] if chunks else []
+
+        def close(self):
+            replay.close()
+
+    said, t0 = [], time.monotonic()
+    LiveCapture(Stopping(), Measures("m", 1.8), IKOptions(), in_line=True,
+                say=said.append).run(stop=lambda: time.monotonic() - t0 > 3.0)
+    assert sum(w.startswith("live: nothing from any stream") for w in said) == 1, said

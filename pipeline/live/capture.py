@@ -54,6 +54,8 @@ STILL_S = 1.0
 RECALIBRATE_S = 2.0
 #: How often (s of capture) the capture looks for its still window.
 LOOK_S = 0.5
+#: Nothing from any stream for this long (s, by the clock) is said (once, and again when back).
+QUIET_S = 3.0
 
 
 class CalibrationUsed(NamedTuple):
@@ -113,11 +115,14 @@ class LiveCapture:
         """Read the source until it ends, ``duration_s`` is reached or ``stop()``; the result."""
         aligner = Aligner(self.source.names, self.source.rate_hz)
         self._set_state("stand still")
+        quiet = Quiet(QUIET_S)
         try:
             while not stop():
                 chunks = self.source.read()
                 if chunks is None:
                     break
+                if (words := quiet.heard(bool(chunks), time.monotonic())) is not None:
+                    self.say(words)
                 arrived = time.perf_counter()
                 for c in chunks:
                     aligner.push(c.sensor, c.time, c.signals)
@@ -279,6 +284,28 @@ class LiveCapture:
             if spool is not None:
                 spool.close()
         return self.result
+
+
+class Quiet:
+    """Whether the streams have fallen silent: nothing from any of them for ``limit_s`` (an
+    LSL outlet closed, a network down, the sensors off) is said once, and their return."""
+
+    def __init__(self, limit_s: float) -> None:
+        self.limit, self.last, self.said = limit_s, None, False
+
+    def heard(self, got: bool, now: float) -> str | None:
+        """What to say after a read that ``got`` samples or none at ``now`` (s), if anything."""
+        if self.last is None or got:
+            self.last = now
+            if got and self.said:
+                self.said = False
+                return "live: the streams are back"
+            return None
+        if not self.said and now - self.last >= self.limit:
+            self.said = True
+            return (f"live: nothing from any stream for {self.limit:g} s (Ctrl-C stops and writes "
+                    "the capture)")
+        return None
 
 
 def _first(block: Block, m: int) -> Block:
