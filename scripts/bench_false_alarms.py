@@ -31,7 +31,6 @@ Run alone (2 cores): ``python scripts/bench_false_alarms.py`` -> ``results/bench
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -42,7 +41,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from bench_gait import S02_MAP  # noqa: E402
-from real_gait_cuts import cut, other_shanks  # noqa: E402
+from real_gait_cuts import other_shanks  # noqa: E402
 
 from pipeline.errors import InputError  # noqa: E402
 from pipeline.io.recording import Recording  # noqa: E402
@@ -73,15 +72,6 @@ VENDOR = IKOptions(sensor_to_model=(-np.pi / 2, 0.0, 0.0))
 Case = tuple[str, Callable[[], Recording | None], Measures, IKOptions]
 
 
-def _until(rec: Recording, stop: int) -> Recording:
-    """``rec``'s first ``stop`` samples: a recording that ends there."""
-    sensors = {n: dataclasses.replace(x, **{k: None if getattr(x, k) is None else
-                                            getattr(x, k)[:stop]
-                                            for k in ("quat", "gyr", "acc", "mag")})
-               for n, x in rec.sensors.items()}
-    return dataclasses.replace(rec, time=rec.time[:stop], sensors=sensors)
-
-
 def _s02(data: Path) -> Iterator[Case]:
     from pipeline.io.formats import read_recording
 
@@ -92,10 +82,10 @@ def _s02(data: Path) -> Iterator[Case]:
     m = Measures("m", 1.72)
     yield "S02 as recorded", lambda: s02, m, VENDOR
     yield "S02, its other shank sensors", lambda: other_shanks(folder, S02_MAP), m, VENDOR
-    yield "S02, its first strides (to 14 s)", lambda: _until(s02, 1400), m, VENDOR
-    yield "S02, its last strides (from 16 s)", lambda: cut(s02, 1600), m, VENDOR
+    yield "S02, its first strides (to 14 s)", lambda: s02.cropped(0, 1400), m, VENDOR
+    yield "S02, its last strides (from 16 s)", lambda: s02.cropped(1600), m, VENDOR
     for start in (1120, 1300, 1500):
-        yield f"S02 from sample {start}", (lambda a=start: cut(s02, a)), m, VENDOR
+        yield f"S02 from sample {start}", (lambda a=start: s02.cropped(a)), m, VENDOR
 
 
 def _others(data: Path) -> Iterator[Case]:

@@ -88,20 +88,11 @@ def offline_hindsight(result, opts: IKOptions, window_s: float = 2.0) -> dict[st
         return {}
     rec = result.recording
     n = int(np.searchsorted(rec.time, at)) + 1
-    part = process_recording(_first(rec, n), SUBJECT, opts)
+    part = process_recording(rec.cropped(0, n), SUBJECT, opts)
     whole = process_recording(rec, SUBJECT, opts)
     w = slice(max(0, n - 1 - int(window_s * rec.rate_hz)), n - 1)
     return {k: _rms_deg(part.joint_angles[k][w], y[w]) for k, y in whole.joint_angles.items()
             if k in part.joint_angles}
-
-
-def _first(rec: Recording, n: int) -> Recording:
-    """``rec``'s first ``n`` samples."""
-    import dataclasses
-
-    sensors = {k: s.replace(**{g: getattr(s, g)[:n] for g in ("quat", "gyr", "acc", "mag")
-                               if getattr(s, g) is not None}) for k, s in rec.sensors.items()}
-    return dataclasses.replace(rec, time=rec.time[:n], sensors=sensors)
 
 
 def resampled(rec: Recording, factor: int) -> Recording:

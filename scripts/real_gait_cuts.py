@@ -7,7 +7,6 @@ a second sensor strapped elsewhere on each shank), on every input path of
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import tempfile
 from pathlib import Path
@@ -18,7 +17,7 @@ from pipeline.io.formats import read_recording
 from pipeline.io.recording import Recording
 from pipeline.process import mot_columns, process_recording
 
-__all__ = ["CUTS", "OTHER_SHANKS", "cut", "other_shanks", "section"]
+__all__ = ["CUTS", "OTHER_SHANKS", "other_shanks", "section"]
 
 #: Where each cut starts (samples): the recording as recorded, as the walk starts, mid-walk.
 CUTS = (0, 1120, 1300, 1500)
@@ -26,16 +25,6 @@ CUTS = (0, 1120, 1300, 1500)
 OTHER_SHANKS = {"tibia_l_imu": "00B40BA5", "tibia_r_imu": "00B40C35"}
 #: The walk scored (samples), as bench_real_gait.WALK.
 WALK = (1120, 2075)
-
-
-def cut(rec: Recording, start: int) -> Recording:
-    """``rec`` from sample ``start`` on, its time from 0: a recording that starts there."""
-    rows = slice(start, None)
-    sensors = {n: dataclasses.replace(s, **{k: None if getattr(s, k) is None else
-                                            getattr(s, k)[rows]
-                                            for k in ("quat", "gyr", "acc", "mag")})
-               for n, s in rec.sensors.items()}
-    return dataclasses.replace(rec, time=rec.time[rows] - rec.time[start], sensors=sensors)
 
 
 def other_shanks(data: Path, sensor_map: dict[str, str]) -> Recording:
@@ -86,7 +75,7 @@ def section(data: Path, sensor_map: dict[str, str], subject, inputs, sagittal, r
     against the markers, and the flags; then each joint's mean error against both references
     (what a calibration without a pose changes: the zeros)."""
     full = read_recording(data / "imu", sensor_map)
-    recordings = {f"from {s}" if s else "as recorded": (cut(full, s), s) for s in CUTS}
+    recordings = {f"from {s}" if s else "as recorded": (full.cropped(s), s) for s in CUTS}
     recordings["other shanks"] = (other_shanks(data, sensor_map), 0)
     names = " | ".join(c.replace("_angle", "").replace("_flexion", "") for c in sagittal)
     lines = ["", "## The recordings users bring (defaults)", "",

@@ -24,21 +24,15 @@ def s02_cut(start: int, stop: int | None = None, path: str = "vendor"):
     """S02 (read with its map) cut to samples ``[start, stop)``, its time from 0, as a recording
     that starts or ends there; ``path``: ``'vendor'`` (its orientations, in its z-up world) or
     ``'vqf6'`` (raw signals without the orientations and magnetometers). None without the data."""
-    import dataclasses
 
     from pipeline.io.formats import read_recording
 
     if not S02.exists():
         return None
-    rec = read_recording(S02 / "imu", S02_MAP)
-    rows = slice(start, stop)
-    sensors = {n: dataclasses.replace(s, **{k: None if getattr(s, k) is None else
-                                            getattr(s, k)[rows]
-                                            for k in ("quat", "gyr", "acc", "mag")})
-               for n, s in rec.sensors.items()}
+    rec = read_recording(S02 / "imu", S02_MAP).cropped(start, stop)
     if path == "vqf6":
-        sensors = {n: s.replace(quat=None, mag=None) for n, s in sensors.items()}
-    return dataclasses.replace(rec, time=rec.time[rows] - rec.time[start], sensors=sensors)
+        rec = rec.with_sensors({n: s.replace(quat=None, mag=None) for n, s in rec.sensors.items()})
+    return rec
 
 
 def asymmetric_subject(**over: object) -> SubjectGeometry:

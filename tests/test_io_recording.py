@@ -76,3 +76,20 @@ def test_complete_means_both_inertial_signals_every_sample_finite():
     gap = x.copy()
     gap[2, 1] = np.nan
     assert not SensorSignals(gyr=x, acc=gap).complete
+
+
+def test_cropped_is_a_recording_that_starts_there_its_gaps_with_it():
+    """Samples 100-300 of a 500-sample recording: its time from 0, every signal cut alike, a gap
+    across the start clipped to it, one inside moved with it, one after dropped."""
+    from pipeline.io.gaps import Missing
+
+    t = np.arange(500) / 100.0
+    gyr = np.column_stack([t, 2 * t, 3 * t])
+    rec = Recording(t, 100.0, {"a": SensorSignals(gyr=gyr, acc=gyr + 1.0)},
+                    missing=Missing({"a": ((90, 110), (150, 160), (400, 420))}))
+    out = rec.cropped(100, 300)
+    assert out.n_samples == 200 and out.time[0] == 0.0 and out.time[-1] == pytest.approx(1.99)
+    np.testing.assert_array_equal(out.sensors["a"].gyr, gyr[100:300])
+    assert out.sensors["a"].quat is None and out.sensors["a"].acc[0, 0] == gyr[100, 0] + 1.0
+    assert out.missing.spans == {"a": ((0, 10), (50, 60))}
+    assert rec.cropped(450).n_samples == 50 and rec.cropped(450).missing.spans == {}

@@ -1,7 +1,6 @@
 """pipeline.live.calibration: the offline pipeline on the capture so far; not final before the
 walk has checked the pose and given the heading; a capture without a pelvis sensor refused."""
 
-import dataclasses
 
 import numpy as np
 import pytest
@@ -13,15 +12,9 @@ from pipeline.model.measures import Measures
 from pipeline.process.options import IKOptions
 
 
-def _first(rec, n):
-    return dataclasses.replace(rec, time=rec.time[:n], sensors={
-        k: s.replace(**{g: getattr(s, g)[:n] for g in ("quat", "gyr", "acc", "mag")
-                        if getattr(s, g) is not None}) for k, s in rec.sensors.items()})
-
-
 def test_final_only_once_the_walk_has_checked_the_pose():
     rec, subject = read_recording("example:ximu3_lower_body"), Measures("m", 1.8)
-    still = calibrate_capture(_first(rec, 60), subject, IKOptions(), {})
+    still = calibrate_capture(rec.cropped(0, 60), subject, IKOptions(), {})
     assert not still.final and "no walk to check it by" in still.how
     assert still.turns and all(t == 0.0 for t in still.turns.values())  # nothing aligned yet
     walked = calibrate_capture(rec, subject, IKOptions(), {})

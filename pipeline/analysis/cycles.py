@@ -51,6 +51,12 @@ class Cycles:
     angles: dict[str, np.ndarray]
 
 
+#: What a side's means are over: its straight, steady strides...
+STEADY = "straight, steady"
+#: ... or, where it has none (a short walk, turns on the spot), its straight strides, said so.
+STRAIGHT_ONLY = "straight, none steady"
+
+
 @dataclass(frozen=True)
 class CycleMean:
     """One joint's mean curve of one side, its SD across strides (rad, :data:`CYCLE_POINTS`
@@ -60,13 +66,7 @@ class CycleMean:
     mean: np.ndarray
     sd: np.ndarray
     n: int
-    over: str = "straight, steady"
-
-
-#: What a side's means are over: its straight, steady strides...
-STEADY = "straight, steady"
-#: ... or, where it has none (a short walk, turns on the spot), its straight strides, said so.
-STRAIGHT_ONLY = "straight, none steady"
+    over: str = STEADY
 
 
 def averaged(strides: list[Stride], side: str) -> tuple[np.ndarray, str]:
@@ -77,13 +77,10 @@ def averaged(strides: list[Stride], side: str) -> tuple[np.ndarray, str]:
     steady = mine & np.array([in_the_means(s) for s in strides], bool)
     if steady.any() or not mine.any():
         return steady, STEADY
-    straight = mine & np.array([s.straight and s.stride_time_s <= MERGED_SHARE * _typical(
-        strides, side) for s in strides], bool)
+    typical = float(np.median([s.stride_time_s for s, m in zip(strides, mine, strict=True) if m]))
+    straight = mine & np.array([s.straight and s.stride_time_s <= MERGED_SHARE * typical
+                                for s in strides], bool)
     return straight, STRAIGHT_ONLY
-
-
-def _typical(strides: list[Stride], side: str) -> float:
-    return float(np.median([s.stride_time_s for s in strides if s.side == side]))
 
 
 def _angle_key(ours: str, side: str) -> str:
@@ -177,13 +174,13 @@ def cycle_table(cycles: Cycles) -> list[str]:
     ± SD across the side's straight, steady strides (deg)."""
     means = cycle_means(cycles)
     counts = {side: max((m.n for m in means[side].values()), default=0) for side in means}
-    overs = {side: next((m.over for m in means[side].values()), STEADY) for side in means}
+    chosen_by = {side: averaged(cycles.strides, side) for side in ("right", "left")}
     lines = ["| angle over the cycle (deg) | right max | right min | right range | left max | "
              "left min | left range |", "|---|---|---|---|---|---|---|"]
     for column, curves in cycles.angles.items():
         cells = []
         for side in ("right", "left"):
-            mask = averaged(cycles.strides, side)[0]
+            mask = chosen_by[side][0]
             chosen = [k for k in np.flatnonzero(mask) if np.all(np.isfinite(curves[k]))]
             c = np.degrees(curves[chosen]) if chosen else np.zeros((0, CYCLE_POINTS))
             for v in (c.max(axis=1), c.min(axis=1), np.ptp(c, axis=1)) if len(c) else ((),) * 3:
@@ -191,7 +188,7 @@ def cycle_table(cycles: Cycles) -> list[str]:
         lines.append(f"| {column} | " + " | ".join(cells) + " |")
     lines.append(f"| strides in the means | {counts['right']} | | | {counts['left']} | | |")
     for side in ("right", "left"):
-        if overs.get(side) == STRAIGHT_ONLY:
+        if chosen_by[side][1] == STRAIGHT_ONLY:
             lines.append(f"| the {side} side's means are over its straight strides: it has no "
                          "steady one | | | | | | |")
     return lines

@@ -52,6 +52,7 @@ __all__ = [
     "TUNED",
     "AttitudeEstimate",
     "PIState",
+    "REST_START_S",
     "filter_orientations",
     "mahony_filter",
     "rest_bias",
@@ -62,6 +63,9 @@ __all__ = [
 #: The gains and extensions ``--filter pi`` uses (module docstring; tuned on BROAD).
 TUNED = {"lambda_p": 1.0, "lambda_i": 0.01, "acc_lowpass_s": 3.0, "rest_start": True}
 _GRAVITY = 9.81
+#: A still start this long (s) or longer gives the filter its first attitude and bias
+#: (``rest_start``) and VQF its bias (:func:`rest_bias`).
+REST_START_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,12 @@ class PIState:
     tau: float = 0.0
     integral: np.ndarray = field(default_factory=lambda: np.zeros(3))
     force: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, _GRAVITY]))
+
+    def seed_at_rest(self, gyr_mean: np.ndarray, acc_mean: np.ndarray) -> None:
+        """``rest_start``: upright by a still start's mean specific force, the integral minus its
+        mean gyro (the bias)."""
+        self.q = upright(acc_mean)
+        self.integral = -np.asarray(gyr_mean, float)
 
     def run(self, gyr: np.ndarray, acc: np.ndarray, dts: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -185,9 +195,8 @@ def mahony_filter(
     state = PIState(q, lambda_p, lambda_i, float(acc_lowpass_s))
     if rest_start:
         n0 = still_start(gyr, acc)
-        if n0 * period >= 0.5:
-            state.integral = -gyr[:n0].mean(axis=0)
-            state.q = upright(acc[:n0].mean(axis=0))
+        if n0 * period >= REST_START_S:
+            state.seed_at_rest(gyr[:n0].mean(axis=0), acc[:n0].mean(axis=0))
     quat, bias, error = state.run(gyr, acc, np.diff(t, prepend=t[0] - period))
     return AttitudeEstimate(time=t, quat=quat, bias=bias, error=error)
 
@@ -214,7 +223,7 @@ def rest_bias(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray) -> np.ndarray | N
     magnetometer the vertical component of the bias is unobservable in motion, and each sensor's
     heading would drift by it (0.005 rad/s is 4 deg in 15 s)."""
     n0 = still_start(gyr, acc)
-    if n0 < 2 or t[n0 - 1] - t[0] < 0.5:
+    if n0 < 2 or t[n0 - 1] - t[0] < REST_START_S:
         return None
     return gyr[:n0].mean(axis=0)
 

@@ -46,6 +46,16 @@ class Missing:
         return Missing({k: v for k, v in self.spans.items() if k in sensors},
                        self.restarted & frozenset(sensors))
 
+    def cropped(self, start: int, n: int) -> Missing:
+        """The spans of the ``n`` samples from ``start`` on, counted from there."""
+        spans = {}
+        for name, runs in self.spans.items():
+            kept = tuple((max(a - start, 0), min(b - start, n)) for a, b in runs
+                         if b > start and a < start + n)
+            if kept:
+                spans[name] = kept
+        return Missing(spans, self.restarted)
+
     def breaks(self, sensors, n: int) -> np.ndarray:
         """(n,) bool: the samples missing of those ``sensors`` whose filter started again
         after them (a heading may jump across them)."""

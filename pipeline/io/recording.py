@@ -67,6 +67,11 @@ class SensorSignals:
     def replace(self, **changes: np.ndarray | None) -> SensorSignals:
         return dataclasses.replace(self, **changes)
 
+    def rows(self, rows: slice) -> SensorSignals:
+        """The signals of samples ``rows``."""
+        return SensorSignals(*(None if v is None else v[rows]
+                               for v in (self.quat, self.gyr, self.acc, self.mag)))
+
     @property
     def complete(self) -> bool:
         """Whether the gyroscope's and the accelerometer's signals are there, every sample
@@ -147,6 +152,16 @@ class Recording:
     def with_sensors(self, sensors: Mapping[str, SensorSignals]) -> Recording:
         """The same recording with other sensors (same time base)."""
         return dataclasses.replace(self, sensors=dict(sensors))
+
+    def cropped(self, start: int, stop: int | None = None) -> Recording:
+        """Samples ``start:stop`` as a recording that starts there (its time from 0, its missing
+        spans with it): a trimmed file, a sensor started late."""
+        rows = slice(start, stop)
+        time = self.time[rows]
+        return dataclasses.replace(
+            self, time=time - self.time[start],
+            sensors={n: s.rows(rows) for n, s in self.sensors.items()},
+            missing=self.missing.cropped(start, len(time)))
 
     def with_notes(self, *notes: str) -> Recording:
         """The same recording with more notes."""

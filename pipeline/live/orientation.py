@@ -110,7 +110,7 @@ class LiveOrientations:
 class StillStart:
     """A sensor's still start, as the offline PI filter's ``rest_start`` reads it
     (:func:`pipeline.calibration.attitude.still_start`): the mean gyro and specific force of the
-    samples still from its first one; when it first moves, a start of 0.5 s or more seeds the
+    samples still from its first one; when it first moves, a long enough start seeds the
     filter (:meth:`seed`): upright by the mean force, its integral minus the mean gyro (the
     bias, whose vertical part no later sample corrects: unseeded, S02's pelvis turned 7 deg
     from the offline filter's within 6 s of the calibration)."""
@@ -130,16 +130,14 @@ class StillStart:
         self.n += k
         return k
 
-    def seed(self, state) -> bool:
-        """At the first movement: the state seeded from a long enough still start."""
-        from pipeline.calibration.attitude import upright
+    def seed(self, state) -> None:
+        """At the first movement: the state seeded from a long enough still start
+        (:meth:`~pipeline.calibration.attitude.PIState.seed_at_rest`)."""
+        from pipeline.calibration.attitude import REST_START_S
 
         self.moved = True
-        if self.n * self.period < 0.5:
-            return False
-        state.integral = -self.gyr / self.n
-        state.q = upright(self.acc / self.n)
-        return True
+        if self.n * self.period >= REST_START_S:
+            state.seed_at_rest(self.gyr / self.n, self.acc / self.n)
 
 
 def _vqf(rate_hz: float):

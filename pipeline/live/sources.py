@@ -199,11 +199,11 @@ def _layout(info, name: str) -> Layout:
 
 
 def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool] = lambda: False,
-                  prefix: str = "", wait_s: float | None = None) -> int:
+                  prefix: str = "") -> int:
     """``rec``'s sensors as LSL outlets of type ``IMU`` (named ``prefix + sensor``), its samples
-    pushed in real time (``speed``) with LSL time stamps once every outlet has a reader (or
-    ``wait_s`` passed: none is lost to a reader still connecting); returns the samples pushed
-    when the recording ends or ``stop()`` says so."""
+    pushed in real time (``speed``) with LSL time stamps once every outlet has a reader (none
+    is lost to a reader still connecting); returns the samples pushed when the recording ends
+    or ``stop()`` says so."""
     from pipeline.optional import need
 
     lsl = need("pylsl", "pipeline live --serve-example")
@@ -218,7 +218,8 @@ def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool
             for label in GROUPS[g]:
                 channels.append_child("channel").append_child_value("label", label)
         outlets[name] = (lsl.StreamOutlet(info), groups)
-    _wait_for_readers([o for o, _ in outlets.values()], stop, wait_s)
+    while not stop() and not all(o.have_consumers() for o, _ in outlets.values()):
+        time.sleep(0.01)
     source, base, pushed = ReplaySource(rec, speed), lsl.local_clock(), 0
     while not stop() and (chunks := source.read()) is not None:
         for c in chunks:
@@ -228,11 +229,3 @@ def serve_outlets(rec: Recording, speed: float = 1.0, *, stop: Callable[[], bool
             pushed += len(c.time)
     return pushed
 
-
-def _wait_for_readers(outlets: list, stop: Callable[[], bool], wait_s: float | None) -> None:
-    """Until every outlet has a reader, ``stop()`` or ``wait_s`` (None: no limit)."""
-    t0 = time.monotonic()
-    while not stop() and not all(o.have_consumers() for o in outlets):
-        if wait_s is not None and time.monotonic() - t0 >= wait_s:
-            return
-        time.sleep(0.01)
